@@ -1,0 +1,1 @@
+//! The Smart Teams map editor library behind `smartteams-editor`.

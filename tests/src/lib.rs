@@ -1,0 +1,1 @@
+//! Workspace-level integration tests of Smart Teams live in `tests/tests/`.
