@@ -107,8 +107,16 @@ impl Grid {
     pub fn extent(&self) -> Aabb {
         Aabb {
             min: self.origin,
-            max: self.origin + DVec2::new(self.width_m(), self.height_m()),
+            max: self.corner(self.width_cells, self.height_cells),
         }
+    }
+
+    /// World position of the corner between cells: `origin + (x, y) · cell_m`. Every box the
+    /// grid hands out is made of such corners, computed this one way, so boxes that share an
+    /// edge agree on it to the last bit.
+    #[inline]
+    pub fn corner(&self, x: u32, y: u32) -> DVec2 {
+        self.origin + DVec2::new(f64::from(x), f64::from(y)) * self.cell_m
     }
     /// Area of one cell in m².
     pub fn cell_area_m2(&self) -> f64 {
@@ -118,11 +126,10 @@ impl Grid {
     /// World box of the square of `2^level` cells whose lower-left cell is `(x, y)`.
     #[inline]
     pub fn square(&self, x: u32, y: u32, level: u8) -> Aabb {
-        let size = f64::from(1u32 << level) * self.cell_m;
-        let min = self.origin + DVec2::new(f64::from(x), f64::from(y)) * self.cell_m;
+        let size = 1u32 << level;
         Aabb {
-            min,
-            max: min + DVec2::splat(size),
+            min: self.corner(x, y),
+            max: self.corner(x + size, y + size),
         }
     }
 

@@ -275,9 +275,14 @@ impl MapData {
         Ok(map)
     }
 
-    /// Write to `path` atomically (a temporary file beside it, then a rename), so a failed
+    /// Check the map, then write it to `path` atomically (a temporary file beside it, then a rename), so a failed
     /// save never leaves half a map behind.
     pub fn save(&self, path: &Path) -> Result<()> {
+        self.check().map_err(|problem| Error::MapFile {
+            path: path.to_path_buf(),
+            offset: 0,
+            problem: format!("refusing to write an invalid map: {problem}"),
+        })?;
         write_atomically(path, &self.to_bytes())
     }
 

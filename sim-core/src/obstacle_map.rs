@@ -178,27 +178,22 @@ impl ObstacleMap {
     pub fn validate(&self) -> Result<(), String> {
         self.tree.validate()?;
         let g = *self.grid();
-        let side = f64::from(g.side_cells()) * g.cell_m();
-        let square = Aabb {
-            min: g.origin(),
-            max: g.origin() + DVec2::splat(side),
-        };
-        let ext = g.extent();
-        let strips = [
-            Aabb {
-                min: DVec2::new(ext.max.x, square.min.y),
-                max: square.max,
-            },
-            Aabb {
-                min: DVec2::new(square.min.x, ext.max.y),
-                max: square.max,
-            },
-        ];
-        for s in strips {
-            if s.area() > 0.0 && self.tree.any_leaf_in(&s, false) {
-                return Err("free cells outside the map's extent (padding must be blocked)".into());
+        let (w, h) = (u64::from(g.width_cells()), u64::from(g.height_cells()));
+        let mut bad = None;
+        self.tree.for_each_leaf(|sq, blocked| {
+            let side = u64::from(sq.side_cells());
+            if !blocked && (u64::from(sq.x) + side > w || u64::from(sq.y) + side > h) {
+                bad.get_or_insert(sq);
             }
+        });
+        match bad {
+            Some(sq) => Err(format!(
+                "free leaf at cell ({}, {}), {} cells wide, reaches outside the map (padding must be blocked)",
+                sq.x,
+                sq.y,
+                sq.side_cells()
+            )),
+            None => Ok(()),
         }
-        Ok(())
     }
 }

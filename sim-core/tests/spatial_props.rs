@@ -1,0 +1,419 @@
+//! Property tests of every spatial structure against brute force over random rasters and
+//! random shapes. Seeds are fixed, so a failure reproduces.
+
+use std::collections::BTreeSet;
+use std::ops::ControlFlow;
+
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngSeed};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use sim_core::geometry::{Aabb, Capsule, Disc, Overlap, Shape, clip_line};
+use sim_core::glam::DVec2;
+use sim_core::quadtree::build::{BitGrid, Region};
+use sim_core::quadtree::update::PartialCells;
+use sim_core::quadtree::{RegionQuadtree, Square};
+use sim_core::treasure_index::TreasureIndex;
+use sim_core::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex, TreasureId};
+
+fn config(cases: u32) -> Config {
+    Config {
+        cases,
+        rng_seed: RngSeed::Fixed(0x5EED_0002),
+        failure_persistence: None,
+        ..Config::default()
+    }
+}
+
+/// A random map: grid with a random origin and cell size, and a raster of blocked cells.
+#[derive(Debug, Clone)]
+struct World {
+    grid: Grid,
+    bits: BitGrid,
+}
+
+impl World {
+    fn generate(w: u32, h: u32, density: f64, cell_m: f64, seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = DVec2::new(rng.random_range(-50.0..50.0), rng.random_range(-50.0..50.0));
+        let grid = Grid::new(origin, cell_m, w, h).unwrap();
+        let mut bits = BitGrid::new(w, h);
+        // Clumps as well as noise, so merged leaves of every size appear.
+        let clumpy = rng.random_bool(0.5);
+        for y in 0..h {
+            for x in 0..w {
+                let v = if clumpy {
+                    ((x / 4 + y / 3) % 3 == 0) != rng.random_bool(density * 0.2)
+                } else {
+                    rng.random_bool(density)
+                };
+                bits.set(x, y, v);
+            }
+        }
+        Self { grid, bits }
+    }
+
+    /// Blocked value of a cell of the covering square (padding is blocked).
+    fn blocked(&self, x: u32, y: u32) -> bool {
+        !self.grid.in_map(x, y) || self.bits.get(x, y)
+    }
+
+    fn cells(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let side = self.grid.side_cells();
+        (0..side).flat_map(move |y| (0..side).map(move |x| (x, y)))
+    }
+
+    fn map(&self) -> ObstacleMap {
+        ObstacleMap::from_bitgrid(self.grid, &self.bits).unwrap()
+    }
+
+    fn random_point(&self, rng: &mut ChaCha8Rng) -> DVec2 {
+        let e = self.grid.extent();
+        let pad = DVec2::splat(3.0 * self.grid.cell_m());
+        let lo = e.min - pad;
+        let hi = e.max + pad;
+        DVec2::new(rng.random_range(lo.x..hi.x), rng.random_range(lo.y..hi.y))
+    }
+}
+
+fn world_strategy() -> impl Strategy<Value = World> {
+    (
+        1u32..40,
+        1u32..40,
+        0.0f64..1.0,
+        prop_oneof![Just(1.0), Just(0.5), Just(0.25), 0.1f64..3.0],
+        any::<u64>(),
+    )
+        .prop_map(|(w, h, d, c, s)| World::generate(w, h, d, c, s))
+}
+
+/// Cells of the covering square lying in the returned leaves and overlapping the shape.
+fn cells_from_leaves<S: Shape>(map: &ObstacleMap, shape: &S) -> BTreeSet<(u32, u32)> {
+    let g = *map.grid();
+    let mut out = BTreeSet::new();
+    let _ = map.visit_blocked(shape, |sq: Square, b| {
+        assert_ne!(
+            shape.classify(&b),
+            Overlap::Disjoint,
+            "visited leaf {b:?} misses the shape"
+        );
+        for y in sq.y..sq.y + sq.side_cells() {
+            for x in sq.x..sq.x + sq.side_cells() {
+                if shape.classify(&g.square(x, y, 0)) != Overlap::Disjoint {
+                    assert!(out.insert((x, y)), "cell ({x}, {y}) reported twice");
+                }
+            }
+        }
+        ControlFlow::Continue(())
+    });
+    out
+}
+
+fn brute_cells<S: Shape>(w: &World, shape: &S) -> BTreeSet<(u32, u32)> {
+    w.cells()
+        .filter(|&(x, y)| w.blocked(x, y) && shape.classify(&w.grid.square(x, y, 0)) != Overlap::Disjoint)
+        .collect()
+}
+
+fn brute_free<S: Shape>(w: &World, shape: &S) -> bool {
+    w.grid.extent().contains_box(&shape.bounds()) && brute_cells(w, shape).is_empty()
+}
+
+/// First entry of the ray into a blocked cell's interior, or its exit from the extent.
+fn brute_first_hit(w: &World, o: DVec2, dir: DVec2, max: f64) -> Option<f64> {
+    let mut best = match clip_line(o, dir, 0.0, f64::INFINITY, &w.grid.extent()) {
+        Some((t0, t1)) if t0 <= 0.0 => t1,
+        _ => 0.0,
+    };
+    for (x, y) in w.cells() {
+        if !w.blocked(x, y) {
+            continue;
+        }
+        let b = w.grid.square(x, y, 0);
+        if let Some((t0, t1)) = clip_line(o, dir, 0.0, max, &b)
+            && b.contains_strictly(o + dir * (0.5 * (t0 + t1)))
+        {
+            best = best.min(t0);
+        }
+    }
+    (best <= max).then_some(best)
+}
+
+proptest! {
+    #![proptest_config(config(256))]
+
+    #[test]
+    fn obstacle_map_matches_its_raster(w in world_strategy()) {
+        let map = w.map();
+        map.validate().unwrap();
+        for (x, y) in w.cells() {
+            prop_assert_eq!(map.tree().cell_value(x, y), w.blocked(x, y), "cell ({}, {})", x, y);
+        }
+        let cell_area = w.grid.cell_area_m2();
+        let blocked = w.bits.count_ones() as f64 * cell_area;
+        let total = f64::from(w.grid.width_cells()) * f64::from(w.grid.height_cells()) * cell_area;
+        prop_assert!((map.blocked_area_m2() - blocked).abs() < 1e-6);
+        prop_assert!((map.free_area_m2() - (total - blocked)).abs() < 1e-6);
+        // Built from a predicate, a raster and region classification: one canonical tree.
+        let by_fn = ObstacleMap::from_fn(w.grid, |x, y| w.bits.get(x, y));
+        prop_assert_eq!(by_fn.leaf_count(), map.leaf_count());
+        let by_regions = ObstacleMap::from_regions(w.grid, |sq| {
+            let cells: Vec<bool> = (sq.y..sq.y + sq.side_cells())
+                .flat_map(|y| (sq.x..sq.x + sq.side_cells()).map(move |x| (x, y)))
+                .map(|(x, y)| w.bits.get(x, y))
+                .collect();
+            if cells.iter().all(|&c| c) { Region::Full } else if cells.iter().all(|&c| !c) { Region::Empty } else { Region::Mixed }
+        });
+        by_regions.validate().unwrap();
+        prop_assert_eq!(by_regions.leaf_count(), map.leaf_count());
+        // Merging: no two leaves could be one, so the leaf count is the canonical minimum.
+        prop_assert_eq!(map.leaf_count(), map.tree().count_leaves(true) + map.tree().count_leaves(false));
+    }
+
+    #[test]
+    fn disc_and_box_queries_match_brute_force(w in world_strategy(), seed in any::<u64>()) {
+        let map = w.map();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for _ in 0..20 {
+            let c = w.random_point(&mut rng);
+            let r = rng.random_range(0.0..10.0) * w.grid.cell_m();
+            let disc = Disc { center: c, radius: r };
+            prop_assert_eq!(cells_from_leaves(&map, &disc), brute_cells(&w, &disc));
+            prop_assert_eq!(map.is_disc_free(c, r), brute_free(&w, &disc));
+            let mut n = 0;
+            map.for_each_blocked_in_disc(c, r, |_| n += 1);
+            let mut leaves = 0;
+            let _ = map.visit_blocked(&disc, |_, _| { leaves += 1; ControlFlow::Continue(()) });
+            prop_assert_eq!(n, leaves);
+
+            let b = Aabb::from_corners(w.random_point(&mut rng), w.random_point(&mut rng));
+            prop_assert_eq!(cells_from_leaves(&map, &b), brute_cells(&w, &b));
+            prop_assert_eq!(map.is_point_free(c), w.grid.extent().contains_box(&Aabb { min: c, max: c })
+                && w.grid.cell_of(c).is_some_and(|(x, y)| !w.blocked(x, y)));
+        }
+    }
+
+    #[test]
+    fn movement_tests_match_brute_force(w in world_strategy(), seed in any::<u64>()) {
+        let map = w.map();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for _ in 0..20 {
+            let a = w.random_point(&mut rng);
+            // Short and long moves, axis-aligned ones along cell edges included.
+            let b = match rng.random_range(0..3) {
+                0 => w.random_point(&mut rng),
+                1 => a + DVec2::new(rng.random_range(-2.0..2.0), 0.0) * w.grid.cell_m(),
+                _ => a + DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+            };
+            let r = if rng.random_bool(0.3) { 0.0 } else { rng.random_range(0.0..2.0) * w.grid.cell_m() };
+            let cap = Capsule { a, b, radius: r };
+            prop_assert_eq!(cells_from_leaves(&map, &cap), brute_cells(&w, &cap));
+            prop_assert_eq!(map.is_swept_disc_free(a, b, r), brute_free(&w, &cap));
+            if r == 0.0 {
+                prop_assert_eq!(map.is_segment_free(a, b), brute_free(&w, &cap));
+            }
+            let dir = DVec2::from_angle(rng.random_range(0.0..std::f64::consts::TAU));
+            let max = rng.random_range(0.0..60.0);
+            let got = map.first_hit(a, dir, max);
+            let want = brute_first_hit(&w, a, dir, max);
+            match (got, want) {
+                (Some(g), Some(e)) => prop_assert!((g - e).abs() < 1e-9, "hit {} vs {}", g, e),
+                (g, e) => prop_assert_eq!(g, e),
+            }
+        }
+    }
+
+    #[test]
+    fn fill_matches_a_raster_and_stays_canonical(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut tree = RegionQuadtree::from_bitgrid(w.grid, &w.bits, true).unwrap();
+        let side = w.grid.side_cells();
+        let mut cells: Vec<bool> = w.cells().map(|(x, y)| w.blocked(x, y)).collect();
+        for _ in 0..12 {
+            let value = rng.random_bool(0.5);
+            let partial = if rng.random_bool(0.5) { PartialCells::Include } else { PartialCells::Exclude };
+            let a = w.random_point(&mut rng);
+            let shape: Box<dyn Shape> = match rng.random_range(0..3) {
+                0 => Box::new(Disc { center: a, radius: rng.random_range(0.0..8.0) * w.grid.cell_m() }),
+                1 => Box::new(Aabb::from_corners(a, w.random_point(&mut rng))),
+                _ => Box::new(Capsule { a, b: w.random_point(&mut rng), radius: rng.random_range(0.0..2.0) }),
+            };
+            let changed = tree.fill(&&*shape, value, partial);
+            let mut expect_change = false;
+            for (i, (x, y)) in w.cells().enumerate() {
+                let o = shape.classify(&w.grid.square(x, y, 0));
+                let hit = o == Overlap::Contains || (o == Overlap::Partial && partial == PartialCells::Include);
+                if hit && cells[i] != value {
+                    cells[i] = value;
+                    expect_change = true;
+                }
+            }
+            tree.assert_well_formed();
+            prop_assert_eq!(changed, expect_change);
+            for (i, (x, y)) in w.cells().enumerate() {
+                prop_assert_eq!(tree.cell_value(x, y), cells[i], "cell ({}, {}) of {}", x, y, side);
+            }
+            prop_assert_eq!(tree.count_cells(true), cells.iter().filter(|&&c| c).count() as u64);
+        }
+    }
+
+    #[test]
+    fn known_maps_mark_conservatively_and_merge_as_union(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut maps = [KnownMap::new(w.grid), KnownMap::new(w.grid)];
+        let mut truth = [vec![false; w.cells().count()], vec![false; w.cells().count()]];
+        for step in 0..16 {
+            let k = step % 2;
+            let c = w.random_point(&mut rng);
+            let r = rng.random_range(0.0..6.0) * w.grid.cell_m();
+            maps[k].mark_disc(c, r);
+            maps[k].validate().unwrap();
+            for (i, (x, y)) in w.cells().enumerate() {
+                let cell = w.grid.square(x, y, 0);
+                // Known iff wholly inside some marked disc, and inside the map.
+                if w.grid.in_map(x, y) && cell.farthest_corner_distance_squared(c) <= r * r {
+                    truth[k][i] = true;
+                }
+            }
+        }
+        for k in 0..2 {
+            for (i, (x, y)) in w.cells().enumerate() {
+                prop_assert_eq!(maps[k].tree().cell_value(x, y), truth[k][i]);
+            }
+        }
+        let obstacles = w.map();
+        let [mut a, b] = maps;
+        a.merge(&b);
+        a.validate().unwrap();
+        let mut known_free = 0u64;
+        for (i, (x, y)) in w.cells().enumerate() {
+            let union = truth[0][i] || truth[1][i];
+            prop_assert_eq!(a.tree().cell_value(x, y), union);
+            known_free += u64::from(union && !w.blocked(x, y));
+        }
+        let cell_area = w.grid.cell_area_m2();
+        prop_assert!((a.known_free_area_m2(&obstacles) - known_free as f64 * cell_area).abs() < 1e-6);
+        // Merging again changes nothing; merging into an empty map copies exactly.
+        prop_assert!(!a.merge(&b));
+        let mut c = KnownMap::new(w.grid);
+        c.merge(&a);
+        c.validate().unwrap();
+        prop_assert_eq!(c.leaf_count(), a.leaf_count());
+    }
+
+    #[test]
+    fn treasure_index_matches_brute_force(seed in any::<u64>(), n in 1usize..300, clustered in any::<bool>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let area = Aabb::from_corners(DVec2::new(-20.0, 5.0), DVec2::new(80.0, 45.0));
+        let mut index = TreasureIndex::new(area).unwrap();
+        let mut live: Vec<(TreasureId, DVec2, u32)> = Vec::new();
+        let point = |rng: &mut ChaCha8Rng| if clustered {
+            DVec2::new(10.0 + rng.random_range(0.0..0.5), 20.0 + rng.random_range(0.0..0.5))
+        } else {
+            DVec2::new(rng.random_range(-20.0..80.0), rng.random_range(5.0..45.0))
+        };
+        for _ in 0..n {
+            match rng.random_range(0..10) {
+                0..=5 => {
+                    let p = point(&mut rng);
+                    let q = rng.random_range(1..100);
+                    let id = index.insert(p, q).unwrap();
+                    live.push((id, p, q));
+                }
+                6..=7 if !live.is_empty() => {
+                    let (id, p, q) = live.swap_remove(rng.random_range(0..live.len()));
+                    let t = index.remove(id).unwrap();
+                    prop_assert_eq!((t.position, t.quantity), (p, q));
+                    prop_assert!(index.remove(id).is_none());
+                }
+                _ if !live.is_empty() => {
+                    let i = rng.random_range(0..live.len());
+                    live[i].2 = rng.random_range(0..100);
+                    prop_assert!(index.set_quantity(live[i].0, live[i].2));
+                }
+                _ => {}
+            }
+            index.validate().unwrap();
+            prop_assert_eq!(index.len(), live.len());
+            let c = point(&mut rng);
+            let r = rng.random_range(0.0..30.0);
+            let mut got = Vec::new();
+            index.for_each_in_disc(c, r, |t| got.push((t.id, t.quantity)));
+            got.sort();
+            let mut want: Vec<_> = live.iter().filter(|t| t.1.distance(c) <= r).map(|t| (t.0, t.2)).collect();
+            want.sort();
+            prop_assert_eq!(got, want);
+            let best = live.iter().min_by(|a, b| a.1.distance_squared(c).total_cmp(&b.1.distance_squared(c)).then(a.0.cmp(&b.0)));
+            prop_assert_eq!(index.nearest(c).map(|t| t.id), best.map(|t| t.0));
+            let best_rich = live.iter().filter(|t| t.2 >= 50)
+                .min_by(|a, b| a.1.distance_squared(c).total_cmp(&b.1.distance_squared(c)).then(a.0.cmp(&b.0)));
+            prop_assert_eq!(index.nearest_where(c, |t| t.quantity >= 50).map(|t| t.id), best_rich.map(|t| t.0));
+        }
+    }
+
+    #[test]
+    fn robot_index_matches_brute_force(seed in any::<u64>(), n in 0usize..400, cell in 0.2f64..30.0) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let spread = rng.random_range(1.0..500.0);
+        let robots: Vec<(RobotId, DVec2)> = (0..n)
+            .map(|i| (RobotId(i as u32), DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread))))
+            .collect();
+        let mut index = RobotIndex::new();
+        // Rebuilt twice, as every round does, to catch stale state.
+        index.rebuild(robots.iter().rev().copied(), cell * 2.0);
+        index.rebuild(robots.iter().copied(), cell);
+        prop_assert_eq!(index.len(), n);
+        for _ in 0..20 {
+            let p = DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread));
+            let r = rng.random_range(0.0..spread);
+            let mut got = Vec::new();
+            index.for_each_within(p, r, |id, q| got.push((id, q.x.to_bits(), q.y.to_bits())));
+            got.sort();
+            let want: Vec<_> = robots.iter().filter(|(_, q)| q.distance_squared(p) <= r * r)
+                .map(|(id, q)| (*id, q.x.to_bits(), q.y.to_bits())).collect();
+            prop_assert_eq!(got, want);
+        }
+    }
+}
+
+#[test]
+fn marking_the_same_area_again_costs_no_memory() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 512, 512).unwrap();
+    let mut known = KnownMap::new(grid);
+    for i in 0..50 {
+        known.mark_disc(DVec2::new(100.0 + f64::from(i), 100.0), 20.0);
+    }
+    let bytes = known.memory_bytes();
+    let leaves = known.leaf_count();
+    for _ in 0..5 {
+        for i in 0..50 {
+            assert!(!known.mark_disc(DVec2::new(100.0 + f64::from(i), 100.0), 20.0));
+        }
+    }
+    assert_eq!(known.memory_bytes(), bytes);
+    assert_eq!(known.leaf_count(), leaves);
+    known.validate().unwrap();
+}
+
+#[test]
+fn known_map_memory_is_reused_after_merges_into_big_leaves() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 256, 256).unwrap();
+    let mut known = KnownMap::new(grid);
+    // A ring of small discs makes many nodes; covering it all collapses them to one leaf
+    // and the released nodes serve later marks without growing the store.
+    for i in 0..64 {
+        let a = f64::from(i) / 64.0 * std::f64::consts::TAU;
+        known.mark_disc(DVec2::new(128.0, 128.0) + DVec2::from_angle(a) * 60.0, 6.0);
+    }
+    let peak = known.memory_bytes();
+    known.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::splat(256.0)));
+    assert_eq!(known.leaf_count(), 1);
+    assert!((known.known_area_m2() - 65536.0).abs() < 1e-9);
+    let mut other = KnownMap::new(grid);
+    for i in 0..64 {
+        let a = f64::from(i) / 64.0 * std::f64::consts::TAU;
+        other.mark_disc(DVec2::new(128.0, 128.0) + DVec2::from_angle(a) * 60.0, 6.0);
+    }
+    assert_eq!(other.memory_bytes(), peak);
+    other.validate().unwrap();
+}
