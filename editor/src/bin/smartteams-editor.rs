@@ -1,0 +1,354 @@
+//! `smartteams-editor`: build, import, validate and preview Smart Teams maps.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use editor::import::{ImportOptions, Unknown};
+use editor::place::{PlaceOptions, Spread};
+use editor::preview::PreviewOptions;
+use sim_core::MapData;
+use sim_core::glam::DVec2;
+
+#[derive(Parser)]
+#[command(name = "smartteams-editor", version, about = "Build, import, check and draw Smart Teams maps")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Generate a map.
+    Generate(GenerateArgs),
+    /// Import a bitmap (PNG/PGM/JPEG/BMP), a ROS map_server YAML or a MovingAI .map.
+    Import(ImportArgs),
+    /// Build a map from an XML scene of shapes.
+    Compose {
+        /// The scene file.
+        scene: PathBuf,
+        /// Output map file.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Set the home base and scatter treasures reachable from it.
+    Place {
+        /// The map file.
+        map: PathBuf,
+        #[command(flatten)]
+        place: PlaceArgs,
+        /// Output map file (may be the input).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Check a map: exit status 1 with every problem listed.
+    Validate {
+        /// The map file.
+        map: PathBuf,
+    },
+    /// Print figures about a map.
+    Stats {
+        /// The map file.
+        map: PathBuf,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Draw a map as PNG.
+    Preview {
+        /// The map file.
+        map: PathBuf,
+        /// Output PNG.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Pixels along the map's longer side (default: one per cell, at most 4096).
+        #[arg(long)]
+        px: Option<u32>,
+        /// Draw obstacles only (no home base, no treasures).
+        #[arg(long)]
+        obstacles_only: bool,
+    },
+}
+
+#[derive(Args, Clone)]
+struct PlaceArgs {
+    /// Home base centre `X,Y` in metres (must be free).
+    #[arg(long, value_parser = parse_point)]
+    home: Option<DVec2>,
+    /// Home base radius in metres.
+    #[arg(long, default_value_t = 2.0)]
+    home_radius_m: f64,
+    /// Number of treasures to scatter.
+    #[arg(long, default_value_t = 0)]
+    treasures: u32,
+    /// Keep the treasures already on the map.
+    #[arg(long)]
+    keep_treasures: bool,
+    /// How treasures are spread.
+    #[arg(long, value_enum, default_value_t = SpreadArg::Uniform)]
+    spread: SpreadArg,
+    /// Number of clusters (with `--spread clustered`).
+    #[arg(long, default_value_t = 4)]
+    clusters: u32,
+    /// Spread of a cluster in metres (with `--spread clustered`).
+    #[arg(long, default_value_t = 5.0)]
+    cluster_sigma_m: f64,
+    /// Treasure quantity, `N` or `MIN..MAX` (inclusive).
+    #[arg(long, default_value = "1", value_parser = parse_range)]
+    quantity: (u32, u32),
+    /// Random seed for placement.
+    #[arg(long = "place-seed", default_value_t = 1)]
+    place_seed: u64,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SpreadArg {
+    Uniform,
+    Clustered,
+}
+
+impl PlaceArgs {
+    fn options(&self, auto_home: bool) -> PlaceOptions {
+        PlaceOptions {
+            home: self.home,
+            auto_home,
+            home_radius_m: self.home_radius_m,
+            treasures: self.treasures,
+            keep_treasures: self.keep_treasures,
+            spread: match self.spread {
+                SpreadArg::Uniform => Spread::Uniform,
+                SpreadArg::Clustered => Spread::Clustered {
+                    clusters: self.clusters,
+                    sigma_m: self.cluster_sigma_m,
+                },
+            },
+            quantity: self.quantity,
+            seed: self.place_seed,
+        }
+    }
+}
+
+#[derive(Args)]
+struct ImportArgs {
+    /// The file to import.
+    file: PathBuf,
+    /// Metres per pixel (bitmaps; default 1; overrides a ROS or MovingAI resolution).
+    #[arg(long)]
+    resolution_m: Option<f64>,
+    /// Bitmaps: a pixel darker than this grey value (0–255) is blocked.
+    #[arg(long, default_value_t = 128)]
+    threshold: u8,
+    /// Bitmaps: light pixels are blocked instead of dark ones.
+    #[arg(long)]
+    invert: bool,
+    /// ROS: what unknown cells become.
+    #[arg(long, value_enum, default_value_t = UnknownArg::Blocked)]
+    unknown: UnknownArg,
+    /// World position `X,Y` of the map's lower-left corner (bitmaps, MovingAI).
+    #[arg(long, value_parser = parse_point, default_value = "0,0")]
+    origin: DVec2,
+    #[command(flatten)]
+    place: PlaceArgs,
+    /// Output map file.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum UnknownArg {
+    Blocked,
+    Free,
+}
+
+#[derive(Args)]
+struct GenerateArgs {
+    /// The generator.
+    #[arg(value_enum)]
+    kind: GeneratorArg,
+    /// Map width in metres.
+    #[arg(long, default_value_t = 128.0)]
+    width_m: f64,
+    /// Map height in metres.
+    #[arg(long, default_value_t = 128.0)]
+    height_m: f64,
+    /// Cell side in metres.
+    #[arg(long, default_value_t = 1.0)]
+    cell_m: f64,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Target blocked fraction (generator default if absent).
+    #[arg(long)]
+    density: Option<f64>,
+    /// Feature size in metres (fractal: noise wavelength; maze: corridor width; rooms: smallest room).
+    #[arg(long)]
+    scale_m: Option<f64>,
+    /// Mesas: number of obstacles (default: enough for the density).
+    #[arg(long)]
+    count: Option<u64>,
+    /// Hide the progress bar.
+    #[arg(long)]
+    quiet: bool,
+    #[command(flatten)]
+    place: PlaceArgs,
+    /// Output map file.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum GeneratorArg {
+    Noise,
+    Fractal,
+    Caves,
+    Maze,
+    Rooms,
+    Mesas,
+}
+
+fn parse_point(s: &str) -> Result<DVec2, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    match parts[..] {
+        [x, y] => match (x.parse::<f64>(), y.parse::<f64>()) {
+            (Ok(x), Ok(y)) if x.is_finite() && y.is_finite() => Ok(DVec2::new(x, y)),
+            _ => Err(format!("expected X,Y with two numbers, got {s:?}")),
+        },
+        _ => Err(format!("expected X,Y, got {s:?}")),
+    }
+}
+
+fn parse_range(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected N or MIN..MAX with positive integers, got {s:?}");
+    let (a, b) = match s.split_once("..") {
+        Some((a, b)) => (a, b.trim_start_matches('=')),
+        None => (s, s),
+    };
+    let (a, b) = (a.trim().parse::<u32>().map_err(|_| bad())?, b.trim().parse::<u32>().map_err(|_| bad())?);
+    if a == 0 || a > b {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+fn load(path: &Path) -> Result<MapData> {
+    Ok(MapData::load(path)?)
+}
+
+fn save(map: &MapData, path: &Path) -> Result<()> {
+    map.check()
+        .map_err(|p| anyhow::anyhow!("refusing to write {}: {p}", path.display()))?;
+    map.save(path)?;
+    eprintln!(
+        "wrote {} ({} leaves, {:.2} % blocked, {} treasures)",
+        path.display(),
+        map.obstacles.leaf_count(),
+        100.0 * map.obstacles.blocked_area_m2() / (map.obstacles.grid().width_m() * map.obstacles.grid().height_m()),
+        map.treasures.len()
+    );
+    Ok(())
+}
+
+fn with_placement(obstacles: sim_core::ObstacleMap, place: &PlaceArgs) -> Result<MapData> {
+    let home = editor::place::auto_home(&obstacles, place.home_radius_m)?;
+    let mut map = MapData {
+        obstacles,
+        home,
+        treasures: Vec::new(),
+    };
+    editor::place::place(&mut map, &place.options(false))?;
+    Ok(map)
+}
+
+fn run(cli: Cli) -> Result<ExitCode> {
+    match cli.command {
+        Command::Generate(args) => {
+            let obstacles = generate(&args)?;
+            let map = with_placement(obstacles, &args.place)?;
+            save(&map, &args.output)?;
+        }
+        Command::Import(args) => {
+            let opts = ImportOptions {
+                resolution_m: args.resolution_m,
+                threshold: args.threshold,
+                invert: args.invert,
+                unknown: match args.unknown {
+                    UnknownArg::Blocked => Unknown::Blocked,
+                    UnknownArg::Free => Unknown::Free,
+                },
+                origin: args.origin,
+            };
+            let obstacles = editor::import::import(&args.file, &opts)?;
+            let map = with_placement(obstacles, &args.place)?;
+            save(&map, &args.output)?;
+        }
+        Command::Compose { scene, output } => {
+            let map = editor::compose::compose_file(&scene)?;
+            save(&map, &output)?;
+        }
+        Command::Place { map: path, place, output } => {
+            let mut map = load(&path)?;
+            editor::place::place(&mut map, &place.options(false))?;
+            save(&map, &output)?;
+        }
+        Command::Validate { map: path } => {
+            let map = load(&path)?;
+            let problems = editor::validate::validate(&map);
+            if problems.is_empty() {
+                println!("{}: ok", path.display());
+            } else {
+                for p in &problems {
+                    println!("{}: {p}", path.display());
+                }
+                eprintln!("{}: {} problem(s)", path.display(), problems.len());
+                return Ok(ExitCode::from(1));
+            }
+        }
+        Command::Stats { map: path, json } => {
+            let bytes = std::fs::metadata(&path)
+                .with_context(|| format!("cannot read {}", path.display()))?
+                .len();
+            let map = load(&path)?;
+            let s = editor::stats::stats(&map, bytes);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&s)?);
+            } else {
+                println!("{s}");
+            }
+        }
+        Command::Preview {
+            map: path,
+            output,
+            px,
+            obstacles_only,
+        } => {
+            let map = load(&path)?;
+            let img = editor::preview::render(
+                &map,
+                &PreviewOptions {
+                    px,
+                    overlays: !obstacles_only,
+                },
+            )?;
+            editor::preview::write_png(&img, &output)?;
+            eprintln!("wrote {} ({} × {} px)", output.display(), img.width(), img.height());
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn generate(args: &GenerateArgs) -> Result<sim_core::ObstacleMap> {
+    let _ = args;
+    bail!("generators are not implemented yet")
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

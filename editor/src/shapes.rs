@@ -1,0 +1,1 @@
+//! Shapes (parry2d) and their conservative rasterisation into a quadtree.

@@ -1,0 +1,92 @@
+//! `stats`: what a map file holds.
+
+use std::fmt;
+
+use serde::Serialize;
+use sim_core::MapData;
+
+/// Figures describing a map.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MapStats {
+    /// Width in metres.
+    pub width_m: f64,
+    /// Height in metres.
+    pub height_m: f64,
+    /// Cell side in metres.
+    pub cell_m: f64,
+    /// Width in cells.
+    pub width_cells: u32,
+    /// Height in cells.
+    pub height_cells: u32,
+    /// Lower-left corner `[x, y]`.
+    pub origin: [f64; 2],
+    /// Quadtree leaves (padding included).
+    pub leaves: usize,
+    /// Blocked leaves (padding included).
+    pub blocked_leaves: usize,
+    /// Free area, m².
+    pub free_area_m2: f64,
+    /// Blocked area inside the map, m².
+    pub blocked_area_m2: f64,
+    /// Blocked fraction of the map's area.
+    pub blocked_fraction: f64,
+    /// Number of treasures.
+    pub treasures: usize,
+    /// Sum of treasure quantities.
+    pub treasure_quantity: u64,
+    /// Home base centre `[x, y]`.
+    pub home_center: [f64; 2],
+    /// Size of the map file in bytes.
+    pub file_bytes: u64,
+}
+
+/// Compute the figures of `map`, whose file has `file_bytes` bytes.
+pub fn stats(map: &MapData, file_bytes: u64) -> MapStats {
+    let o = &map.obstacles;
+    let g = o.grid();
+    let blocked = o.blocked_area_m2();
+    let total = g.width_m() * g.height_m();
+    MapStats {
+        width_m: g.width_m(),
+        height_m: g.height_m(),
+        cell_m: g.cell_m(),
+        width_cells: g.width_cells(),
+        height_cells: g.height_cells(),
+        origin: g.origin().to_array(),
+        leaves: o.leaf_count(),
+        blocked_leaves: o.blocked_leaf_count(),
+        free_area_m2: o.free_area_m2(),
+        blocked_area_m2: blocked,
+        blocked_fraction: blocked / total,
+        treasures: map.treasures.len(),
+        treasure_quantity: map.treasures.iter().map(|t| u64::from(t.quantity)).sum(),
+        home_center: map.home.center().to_array(),
+        file_bytes,
+    }
+}
+
+impl fmt::Display for MapStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "size            {} m × {} m ({} × {} cells of {} m)",
+            self.width_m, self.height_m, self.width_cells, self.height_cells, self.cell_m
+        )?;
+        writeln!(f, "origin          ({}, {})", self.origin[0], self.origin[1])?;
+        writeln!(f, "leaves          {} ({} blocked)", self.leaves, self.blocked_leaves)?;
+        writeln!(
+            f,
+            "area            {} m² free, {} m² blocked ({:.2} %)",
+            self.free_area_m2,
+            self.blocked_area_m2,
+            100.0 * self.blocked_fraction
+        )?;
+        writeln!(f, "home            ({}, {})", self.home_center[0], self.home_center[1])?;
+        writeln!(
+            f,
+            "treasures       {} (total quantity {})",
+            self.treasures, self.treasure_quantity
+        )?;
+        write!(f, "file            {} bytes", self.file_bytes)
+    }
+}
