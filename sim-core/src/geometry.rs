@@ -89,6 +89,11 @@ pub enum Overlap {
 pub trait Shape {
     /// How the shape relates to the closed box `b`.
     fn classify(&self, b: &Aabb) -> Overlap;
+    /// Whether the shape and the box share some area (the cheap half of `classify`).
+    #[inline]
+    fn intersects(&self, b: &Aabb) -> bool {
+        self.classify(b) != Overlap::Disjoint
+    }
     /// A box enclosing the shape.
     fn bounds(&self) -> Aabb;
 }
@@ -99,6 +104,9 @@ impl<S: Shape + ?Sized> Shape for &S {
     }
     fn bounds(&self) -> Aabb {
         (**self).bounds()
+    }
+    fn intersects(&self, b: &Aabb) -> bool {
+        (**self).intersects(b)
     }
 }
 
@@ -112,6 +120,12 @@ pub struct Disc {
 }
 
 impl Shape for Disc {
+    #[inline]
+    fn intersects(&self, b: &Aabb) -> bool {
+        b.distance_squared_to(self.center) < self.radius * self.radius
+    }
+
+    #[inline]
     fn classify(&self, b: &Aabb) -> Overlap {
         let r2 = self.radius * self.radius;
         if b.distance_squared_to(self.center) >= r2 {

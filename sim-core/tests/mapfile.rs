@@ -29,7 +29,10 @@ fn random_map(seed: u64, w: u32, h: u32) -> MapData {
             radius_m: 1.5,
         }
     } else {
-        HomeBase::Rect(Aabb::from_corners(e.min + (e.max - e.min) * 0.1, e.min + (e.max - e.min) * 0.4))
+        HomeBase::Rect(Aabb::from_corners(
+            e.min + (e.max - e.min) * 0.1,
+            e.min + (e.max - e.min) * 0.4,
+        ))
     };
     MapData {
         obstacles,
@@ -137,7 +140,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         crc ^= u32::from(b);
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc
@@ -202,7 +209,11 @@ fn bad_headers_name_the_problem() {
     // A treasure count that would need 80 GB: refused before any allocation.
     let count_at = 8 + 4 + 24 + 8 + 25;
     let many = header_with(|b| b[count_at..count_at + 4].copy_from_slice(&u32::MAX.to_le_bytes()));
-    assert!(problem(&many).contains("claims 4294967295 treasures"), "{}", problem(&many));
+    assert!(
+        problem(&many).contains("claims 4294967295 treasures"),
+        "{}",
+        problem(&many)
+    );
 }
 
 #[test]
@@ -214,6 +225,9 @@ fn absurd_node_counts_are_refused() {
         let mut bad = bytes.clone();
         bad[nodes_at..nodes_at + 8].copy_from_slice(&claim.to_le_bytes());
         let msg = problem(&with_fixed_crc(bad));
-        assert!(msg.contains("node count") || msg.contains("truncated"), "{claim}: {msg}");
+        assert!(
+            msg.contains("node count") || msg.contains("truncated"),
+            "{claim}: {msg}"
+        );
     }
 }

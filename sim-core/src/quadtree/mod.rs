@@ -80,6 +80,35 @@ impl Square {
     }
 }
 
+const FLAG: u8 = 0x80;
+
+/// A level with a flag in its top bit (levels never exceed [`MAX_DEPTH`] < 128).
+#[inline]
+pub(crate) fn tag(level: u8, flag: bool) -> u8 {
+    if flag { level | FLAG } else { level }
+}
+
+/// A square whose level carries a flag.
+#[inline]
+pub(crate) fn tag_square(sq: Square, flag: bool) -> Square {
+    Square {
+        level: tag(sq.level, flag),
+        ..sq
+    }
+}
+
+/// Split a tagged square into the square and its flag.
+#[inline]
+pub(crate) fn untag(sq: Square) -> (Square, bool) {
+    (
+        Square {
+            level: sq.level & !FLAG,
+            ..sq
+        },
+        sq.level & FLAG != 0,
+    )
+}
+
 /// Fixed-capacity traversal stack: a depth-first walk never holds more than three pending
 /// siblings per level plus the current node, so no query allocates.
 pub(crate) struct Stack {

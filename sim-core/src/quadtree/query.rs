@@ -4,7 +4,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec2;
 
-use super::{FULL, NodeRef, RegionQuadtree, Square, Stack, is_leaf, leaf};
+use super::{FULL, NodeRef, RegionQuadtree, Square, Stack, is_leaf, leaf, tag, tag_square, untag};
 use crate::geometry::{Aabb, Overlap, Shape, clip_line};
 
 impl RegionQuadtree {
@@ -19,26 +19,59 @@ impl RegionQuadtree {
         mut visit: impl FnMut(Square, Aabb) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
         let want = leaf(value);
-        let mut stack = Stack::new(self.root, self.grid.depth());
-        while let Some((n, sq)) = stack.pop() {
-            if is_leaf(n) && n != want {
-                continue;
-            }
-            let b = self.grid.square(sq.x, sq.y, sq.level);
-            if shape.classify(&b) == Overlap::Disjoint {
-                continue;
-            }
+        let root = self.root_square();
+        let inside = match self.classify_node(shape, self.root, want, root) {
+            None => return ControlFlow::Continue(()),
+            Some(inside) => inside,
+        };
+        // Stack entries carry "wholly inside the shape" in the level's top bit: below such a
+        // node every wanted leaf is reported without further tests.
+        let mut stack = Stack::new(self.root, tag(root.level, inside));
+        while let Some((n, tagged)) = stack.pop() {
+            let (sq, inside) = untag(tagged);
             if is_leaf(n) {
-                visit(sq, b)?;
-            } else {
-                let kids = self.groups[n as usize];
-                // Pushed in reverse so children pop in SW, SE, NW, NE order.
-                for i in (0..4).rev() {
-                    stack.push(kids[i], sq.child(i));
+                visit(sq, self.grid.square(sq.x, sq.y, sq.level))?;
+                continue;
+            }
+            let kids = self.groups[n as usize];
+            // Leaf children are visited at once (no stack round trip); internal ones are
+            // pushed in reverse so they pop in SW, SE, NW, NE order.
+            for i in (0..4).rev() {
+                let (k, csq) = (kids[i], sq.child(i));
+                if is_leaf(k) {
+                    if k == want {
+                        let b = self.grid.square(csq.x, csq.y, csq.level);
+                        // A leaf needs only the cheap half of the test.
+                        if inside || shape.intersects(&b) {
+                            visit(csq, b)?;
+                        }
+                    }
+                } else if inside {
+                    stack.push(k, tag_square(csq, true));
+                } else {
+                    match shape.classify(&self.grid.square(csq.x, csq.y, csq.level)) {
+                        Overlap::Disjoint => {}
+                        Overlap::Partial => stack.push(k, tag_square(csq, false)),
+                        Overlap::Contains => stack.push(k, tag_square(csq, true)),
+                    }
                 }
             }
         }
         ControlFlow::Continue(())
+    }
+
+    /// `None` if the node cannot hold a wanted leaf overlapping the shape, else whether it
+    /// lies wholly inside the shape.
+    #[inline]
+    fn classify_node<S: Shape>(&self, shape: &S, n: NodeRef, want: NodeRef, sq: Square) -> Option<bool> {
+        if is_leaf(n) && n != want {
+            return None;
+        }
+        match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
+            Overlap::Disjoint => None,
+            Overlap::Partial => Some(false),
+            Overlap::Contains => Some(true),
+        }
     }
 
     /// Whether any leaf of the given value overlaps `shape`.
