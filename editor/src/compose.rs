@@ -1,12 +1,292 @@
-//! `compose`: a map from an XML scene of shapes.
+//! `compose`: a map from an XML scene of shapes, rasterised conservatively (a cell touching a
+//! shape is blocked, see [`crate::shapes`]).
+//!
+//! ```xml
+//! <scene width-m="64" height-m="48" cell-m="1" origin-x="0" origin-y="0">
+//!   <home x="8" y="8" radius="2"/>
+//!   <treasure x="50" y="40" quantity="3"/>
+//!   <disc x="20" y="20" radius="4"/>
+//!   <rect x="40" y="10" width="10" height="3" rotation-deg="30"/>
+//!   <capsule x1="5" y1="30" x2="25" y2="35" radius="1"/>
+//!   <polygon x="45" y="30" rotation-deg="0">
+//!     <point x="0" y="0"/><point x="6" y="0"/><point x="3" y="5"/>
+//!   </polygon>
+//! </scene>
+//! ```
+//! Positions are world metres; polygon points are relative to the polygon's `x`, `y` and
+//! rotated about it. Every shape, the home base and every treasure must lie inside the world.
 
 use std::path::Path;
 
-use sim_core::MapData;
+use quick_xml::events::Event;
+use serde::Deserialize;
+use sim_core::geometry::Aabb;
+use sim_core::glam::DVec2;
+use sim_core::{Grid, HomeBase, MapData, TreasureSpec};
 
+use crate::progress::Progress;
+use crate::shapes::{Obstacle, ShapeSet};
 use crate::{EditorError, Result};
 
-/// Build the map described by the scene file at `path`.
+#[derive(Debug, Deserialize)]
+#[serde(rename = "scene")]
+struct SceneXml {
+    #[serde(rename = "@width-m")]
+    width_m: f64,
+    #[serde(rename = "@height-m")]
+    height_m: f64,
+    #[serde(rename = "@cell-m", default = "one")]
+    cell_m: f64,
+    #[serde(rename = "@origin-x", default)]
+    origin_x: f64,
+    #[serde(rename = "@origin-y", default)]
+    origin_y: f64,
+    #[serde(rename = "$value", default)]
+    items: Vec<Item>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+enum Item {
+    Home {
+        #[serde(rename = "@x")]
+        x: f64,
+        #[serde(rename = "@y")]
+        y: f64,
+        #[serde(rename = "@radius", default = "two")]
+        radius: f64,
+    },
+    Treasure {
+        #[serde(rename = "@x")]
+        x: f64,
+        #[serde(rename = "@y")]
+        y: f64,
+        #[serde(rename = "@quantity", default = "one_u32")]
+        quantity: u32,
+    },
+    Disc {
+        #[serde(rename = "@x")]
+        x: f64,
+        #[serde(rename = "@y")]
+        y: f64,
+        #[serde(rename = "@radius")]
+        radius: f64,
+    },
+    Rect {
+        #[serde(rename = "@x")]
+        x: f64,
+        #[serde(rename = "@y")]
+        y: f64,
+        #[serde(rename = "@width")]
+        width: f64,
+        #[serde(rename = "@height")]
+        height: f64,
+        #[serde(rename = "@rotation-deg", default)]
+        rotation_deg: f64,
+    },
+    Capsule {
+        #[serde(rename = "@x1")]
+        x1: f64,
+        #[serde(rename = "@y1")]
+        y1: f64,
+        #[serde(rename = "@x2")]
+        x2: f64,
+        #[serde(rename = "@y2")]
+        y2: f64,
+        #[serde(rename = "@radius")]
+        radius: f64,
+    },
+    Polygon {
+        #[serde(rename = "@x", default)]
+        x: f64,
+        #[serde(rename = "@y", default)]
+        y: f64,
+        #[serde(rename = "@rotation-deg", default)]
+        rotation_deg: f64,
+        #[serde(rename = "point", default)]
+        points: Vec<PointXml>,
+    },
+}
+
+fn two() -> f64 {
+    2.0
+}
+fn one_u32() -> u32 {
+    1
+}
+
+#[derive(Debug, Deserialize)]
+struct PointXml {
+    #[serde(rename = "@x")]
+    x: f64,
+    #[serde(rename = "@y")]
+    y: f64,
+}
+
+/// A parsed scene.
+#[derive(Debug)]
+pub struct Scene {
+    /// The world grid.
+    pub grid: Grid,
+    /// The obstacles.
+    pub shapes: Vec<Obstacle>,
+    /// The home base, if declared.
+    pub home: Option<HomeBase>,
+    /// Declared treasures.
+    pub treasures: Vec<TreasureSpec>,
+}
+
+fn line_col(text: &str, offset: u64) -> (usize, usize) {
+    let offset = (offset as usize).min(text.len());
+    let before = &text.as_bytes()[..offset];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let col = offset - before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1) + 1;
+    (line, col)
+}
+
+/// Check well-formedness first, so syntax errors carry a line and column.
+fn check_xml(text: &str, path: &Path) -> Result<()> {
+    let mut reader = quick_xml::Reader::from_str(text);
+    reader.config_mut().check_end_names = true;
+    loop {
+        match reader.read_event() {
+            Ok(Event::Eof) => return Ok(()),
+            Ok(_) => {}
+            Err(e) => {
+                let (line, column) = line_col(text, reader.error_position());
+                return Err(EditorError::Xml {
+                    path: path.to_path_buf(),
+                    line,
+                    column,
+                    problem: e.to_string(),
+                });
+            }
+        }
+    }
+}
+
+/// Parse scene XML text; `path` names the file in errors.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
+    check_xml(text, path)?;
+    let raw: SceneXml = quick_xml::de::from_str(text)
+        .map_err(|e| EditorError::bad_input(path, format!("scene does not match the expected form: {e}")))?;
+    let bad = |p: String| EditorError::bad_input(path, p);
+    let grid = Grid::from_size_m(
+        DVec2::new(raw.origin_x, raw.origin_y),
+        raw.cell_m,
+        raw.width_m,
+        raw.height_m,
+    )
+    .map_err(|e| bad(format!("world: {e}")))?;
+    let world = grid.extent();
+    let inside = |b: &Aabb| world.contains_box(b);
+    let mut shapes = Vec::new();
+    let mut home = None;
+    let mut treasures = Vec::new();
+    for (i, item) in raw.items.into_iter().enumerate() {
+        let n = i + 1;
+        let shape = match item {
+            Item::Home { x, y, radius } => {
+                let h = HomeBase::Disc {
+                    center: DVec2::new(x, y),
+                    radius_m: radius,
+                };
+                if !(radius > 0.0 && radius.is_finite()) || !inside(&h.bounds()) {
+                    return Err(bad(format!(
+                        "item {n} (home at {x}, {y}, radius {radius}) must be a positive-radius disc inside the world"
+                    )));
+                }
+                if home.replace(h).is_some() {
+                    return Err(bad(format!("item {n}: a second home base")));
+                }
+                continue;
+            }
+            Item::Treasure { x, y, quantity } => {
+                let p = DVec2::new(x, y);
+                if !inside(&Aabb { min: p, max: p }) || quantity == 0 {
+                    return Err(bad(format!(
+                        "item {n} (treasure at {x}, {y}) must lie inside the world and have a quantity ≥ 1"
+                    )));
+                }
+                treasures.push(TreasureSpec { position: p, quantity });
+                continue;
+            }
+            Item::Disc { x, y, radius } => ("disc", Obstacle::disc(DVec2::new(x, y), radius)),
+            Item::Rect {
+                x,
+                y,
+                width,
+                height,
+                rotation_deg,
+            } => (
+                "rect",
+                Obstacle::rect(DVec2::new(x, y), width, height, rotation_deg.to_radians()),
+            ),
+            Item::Capsule { x1, y1, x2, y2, radius } => (
+                "capsule",
+                Obstacle::capsule(DVec2::new(x1, y1), DVec2::new(x2, y2), radius),
+            ),
+            Item::Polygon {
+                x,
+                y,
+                rotation_deg,
+                points,
+            } => {
+                let pts: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+                (
+                    "polygon",
+                    Obstacle::polygon(DVec2::new(x, y), &pts, rotation_deg.to_radians()),
+                )
+            }
+        };
+        let (kind, Some(s)) = shape else {
+            return Err(bad(format!(
+                "item {n} ({}) is degenerate (non-positive size, fewer than 3 points, or a self-intersecting polygon)",
+                shape.0
+            )));
+        };
+        let b = s.bounds();
+        if !inside(&Aabb {
+            min: b.min + 2e-3,
+            max: b.max - 2e-3,
+        }) {
+            return Err(bad(format!(
+                "item {n} ({kind}, spanning ({:.3}, {:.3})–({:.3}, {:.3})) reaches outside the world ({}, {})–({}, {})",
+                b.min.x, b.min.y, b.max.x, b.max.y, world.min.x, world.min.y, world.max.x, world.max.y
+            )));
+        }
+        shapes.push(s);
+    }
+    Ok(Scene {
+        grid,
+        shapes,
+        home,
+        treasures,
+    })
+}
+
+/// Rasterise a scene. Without a declared home base, one is chosen automatically.
+pub fn compose(scene: Scene) -> Result<MapData> {
+    let set = ShapeSet::new(scene.grid, scene.shapes);
+    let obstacles = set.rasterise(&mut Progress::hidden());
+    let home = match scene.home {
+        Some(h) => h,
+        None => crate::place::auto_home(&obstacles, 2.0)?,
+    };
+    Ok(MapData {
+        obstacles,
+        home,
+        treasures: scene.treasures,
+    })
+}
+
+/// Read, parse and rasterise the scene file at `path`.
 pub fn compose_file(path: &Path) -> Result<MapData> {
-    Err(EditorError::bad_input(path, "compose is not implemented yet"))
+    let bytes = std::fs::read(path).map_err(EditorError::io(path))?;
+    let text = String::from_utf8(bytes).map_err(|_| EditorError::bad_input(path, "scene is not UTF-8 text"))?;
+    compose(parse_scene(&text, path)?)
 }

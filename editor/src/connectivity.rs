@@ -169,24 +169,18 @@ impl<'a> Components<'a> {
 
     fn finish_labels(&mut self) {
         let n = self.parent.len();
+        let roots: Vec<u32> = (0..n as u32).map(|i| self.find(i)).collect();
         let mut label_of_root = vec![NONE; n];
-        for i in 0..n as u32 {
-            let r = self.find(i);
+        for (i, &r) in roots.iter().enumerate() {
             if label_of_root[r as usize] == NONE {
                 label_of_root[r as usize] = self.component_cells.len() as u32;
                 self.component_cells.push(0);
             }
             let l = label_of_root[r as usize];
-            self.component_cells[l as usize] += self.squares[i as usize].cells();
+            self.component_cells[l as usize] += self.squares[i].cells();
         }
-        for i in 0..n {
-            let r = self.parent[i] as usize;
-            let r = if self.parent[r] as usize == r {
-                r
-            } else {
-                self.find(r as u32) as usize
-            };
-            self.parent[i] = label_of_root[r];
+        for (p, &r) in self.parent.iter_mut().zip(&roots) {
+            *p = label_of_root[r as usize];
         }
     }
 

@@ -7,20 +7,20 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum EditorError {
     /// A file that cannot be read or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// An image that cannot be decoded or encoded.
-    #[error("{}: cannot read image: {source}", path.display())]
+    #[error("{}: cannot read image: {cause}", path.display())]
     Image {
         /// The file.
         path: PathBuf,
         /// The cause.
-        source: image::ImageError,
+        cause: image::ImageError,
     },
     /// An input file whose contents make no sense (malformed YAML, a `.map` with a bad
     /// header, a scene with a shape outside the world, …).
@@ -69,6 +69,6 @@ impl EditorError {
     /// An [`EditorError::Io`] for `path`.
     pub fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> Self {
         let path = path.into();
-        move |source| Self::Io { path, source }
+        move |cause| Self::Io { path, cause }
     }
 }

@@ -66,7 +66,9 @@ pub fn auto_home(obstacles: &ObstacleMap, radius_m: f64) -> Result<HomeBase> {
     let comps = Components::new(obstacles.tree());
     let g = obstacles.grid();
     let Some(big) = comps.largest() else {
-        return Err(EditorError::Placement("the map has no free cell for a home base".into()));
+        return Err(EditorError::Placement(
+            "the map has no free cell for a home base".into(),
+        ));
     };
     let target = g.extent().center();
     let mut best: Option<(bool, f64, DVec2, f64)> = None; // (fits, distance², centre, radius)

@@ -5,8 +5,8 @@ use std::io::Cursor;
 use std::path::Path;
 
 use image::{ImageFormat, Rgb, RgbImage};
-use sim_core::glam::DVec2;
 use sim_core::MapData;
+use sim_core::glam::DVec2;
 
 use crate::{EditorError, Result};
 
@@ -24,7 +24,10 @@ pub struct PreviewOptions {
 
 impl Default for PreviewOptions {
     fn default() -> Self {
-        Self { px: None, overlays: true }
+        Self {
+            px: None,
+            overlays: true,
+        }
     }
 }
 
@@ -131,9 +134,9 @@ fn mark(img: &mut RgbImage, (x, y): (f64, f64), r: f64, col: Rgb<u8>) {
 pub fn write_png(img: &RgbImage, path: &Path) -> Result<()> {
     let mut bytes = Vec::new();
     img.write_to(&mut Cursor::new(&mut bytes), ImageFormat::Png)
-        .map_err(|source| EditorError::Image {
+        .map_err(|cause| EditorError::Image {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
     sim_core::mapfile::write_atomically(path, &bytes)?;
     Ok(())

@@ -59,7 +59,11 @@ fn png_pgm_bmp_import_pixel_for_pixel() {
             },
         )
         .unwrap();
-        assert_eq!(inv.blocked_area_m2(), (77 * 45 - dark_count(&img)) as f64, "{ext} inverted");
+        assert_eq!(
+            inv.blocked_area_m2(),
+            (77 * 45 - dark_count(&img)) as f64,
+            "{ext} inverted"
+        );
     }
 }
 
@@ -184,7 +188,11 @@ fn write_ros(dir: &Path, yaml: &str, pixels: &[u8], w: u32, h: u32) -> std::path
 fn ros_counts(pixels: &[u8], negate: bool, occ: f64, free: f64) -> (u64, u64, u64) {
     let mut c = (0, 0, 0);
     for &v in pixels {
-        let p = if negate { f64::from(v) / 255.0 } else { (255.0 - f64::from(v)) / 255.0 };
+        let p = if negate {
+            f64::from(v) / 255.0
+        } else {
+            (255.0 - f64::from(v)) / 255.0
+        };
         if p > occ {
             c.0 += 1;
         } else if p < free {
@@ -263,7 +271,10 @@ fn real_movingai_maps() {
     let Some(data) = common::data_dir("real_movingai_maps") else {
         return;
     };
-    for (file, w, h) in [("movingai/arena.map", 49, 49), ("movingai/street/Berlin_0_256.map", 256, 256)] {
+    for (file, w, h) in [
+        ("movingai/arena.map", 49, 49),
+        ("movingai/street/Berlin_0_256.map", 256, 256),
+    ] {
         let path = data.join(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let body: Vec<&str> = text.lines().skip(4).map(|l| l.trim_end_matches('\r')).collect();
@@ -284,8 +295,20 @@ fn real_ros_maps() {
         return;
     };
     for (yaml, pgm, free_thresh, origin, (w, h)) in [
-        ("ros/turtlebot3/map.yaml", "ros/turtlebot3/map.pgm", 0.196, DVec2::new(-10.0, -10.0), (384, 384)),
-        ("ros/nav2/depot.yaml", "ros/nav2/depot.pgm", 0.25, DVec2::ZERO, (604, 307)),
+        (
+            "ros/turtlebot3/map.yaml",
+            "ros/turtlebot3/map.pgm",
+            0.196,
+            DVec2::new(-10.0, -10.0),
+            (384, 384),
+        ),
+        (
+            "ros/nav2/depot.yaml",
+            "ros/nav2/depot.pgm",
+            0.25,
+            DVec2::ZERO,
+            (604, 307),
+        ),
     ] {
         let (pw, ph, pixels) = common::read_pgm(&std::fs::read(data.join(pgm)).unwrap());
         assert_eq!((pw, ph), (w, h));
@@ -296,7 +319,10 @@ fn real_ros_maps() {
         assert_eq!(map.grid().origin(), origin);
         assert_eq!((map.grid().width_cells(), map.grid().height_cells()), (w, h));
         assert!((map.free_area_m2() / cell - free as f64).abs() < 1e-6, "{yaml}");
-        assert!((map.blocked_area_m2() / cell - (occ + unk) as f64).abs() < 1e-6, "{yaml}");
+        assert!(
+            (map.blocked_area_m2() / cell - (occ + unk) as f64).abs() < 1e-6,
+            "{yaml}"
+        );
         let open = import(
             &data.join(yaml),
             &ImportOptions {

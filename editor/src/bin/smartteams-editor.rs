@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use editor::import::{ImportOptions, Unknown};
 use editor::place::{PlaceOptions, Spread};
@@ -12,7 +12,11 @@ use sim_core::MapData;
 use sim_core::glam::DVec2;
 
 #[derive(Parser)]
-#[command(name = "smartteams-editor", version, about = "Build, import, check and draw Smart Teams maps")]
+#[command(
+    name = "smartteams-editor",
+    version,
+    about = "Build, import, check and draw Smart Teams maps"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -224,7 +228,10 @@ fn parse_range(s: &str) -> Result<(u32, u32), String> {
         Some((a, b)) => (a, b.trim_start_matches('=')),
         None => (s, s),
     };
-    let (a, b) = (a.trim().parse::<u32>().map_err(|_| bad())?, b.trim().parse::<u32>().map_err(|_| bad())?);
+    let (a, b) = (
+        a.trim().parse::<u32>().map_err(|_| bad())?,
+        b.trim().parse::<u32>().map_err(|_| bad())?,
+    );
     if a == 0 || a > b {
         return Err(bad());
     }
@@ -286,7 +293,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let map = editor::compose::compose_file(&scene)?;
             save(&map, &output)?;
         }
-        Command::Place { map: path, place, output } => {
+        Command::Place {
+            map: path,
+            place,
+            output,
+        } => {
             let mut map = load(&path)?;
             editor::place::place(&mut map, &place.options(false))?;
             save(&map, &output)?;
@@ -338,8 +349,34 @@ fn run(cli: Cli) -> Result<ExitCode> {
 }
 
 fn generate(args: &GenerateArgs) -> Result<sim_core::ObstacleMap> {
-    let _ = args;
-    bail!("generators are not implemented yet")
+    use editor::generate::{GenerateOptions, Kind};
+    let kind = match args.kind {
+        GeneratorArg::Noise => Kind::Noise,
+        GeneratorArg::Fractal => Kind::Fractal,
+        GeneratorArg::Caves => Kind::Caves,
+        GeneratorArg::Maze => Kind::Maze,
+        GeneratorArg::Rooms => Kind::Rooms,
+        GeneratorArg::Mesas => Kind::Mesas,
+    };
+    let opts = GenerateOptions {
+        width_m: args.width_m,
+        height_m: args.height_m,
+        cell_m: args.cell_m,
+        seed: args.seed,
+        density: args.density,
+        scale_m: args.scale_m,
+        count: args.count,
+        progress: !args.quiet && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+    };
+    let start = std::time::Instant::now();
+    let map = editor::generate::generate(kind, &opts)?;
+    eprintln!(
+        "generated in {:.1} s: {} leaves ({} blocked)",
+        start.elapsed().as_secs_f64(),
+        map.leaf_count(),
+        map.blocked_leaf_count()
+    );
+    Ok(map)
 }
 
 fn main() -> ExitCode {

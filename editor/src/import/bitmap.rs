@@ -22,9 +22,9 @@ pub fn load_image(path: &Path) -> Result<DynamicImage> {
             "not an image in a supported format (PNG, PGM/PPM/PBM, JPEG, BMP)",
         ));
     }
-    reader.decode().map_err(|source| EditorError::Image {
+    reader.decode().map_err(|cause| EditorError::Image {
         path: path.to_path_buf(),
-        source,
+        cause,
     })
 }
 

@@ -30,7 +30,9 @@ pub struct MovingAiMap {
 pub fn parse(text: &[u8]) -> Result<MovingAiMap, String> {
     let mut lines = text.split(|&b| b == b'\n').map(|l| l.strip_suffix(b"\r").unwrap_or(l));
     let mut next = |what: &str, n: usize| -> Result<String, String> {
-        let line = lines.next().ok_or(format!("line {n}: file ends before the header's {what}"))?;
+        let line = lines
+            .next()
+            .ok_or(format!("line {n}: file ends before the header's {what}"))?;
         String::from_utf8(line.to_vec()).map_err(|_| format!("line {n}: header is not text"))
     };
     let first = next("`type` line", 1)?;
@@ -113,11 +115,31 @@ mod tests {
         let m = parse(ok).unwrap();
         assert_eq!((m.width, m.height), (3, 2));
         assert_eq!(m.rows[1], b"TGS");
-        assert!(parse(b"type octile\nheight 2\nwidth 3\nmap\n.@.\n").unwrap_err().contains("1 rows"));
-        assert!(parse(b"type octile\nheight 2\nwidth 3\nmap\n.@\n...\n").unwrap_err().contains("line 5"));
+        assert!(
+            parse(b"type octile\nheight 2\nwidth 3\nmap\n.@.\n")
+                .unwrap_err()
+                .contains("1 rows")
+        );
+        assert!(
+            parse(b"type octile\nheight 2\nwidth 3\nmap\n.@\n...\n")
+                .unwrap_err()
+                .contains("line 5")
+        );
         assert!(parse(b"typo\nheight 2\nwidth 3\nmap\n").unwrap_err().contains("line 1"));
-        assert!(parse(b"type octile\nheight -2\nwidth 3\nmap\n").unwrap_err().contains("line 2"));
-        assert!(parse(b"type octile\nheight 99999\nwidth 99999\nmap\n").unwrap_err().contains("bytes"));
-        assert!(parse(b"type octile\nheight 1\nwidth 1\nmap\n.\n@\n").unwrap_err().contains("more than"));
+        assert!(
+            parse(b"type octile\nheight -2\nwidth 3\nmap\n")
+                .unwrap_err()
+                .contains("line 2")
+        );
+        assert!(
+            parse(b"type octile\nheight 99999\nwidth 99999\nmap\n")
+                .unwrap_err()
+                .contains("bytes")
+        );
+        assert!(
+            parse(b"type octile\nheight 1\nwidth 1\nmap\n.\n@\n")
+                .unwrap_err()
+                .contains("more than")
+        );
     }
 }

@@ -97,7 +97,10 @@ pub fn parse(text: &str) -> Result<RosMap, String> {
         serde_norway::Value::Number(n) if n.as_i64() == Some(1) => true,
         other => return Err(format!("negate must be 0 or 1, got {other:?}")),
     };
-    for (name, t) in [("occupied_thresh", raw.occupied_thresh), ("free_thresh", raw.free_thresh)] {
+    for (name, t) in [
+        ("occupied_thresh", raw.occupied_thresh),
+        ("free_thresh", raw.free_thresh),
+    ] {
         if !(0.0..=1.0).contains(&t) {
             return Err(format!("{name} must lie in [0, 1], got {t}"));
         }
@@ -157,8 +160,7 @@ impl RosMap {
 /// Import a ROS map (YAML + image).
 pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = read(path)?;
-    let text =
-        String::from_utf8(text).map_err(|_| EditorError::bad_input(path, "ROS map YAML is not UTF-8 text"))?;
+    let text = String::from_utf8(text).map_err(|_| EditorError::bad_input(path, "ROS map YAML is not UTF-8 text"))?;
     let ros = parse(&text).map_err(|p| EditorError::bad_input(path, p))?;
     let image_path = path.parent().unwrap_or(Path::new("")).join(&ros.image);
     let img = load_image(&image_path)?.into_rgba8();
@@ -203,6 +205,10 @@ mod tests {
         assert!(parse("image: a.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.2\nmode: fancy\n")
             .unwrap_err()
             .contains("mode"));
-        assert!(parse("image: a.pgm\norigin: [0, 0, 0]\n").unwrap_err().contains("resolution"));
+        assert!(
+            parse("image: a.pgm\norigin: [0, 0, 0]\n")
+                .unwrap_err()
+                .contains("resolution")
+        );
     }
 }
