@@ -1,0 +1,127 @@
+//! Generator densities and structure, checked cell by cell.
+
+use editor::connectivity::Components;
+use editor::generate::{GenerateOptions, Kind, generate};
+
+fn opts(w: f64, h: f64, seed: u64, density: Option<f64>) -> GenerateOptions {
+    GenerateOptions {
+        width_m: w,
+        height_m: h,
+        seed,
+        density,
+        ..GenerateOptions::default()
+    }
+}
+
+fn blocked_fraction(map: &sim_core::ObstacleMap) -> f64 {
+    let g = map.grid();
+    // Count cells one by one (independent of the tree's area sums).
+    let mut n = 0u64;
+    for y in 0..g.height_cells() {
+        for x in 0..g.width_cells() {
+            n += u64::from(map.tree().cell_value(x, y));
+        }
+    }
+    n as f64 / (f64::from(g.width_cells()) * f64::from(g.height_cells()))
+}
+
+#[test]
+fn white_noise_density_within_1_percent() {
+    // 65,536 cells: the binomial standard deviation is < 0.2 %.
+    for d in [0.05, 0.3, 0.6] {
+        let map = generate(Kind::Noise, &opts(256.0, 256.0, 3, Some(d))).unwrap();
+        let f = blocked_fraction(&map);
+        assert!((f - d).abs() < 0.01, "density {d}: got {f}");
+    }
+}
+
+#[test]
+fn fractal_density_within_1_percent() {
+    // Small maps use every cell for the threshold: exact up to rounding. Larger ones sample.
+    for (w, d) in [(200.0, 0.3), (1500.0, 0.2)] {
+        let mut o = opts(w, w * 0.75, 5, Some(d));
+        o.cell_m = if w > 1000.0 { 2.0 } else { 1.0 };
+        let map = generate(Kind::Fractal, &o).unwrap();
+        let f = blocked_fraction(&map);
+        assert!((f - d).abs() < 0.01, "density {d}: got {f}");
+        assert!(map.validate().is_ok());
+    }
+}
+
+#[test]
+fn mesas_density_within_tolerance() {
+    // Boolean model + conservative rasterisation: within 0.05 of the target on a map much
+    // larger than the obstacles.
+    let mut o = opts(1200.0, 1200.0, 11, Some(0.15));
+    o.scale_m = Some(30.0);
+    let map = generate(Kind::Mesas, &o).unwrap();
+    let f = blocked_fraction(&map);
+    assert!((f - 0.15).abs() < 0.05, "got {f}");
+}
+
+#[test]
+fn caves_are_cave_like() {
+    let map = generate(Kind::Caves, &opts(160.0, 120.0, 2, None)).unwrap();
+    let f = blocked_fraction(&map);
+    assert!((0.2..0.7).contains(&f), "cave rock fraction {f}");
+}
+
+#[test]
+fn maze_is_one_connected_corridor_system() {
+    let map = generate(Kind::Maze, &opts(63.0, 41.0, 4, None)).unwrap();
+    let c = Components::new(map.tree());
+    assert_eq!(c.count(), 1, "a perfect maze has one free component");
+    assert!(blocked_fraction(&map) > 0.3);
+}
+
+#[test]
+fn rooms_are_all_connected_through_doors() {
+    for seed in 0..5 {
+        let map = generate(Kind::Rooms, &opts(120.0, 90.0, seed, None)).unwrap();
+        let c = Components::new(map.tree());
+        assert_eq!(c.count(), 1, "seed {seed}: every room is reachable");
+        let g = map.grid();
+        // The outer wall is closed.
+        for x in 0..g.width_cells() {
+            assert!(map.tree().cell_value(x, 0) && map.tree().cell_value(x, g.height_cells() - 1));
+        }
+        assert!(blocked_fraction(&map) > 0.05);
+    }
+}
+
+#[test]
+fn generators_are_deterministic() {
+    for kind in [
+        Kind::Noise,
+        Kind::Fractal,
+        Kind::Caves,
+        Kind::Maze,
+        Kind::Rooms,
+        Kind::Mesas,
+    ] {
+        let a = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
+        let b = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
+        let ma = sim_core::MapData {
+            obstacles: a,
+            home: sim_core::HomeBase::Disc {
+                center: sim_core::glam::DVec2::new(1.0, 1.0),
+                radius_m: 1.0,
+            },
+            treasures: vec![],
+        };
+        let mb = sim_core::MapData {
+            obstacles: b,
+            ..ma.clone()
+        };
+        assert_eq!(ma.to_bytes(), mb.to_bytes(), "{kind:?}");
+    }
+}
+
+#[test]
+fn bad_parameters_are_refused() {
+    assert!(generate(Kind::Noise, &opts(100.0, 100.0, 1, Some(1.5))).is_err());
+    assert!(generate(Kind::Fractal, &opts(-5.0, 100.0, 1, None)).is_err());
+    // A raster generator refuses a 10^10-cell map instead of allocating it.
+    let e = generate(Kind::Caves, &opts(200_000.0, 200_000.0, 1, None)).unwrap_err();
+    assert!(e.to_string().contains("raster"), "{e}");
+}
