@@ -143,7 +143,7 @@ pub struct Scene {
 fn line_col(text: &str, offset: u64) -> (usize, usize) {
     let offset = (offset as usize).min(text.len());
     let before = &text.as_bytes()[..offset];
-    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line = before.split(|&b| b == b'\n').count();
     let col = offset - before.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1) + 1;
     (line, col)
 }
@@ -195,7 +195,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
                     center: DVec2::new(x, y),
                     radius_m: radius,
                 };
-                if !(radius > 0.0 && radius.is_finite()) || !inside(&h.bounds()) {
+                if !(radius > 0.0 && radius.is_finite() && inside(&h.bounds())) {
                     return Err(bad(format!(
                         "item {n} (home at {x}, {y}, radius {radius}) must be a positive-radius disc inside the world"
                     )));

@@ -82,8 +82,8 @@ pub fn render(map: &MapData, opts: &PreviewOptions) -> Result<RgbImage> {
         };
         let blend = |img: &mut RgbImage, i: u32, j: u32, col: [u8; 3]| {
             let p = img.get_pixel_mut(i, j);
-            for k in 0..3 {
-                p.0[k] = ((u16::from(p.0[k]) + u16::from(col[k])) / 2) as u8;
+            for (c, &k) in p.0.iter_mut().zip(&col) {
+                *c = u16::midpoint(u16::from(*c), u16::from(k)) as u8;
             }
         };
         // Home base: blend blue into every pixel whose centre lies inside it.

@@ -66,7 +66,7 @@ fn is_convex(points: &[DVec2]) -> bool {
         }
         if sign == 0.0 {
             sign = cross.signum();
-        } else if cross.signum() != sign {
+        } else if cross * sign < 0.0 {
             return false;
         }
     }

@@ -26,7 +26,7 @@ struct Cli {
 enum Command {
     /// Generate a map.
     Generate(GenerateArgs),
-    /// Import a bitmap (PNG/PGM/JPEG/BMP), a ROS map_server YAML or a MovingAI .map.
+    /// Import a bitmap (PNG/PGM/JPEG/BMP), a ROS map server YAML or a Moving AI .map.
     Import(ImportArgs),
     /// Build a map from an XML scene of shapes.
     Compose {
@@ -137,7 +137,7 @@ impl PlaceArgs {
 struct ImportArgs {
     /// The file to import.
     file: PathBuf,
-    /// Metres per pixel (bitmaps; default 1; overrides a ROS or MovingAI resolution).
+    /// Metres per pixel (bitmaps; default 1; overrides a ROS or Moving AI resolution).
     #[arg(long)]
     resolution_m: Option<f64>,
     /// Bitmaps: a pixel darker than this grey value (0–255) is blocked.
@@ -149,7 +149,7 @@ struct ImportArgs {
     /// ROS: what unknown cells become.
     #[arg(long, value_enum, default_value_t = UnknownArg::Blocked)]
     unknown: UnknownArg,
-    /// World position `X,Y` of the map's lower-left corner (bitmaps, MovingAI).
+    /// World position `X,Y` of the map's lower-left corner (bitmaps, Moving AI).
     #[arg(long, value_parser = parse_point, default_value = "0,0")]
     origin: DVec2,
     #[command(flatten)]

@@ -40,7 +40,7 @@ impl Field {
             .set_persistence(0.5);
         let finest_m = scale_m / f64::from(1u32 << (OCTAVES - 1));
         let ideal = (finest_m / 4.0 / cell_m).floor().clamp(1.0, 16.0) as u32;
-        let s = 1u32 << (31 - ideal.leading_zeros()); // largest power of two ≤ ideal
+        let s = 1u32 << ideal.ilog2(); // largest power of two ≤ ideal
         Self { fbm, cell_m, s }
     }
 

@@ -139,12 +139,10 @@ pub fn rooms(opts: &GenerateOptions) -> Result<ObstacleMap> {
     let mut stack = vec![(1u32, 1u32, w - 1, h - 1)]; // interior [x0, x1) × [y0, y1)
     while let Some((x0, y0, x1, y1)) = stack.pop() {
         let (rw, rh) = (x1 - x0, y1 - y0);
-        let vertical = if rw > rh {
-            true
-        } else if rh > rw {
-            false
-        } else {
-            rng.random()
+        let vertical = match rw.cmp(&rh) {
+            std::cmp::Ordering::Greater => true,
+            std::cmp::Ordering::Less => false,
+            std::cmp::Ordering::Equal => rng.random(),
         };
         let span = if vertical { rw } else { rh };
         let len = if vertical { rh } else { rw };

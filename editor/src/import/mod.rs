@@ -1,6 +1,6 @@
-//! Importers: bitmaps (PNG, PGM, JPEG, BMP), ROS `map_server` YAML + image, MovingAI `.map`.
+//! Importers: bitmaps (PNG, PGM, JPEG, BMP), ROS `map_server` YAML + image, Moving AI `.map`.
 //!
-//! The format is chosen by the file extension: `.yaml`/`.yml` is ROS, `.map` is MovingAI,
+//! The format is chosen by the file extension: `.yaml`/`.yml` is ROS, `.map` is Moving AI,
 //! anything else is decoded as an image (its format guessed from the content).
 
 pub mod bitmap;
@@ -27,7 +27,7 @@ pub enum Unknown {
 /// Options of `import`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ImportOptions {
-    /// Metres per pixel for bitmaps (ROS and MovingAI files state their own). Default 1.
+    /// Metres per pixel for bitmaps (ROS and Moving AI files state their own). Default 1.
     pub resolution_m: Option<f64>,
     /// Bitmaps: a pixel whose grey value (0–255) is below this is blocked. Default 128.
     pub threshold: u8,
@@ -35,7 +35,7 @@ pub struct ImportOptions {
     pub invert: bool,
     /// ROS: what unknown cells become.
     pub unknown: Unknown,
-    /// World position of the map's lower-left corner (bitmaps and MovingAI; ROS states its own).
+    /// World position of the map's lower-left corner (bitmaps and Moving AI; ROS states its own).
     pub origin: DVec2,
 }
 
@@ -58,7 +58,7 @@ pub enum Format {
     Bitmap,
     /// ROS `map_server` YAML.
     Ros,
-    /// MovingAI `.map`.
+    /// Moving AI `.map`.
     MovingAi,
 }
 

@@ -1,4 +1,4 @@
-//! MovingAI `.map` files: a four-line header (`type …`, `height H`, `width W`, `map`) and
+//! Moving AI `.map` files: a four-line header (`type …`, `height H`, `width W`, `map`) and
 //! `H` rows of `W` characters; row 0 is the top. `.`, `G` and `S` are passable, everything
 //! else is blocked. Cells are 1 m.
 
@@ -10,12 +10,12 @@ use super::{ImportOptions, read};
 use crate::raster::{check_raster_size, grid, map_from_top_rows};
 use crate::{EditorError, Result};
 
-/// Whether a MovingAI terrain character is passable.
+/// Whether a Moving AI terrain character is passable.
 pub fn passable(c: u8) -> bool {
     matches!(c, b'.' | b'G' | b'S')
 }
 
-/// A parsed MovingAI map: rows top to bottom.
+/// A parsed Moving AI map: rows top to bottom.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct MovingAiMap {
     /// Width in cells.
@@ -96,7 +96,7 @@ pub fn parse(text: &[u8]) -> Result<MovingAiMap, String> {
     Ok(MovingAiMap { width, height, rows })
 }
 
-/// Import a MovingAI map (1 m cells unless `--resolution-m` says otherwise).
+/// Import a Moving AI map (1 m cells unless `--resolution-m` says otherwise).
 pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = read(path)?;
     let m = parse(&text).map_err(|p| EditorError::bad_input(path, format!("malformed MovingAI map: {p}")))?;
