@@ -107,7 +107,7 @@ pub fn render(map: &MapData, opts: &PreviewOptions) -> Result<RgbImage> {
         if !any {
             mark(&mut img, to_px(map.home.center()), 2.0, Rgb([0, 90, 255]));
         }
-        let r = (f64::from(px) / 400.0).clamp(1.0, 6.0);
+        let r = (f64::from(px) / 150.0).clamp(1.5, 6.0);
         for t in &map.treasures {
             mark(&mut img, to_px(t.position), r, Rgb([230, 20, 20]));
         }
