@@ -11,7 +11,19 @@ fn generate_place_validate_stats_preview() {
     let dir = tempfile::tempdir().unwrap();
     let map = dir.path().join("m.stmap");
     let out = editor()
-        .args(["generate", "caves", "--width-m", "96", "--height-m", "64", "--seed", "3", "--treasures", "12", "-o"])
+        .args([
+            "generate",
+            "caves",
+            "--width-m",
+            "96",
+            "--height-m",
+            "64",
+            "--seed",
+            "3",
+            "--treasures",
+            "12",
+            "-o",
+        ])
         .arg(&map)
         .output()
         .unwrap();
@@ -24,11 +36,26 @@ fn generate_place_validate_stats_preview() {
     assert_eq!(v["width_m"], 96.0);
     assert_eq!(v["treasures"], 12);
     assert_eq!(v["file_bytes"], std::fs::metadata(&map).unwrap().len());
-    for key in ["height_m", "cell_m", "origin", "leaves", "blocked_leaves", "free_area_m2", "blocked_area_m2"] {
+    for key in [
+        "height_m",
+        "cell_m",
+        "origin",
+        "leaves",
+        "blocked_leaves",
+        "free_area_m2",
+        "blocked_area_m2",
+    ] {
         assert!(!v[key].is_null(), "{key}");
     }
     let png = dir.path().join("m.png");
-    let out = editor().arg("preview").arg(&map).arg("-o").arg(&png).args(["--px", "192"]).output().unwrap();
+    let out = editor()
+        .arg("preview")
+        .arg(&map)
+        .arg("-o")
+        .arg(&png)
+        .args(["--px", "192"])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     assert_eq!(image::image_dimensions(&png).unwrap(), (192, 128));
 }
@@ -45,7 +72,13 @@ fn validate_exits_1_listing_every_problem() {
     )
     .unwrap();
     let map = dir.path().join("s.stmap");
-    let out = editor().arg("compose").arg(&scene).arg("-o").arg(&map).output().unwrap();
+    let out = editor()
+        .arg("compose")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&map)
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let out = editor().arg("validate").arg(&map).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
@@ -61,7 +94,13 @@ fn bad_input_is_an_error_naming_the_file_not_a_panic() {
     let bad = dir.path().join("bad.map");
     std::fs::write(&bad, "type octile\nheight 3\nwidth 3\nmap\n...\n").unwrap();
     let out_map = dir.path().join("out.stmap");
-    let out = editor().arg("import").arg(&bad).arg("-o").arg(&out_map).output().unwrap();
+    let out = editor()
+        .arg("import")
+        .arg(&bad)
+        .arg("-o")
+        .arg(&out_map)
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.map") && !err.contains("panicked"), "{err}");
