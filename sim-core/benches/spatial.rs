@@ -56,7 +56,7 @@ fn paper_workload(c: &mut Criterion) {
 
     let mut rects = Vec::with_capacity(blocked);
     map.for_each_blocked_in_box(map.grid().extent(), |b| {
-        rects.push(Rectangle::from_corners(b.min.to_array(), b.max.to_array()))
+        rects.push(Rectangle::from_corners(b.min.to_array(), b.max.to_array()));
     });
     let before = ALLOC.allocated();
     let rtree = RTree::bulk_load(rects);
@@ -190,7 +190,7 @@ fn robot_index(c: &mut Criterion) {
     let mut g = c.benchmark_group("robot_index");
     g.sample_size(10);
     g.bench_function("rebuild_100k", |b| {
-        b.iter(|| index.rebuild(robots.iter().copied(), VIEW_RADIUS_M))
+        b.iter(|| index.rebuild(robots.iter().copied(), VIEW_RADIUS_M));
     });
     g.bench_function("grid_1k_queries_100k_robots", |b| {
         b.iter(|| {

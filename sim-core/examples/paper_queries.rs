@@ -22,7 +22,7 @@ fn main() {
     let hits: usize = if which == "rstar" {
         let mut rects = Vec::new();
         map.for_each_blocked_in_box(grid.extent(), |b| {
-            rects.push(Rectangle::from_corners(b.min.to_array(), b.max.to_array()))
+            rects.push(Rectangle::from_corners(b.min.to_array(), b.max.to_array()));
         });
         let tree = RTree::bulk_load(rects);
         let t = std::time::Instant::now();

@@ -18,13 +18,25 @@ pub enum Error {
         /// What is wrong.
         problem: String,
     },
+    /// A config file problem: where (line and column are 0 when unknown) and what.
+    #[error("{}{}: {message}", path.display(), if *line > 0 { format!(":{line}:{column}") } else { String::new() })]
+    Config {
+        /// The config file.
+        path: PathBuf,
+        /// Line (1-based; 0 if unknown).
+        line: usize,
+        /// Column (1-based; 0 if unknown).
+        column: usize,
+        /// What is wrong, and what was expected.
+        message: String,
+    },
     /// An I/O failure on a named file.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {cause}", path.display())]
     Io {
         /// The file.
         path: PathBuf,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (part of the message, not a separate source, so it prints once).
+        cause: std::io::Error,
     },
 }
 

@@ -59,6 +59,16 @@ impl KnownMap {
         self.tree.fill(&clipped, true, PartialCells::Exclude)
     }
 
+    /// [`mark`](Self::mark), calling `newly_known` with the squares that became known.
+    pub fn mark_reporting<S: Shape>(&mut self, shape: &S, newly_known: impl FnMut(crate::quadtree::Square)) {
+        let clipped = Clipped {
+            shape,
+            clip: self.grid().extent(),
+        };
+        self.tree
+            .fill_reporting(&clipped, true, PartialCells::Exclude, newly_known);
+    }
+
     /// Whether the cell holding `p` is known (false outside the map).
     pub fn is_known(&self, p: DVec2) -> bool {
         self.tree.value_at(p) == Some(true)

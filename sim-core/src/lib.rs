@@ -24,14 +24,26 @@
 //! # Ok::<(), sim_core::Error>(())
 //! ```
 
+pub mod config;
 pub mod error;
 pub mod geometry;
 pub mod grid;
+pub mod invariants;
 pub mod known_map;
 pub mod mapfile;
+pub mod memory;
+pub mod messages;
+pub mod metrics;
+pub mod model;
+pub mod nav;
+pub mod observer;
 pub mod obstacle_map;
 pub mod quadtree;
 pub mod robot_index;
+pub mod round;
+pub mod sim;
+pub mod strategy;
+pub mod tactics;
 pub mod treasure_index;
 
 pub use error::{Error, Result};
@@ -39,6 +51,9 @@ pub use glam;
 pub use grid::Grid;
 pub use known_map::KnownMap;
 pub use mapfile::{HomeBase, MapData, TreasureSpec};
+pub use model::{Action, Outcome, Robot, RobotType, TreasureState};
+pub use observer::{Event, Observer, RoundReport};
 pub use obstacle_map::ObstacleMap;
 pub use robot_index::{RobotId, RobotIndex};
+pub use sim::{Scenario, Simulation};
 pub use treasure_index::{TreasureId, TreasureIndex};

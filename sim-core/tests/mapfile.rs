@@ -23,7 +23,7 @@ fn random_map(seed: u64, w: u32, h: u32) -> MapData {
             quantity: rng.random(),
         })
         .collect();
-    let home = if seed % 2 == 0 {
+    let home = if seed.is_multiple_of(2) {
         HomeBase::Disc {
             center: e.center(),
             radius_m: 1.5,

@@ -20,9 +20,8 @@ impl RegionQuadtree {
     ) -> ControlFlow<()> {
         let want = leaf(value);
         let root = self.root_square();
-        let inside = match self.classify_node(shape, self.root, want, root) {
-            None => return ControlFlow::Continue(()),
-            Some(inside) => inside,
+        let Some(inside) = self.classify_node(shape, self.root, want, root) else {
+            return ControlFlow::Continue(());
         };
         // Stack entries carry "wholly inside the shape" in the level's top bit: below such a
         // node every wanted leaf is reported without further tests.
@@ -166,6 +165,21 @@ impl RegionQuadtree {
             }
         });
         count
+    }
+
+    /// Number of cells of `sq` holding `value`.
+    pub fn count_cells_in(&self, sq: Square, value: bool) -> u64 {
+        let mut n = self.root;
+        let mut level = self.grid.depth();
+        while level > sq.level {
+            if is_leaf(n) {
+                return if n == leaf(value) { sq.cells() } else { 0 };
+            }
+            level -= 1;
+            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
+            n = self.groups[n as usize][i as usize];
+        }
+        self.subtree_cells(n, leaf(value), sq)
     }
 
     /// Number of cells where `self` holds `a` and `other` holds `b`. Both trees must cover

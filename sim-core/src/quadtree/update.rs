@@ -17,11 +17,23 @@ impl RegionQuadtree {
     /// Set every cell covered by `shape` (world coordinates) to `value`; cells it covers in
     /// part follow `partial`. Returns whether anything changed.
     pub fn fill<S: Shape>(&mut self, shape: &S, value: bool, partial: PartialCells) -> bool {
+        let mut changed = false;
+        self.fill_reporting(shape, value, partial, |_| changed = true);
+        changed
+    }
+
+    /// [`fill`](Self::fill), calling `changed` with every square whose cells all switched to
+    /// `value` (together they are exactly the cells that changed).
+    pub fn fill_reporting<S: Shape>(
+        &mut self,
+        shape: &S,
+        value: bool,
+        partial: PartialCells,
+        mut changed: impl FnMut(Square),
+    ) {
         let root = self.root_square();
         let before = self.root;
-        let mut changed = false;
         self.root = self.fill_node(before, root, shape, leaf(value), partial, &mut changed);
-        changed
     }
 
     /// Set one cell of the covering square.
@@ -42,7 +54,7 @@ impl RegionQuadtree {
         shape: &S,
         want: NodeRef,
         partial: PartialCells,
-        changed: &mut bool,
+        changed: &mut impl FnMut(Square),
     ) -> NodeRef {
         if n == want {
             return n;
@@ -51,14 +63,14 @@ impl RegionQuadtree {
             Overlap::Disjoint => n,
             Overlap::Partial if sq.level == 0 => {
                 if partial == PartialCells::Include {
-                    *changed = true;
+                    changed(sq);
                     want
                 } else {
                     n
                 }
             }
             Overlap::Contains => {
-                *changed = true;
+                self.report_leaves(n, sq, want, changed);
                 self.release(n);
                 want
             }
@@ -75,6 +87,20 @@ impl RegionQuadtree {
                     self.merge_if_uniform(n)
                 }
             }
+        }
+    }
+
+    /// Report the leaves below `n` that differ from `want`.
+    fn report_leaves(&self, n: NodeRef, sq: Square, want: NodeRef, changed: &mut impl FnMut(Square)) {
+        if is_leaf(n) {
+            if n != want {
+                changed(sq);
+            }
+            return;
+        }
+        let kids = self.groups[n as usize];
+        for (i, k) in kids.into_iter().enumerate() {
+            self.report_leaves(k, sq.child(i), want, changed);
         }
     }
 

@@ -1,0 +1,99 @@
+//! The observer interface: how viewers, recorders and tests watch a run (as rapier's
+//! `DebugRenderBackend`). sim-core calls it; viewer-bridge implements it for Rerun.
+
+use crate::metrics::RoundMetrics;
+use crate::robot_index::RobotId;
+use crate::sim::Simulation;
+use crate::treasure_index::TreasureId;
+
+/// Something notable that happened in a round.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A robot ran out of energy and is disabled for good.
+    RobotDisabled {
+        /// The robot.
+        robot: RobotId,
+    },
+    /// A treasure was seen for the first time.
+    TreasureFound {
+        /// The treasure.
+        treasure: TreasureId,
+        /// Who saw it.
+        by: RobotId,
+    },
+    /// The last buried unit of a treasure was dug.
+    TreasureExcavated {
+        /// The treasure.
+        treasure: TreasureId,
+        /// Who dug the last unit.
+        by: RobotId,
+    },
+    /// The last unit of a treasure was delivered home.
+    TreasureDelivered {
+        /// The treasure.
+        treasure: TreasureId,
+        /// Who delivered the last unit.
+        by: RobotId,
+    },
+    /// The whole free area has been explored.
+    MapExplored,
+}
+
+impl std::fmt::Display for Event {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Event::RobotDisabled { robot } => write!(f, "robot {} is out of energy and disabled", robot.0),
+            Event::TreasureFound { treasure, by } => write!(f, "treasure {} found by robot {}", treasure.0, by.0),
+            Event::TreasureExcavated { treasure, by } => {
+                write!(f, "treasure {} fully excavated by robot {}", treasure.0, by.0)
+            }
+            Event::TreasureDelivered { treasure, by } => {
+                write!(f, "treasure {} fully delivered by robot {}", treasure.0, by.0)
+            }
+            Event::MapExplored => write!(f, "the whole free area is explored"),
+        }
+    }
+}
+
+/// A message delivery of the round: `from` reached `to`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Link {
+    /// Sender.
+    pub from: RobotId,
+    /// Receiver.
+    pub to: RobotId,
+}
+
+/// What happened in one round, besides the state itself.
+#[derive(Clone, Debug, Default)]
+pub struct RoundReport {
+    /// The round (1-based).
+    pub round: u64,
+    /// Metrics after the round.
+    pub metrics: RoundMetrics,
+    /// Events, in the order they happened.
+    pub events: Vec<Event>,
+    /// Messages sent this round and whom they will reach.
+    pub links: Vec<Link>,
+    /// Robots whose known map changed this round.
+    pub known_changed: Vec<RobotId>,
+}
+
+/// The error an observer may stop a run with.
+pub type ObserverError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Watches a run. Every method sees the full simulation state (read only).
+pub trait Observer {
+    /// Before the first round.
+    fn on_start(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
+        let _ = sim;
+        Ok(())
+    }
+    /// After every round.
+    fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError>;
+    /// After the last round.
+    fn on_finish(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
+        let _ = sim;
+        Ok(())
+    }
+}

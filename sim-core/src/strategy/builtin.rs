@@ -1,0 +1,380 @@
+//! The built-in strategies: `random_walk`, `frontier`, `cooperative`, `excavator`,
+//! `transporter`.
+
+use glam::DVec2;
+use rand::Rng;
+
+use super::{Ctx, Needs, Params, Strategy, StrategyRegistry};
+use crate::messages::{Payload, Sighting};
+use crate::model::{Action, REACH_M};
+use crate::tactics::{BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, blocked};
+use crate::treasure_index::TreasureId;
+
+/// Register every built-in strategy.
+pub fn register_all(r: &mut StrategyRegistry) {
+    r.register(
+        "random_walk",
+        "walks straight, turning at random and when blocked",
+        |p| {
+            p.only(&["turn_probability"])?;
+            let turn_probability = p.f64_or("turn_probability", 0.05)?;
+            if !(0.0..=1.0).contains(&turn_probability) {
+                return Err(format!("turn_probability must be in [0, 1], got {turn_probability}"));
+            }
+            Ok(Box::new(RandomWalk {
+                turn_probability,
+                heading: None,
+                coll: CollisionAvoidance::default(),
+            }))
+        },
+    );
+    r.register(
+        "frontier",
+        "frontier exploration: walks to the nearest boundary between known free space and the unknown",
+        |p| {
+            p.only(&[])?;
+            Ok(Box::new(Frontier::new(None)))
+        },
+    );
+    r.register(
+        "cooperative",
+        "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals",
+        |p| {
+            p.only(&["share_every", "avoid_radius_m"])?;
+            let share = Sharing::from_params(p)?;
+            Ok(Box::new(Frontier::new(Some(share))))
+        },
+    );
+    r.register(
+        "excavator",
+        "goes to known treasures and digs them out; explores when it knows none",
+        |p| {
+            p.only(&["share_every"])?;
+            Ok(Box::new(Excavator {
+                core: Worker::new(p)?,
+                target: None,
+            }))
+        },
+    );
+    r.register(
+        "transporter",
+        "fetches dug units (waiting at treasures being dug) and delivers them home",
+        |p| {
+            p.only(&["share_every"])?;
+            Ok(Box::new(Transporter {
+                core: Worker::new(p)?,
+                target: None,
+            }))
+        },
+    );
+}
+
+/// Walks straight; turns with `turn_probability` per round or when a move is refused.
+struct RandomWalk {
+    turn_probability: f64,
+    heading: Option<DVec2>,
+    coll: CollisionAvoidance,
+}
+
+impl Strategy for RandomWalk {
+    fn needs(&self) -> Needs {
+        Needs {
+            known_map: true,
+            robots: true,
+            ..Needs::NONE
+        }
+    }
+
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        if let Some(a) = self.coll.suggest(ctx) {
+            return a;
+        }
+        let turn = self.heading.is_none() || blocked(ctx) || ctx.rng.random_bool(self.turn_probability);
+        if turn {
+            self.heading = Some(DVec2::from_angle(ctx.rng.random_range(0.0..std::f64::consts::TAU)));
+        }
+        let h = self.heading.expect("set above");
+        ctx.move_by(h * ctx.kind.speed_m_per_round)
+    }
+}
+
+/// How a cooperative robot shares what it knows.
+#[derive(Clone, Copy, Debug)]
+struct Sharing {
+    every_rounds: u64,
+    avoid_radius_m: f64,
+}
+
+impl Sharing {
+    fn from_params(p: &Params) -> Result<Self, String> {
+        let every_rounds = p.u64_or("share_every", 10)?.max(1);
+        let avoid_radius_m = p.f64_or("avoid_radius_m", 5.0)?;
+        if avoid_radius_m < 0.0 {
+            return Err(format!("avoid_radius_m must be ≥ 0, got {avoid_radius_m}"));
+        }
+        Ok(Self {
+            every_rounds,
+            avoid_radius_m,
+        })
+    }
+}
+
+/// Exploration of the nearest frontier, with energy management and collision avoidance.
+#[derive(Default)]
+struct Explorer {
+    nav: Navigator,
+    coll: CollisionAvoidance,
+    energy: EnergyManagement,
+    target: Option<DVec2>,
+    /// No frontier left within reach: exploration is complete.
+    done: bool,
+    /// Round of the last failed frontier search (retried every 20 rounds).
+    failed_at: Option<u64>,
+}
+
+impl Explorer {
+    /// Tactics that override everything: energy first, then collisions.
+    fn reflexes(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        if let Some(a) = self.energy.suggest(ctx) {
+            ctx.set_goal(Some(ctx.home().center()));
+            return Some(a);
+        }
+        if let Some(a) = self.coll.suggest(ctx) {
+            self.nav.clear();
+            return Some(a);
+        }
+        None
+    }
+
+    /// One step of frontier exploration; `avoid` are goals taken by others.
+    fn explore(&mut self, ctx: &mut Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Action {
+        let known_now = |t: DVec2, ctx: &Ctx| ctx.known().is_some_and(|k| k.is_known(t));
+        let need_plan = self.nav.is_idle() || self.target.is_none_or(|t| known_now(t, ctx));
+        if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
+            if let Some(route) = Navigator::frontier_route(ctx, avoid, avoid_radius_m)
+                .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
+            {
+                self.target = route.waypoints.last().copied();
+                self.nav.follow(route);
+                self.done = false;
+                self.failed_at = None;
+            } else {
+                self.target = None;
+                self.nav.clear();
+                self.done = true;
+                self.failed_at = Some(ctx.round);
+            }
+        }
+        ctx.set_goal(self.target);
+        if let Some(a) = self.nav.step(ctx) {
+            return a;
+        }
+        // Nothing left to explore: go home and wait there.
+        let home = ctx.home().center();
+        if ctx.home().contains(ctx.position()) {
+            Action::Idle
+        } else if self.nav.go_to(ctx, home) {
+            self.nav.step(ctx).unwrap_or(Action::Idle)
+        } else {
+            let dir = BoundaryFollowing::heading(ctx, home - ctx.position()).unwrap_or(DVec2::ZERO);
+            ctx.move_by(dir)
+        }
+    }
+}
+
+/// `frontier` and `cooperative`.
+struct Frontier {
+    core: Explorer,
+    sharing: Option<Sharing>,
+}
+
+impl Frontier {
+    fn new(sharing: Option<Sharing>) -> Self {
+        Self {
+            core: Explorer::default(),
+            sharing,
+        }
+    }
+}
+
+impl Strategy for Frontier {
+    fn needs(&self) -> Needs {
+        Needs {
+            treasures: self.sharing.is_some(),
+            messages: self.sharing.is_some(),
+            ..Needs::ALL
+        }
+    }
+
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        let mut avoid = Vec::new();
+        let mut radius = 0.0;
+        if let Some(share) = self.sharing {
+            share_knowledge(ctx, share.every_rounds);
+            radius = share.avoid_radius_m;
+            avoid.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
+                Payload::Position { goal, .. } => goal,
+                _ => None,
+            }));
+        }
+        if let Some(a) = self.core.reflexes(ctx) {
+            return a;
+        }
+        let action = self.core.explore(ctx, &avoid, radius);
+        if self.sharing.is_some() {
+            let goal = *ctx.goal;
+            ctx.broadcast(Payload::Position {
+                position: ctx.position(),
+                goal,
+            });
+        }
+        action
+    }
+}
+
+/// Broadcast the known map every `every` rounds (staggered by robot id) and fresh treasure
+/// sightings whenever there are any.
+fn share_knowledge(ctx: &mut Ctx, every: u64) {
+    if (ctx.round + u64::from(ctx.me.id.0)).is_multiple_of(every) {
+        ctx.broadcast_known_map();
+        let all: Vec<Sighting> = ctx.data.treasures.iter().map(|(s, _)| *s).collect();
+        if !all.is_empty() {
+            ctx.broadcast(Payload::Sightings(all));
+        }
+    } else {
+        let round = ctx.round;
+        let fresh: Vec<Sighting> = ctx
+            .treasures_in_view()
+            .iter()
+            .map(|t| Sighting {
+                treasure: t.id,
+                position: t.position,
+                buried: t.buried,
+                loose: t.loose,
+                round,
+            })
+            .collect();
+        if !fresh.is_empty() {
+            ctx.broadcast(Payload::Sightings(fresh));
+        }
+    }
+}
+
+/// The part excavators and transporters share: exploration, sharing and going places.
+struct Worker {
+    explorer: Explorer,
+    share_every: u64,
+    heading_to: Option<DVec2>,
+}
+
+impl Worker {
+    fn new(p: &Params) -> Result<Self, String> {
+        Ok(Self {
+            explorer: Explorer::default(),
+            share_every: p.u64_or("share_every", 10)?.max(1),
+            heading_to: None,
+        })
+    }
+
+    /// Walk to `to` along a known route (planned once per destination).
+    fn go(&mut self, ctx: &mut Ctx, to: DVec2) -> Action {
+        if self.heading_to != Some(to) || self.explorer.nav.is_idle() {
+            self.heading_to = Some(to);
+            if !self.explorer.nav.go_to(ctx, to) {
+                self.explorer.nav.clear();
+            }
+        }
+        ctx.set_goal(Some(to));
+        self.explorer.nav.step(ctx).unwrap_or(Action::MoveTo { to })
+    }
+
+    /// The remembered treasure nearest to the robot that `want` accepts.
+    fn nearest(ctx: &Ctx, want: impl Fn(&Sighting) -> bool) -> Option<Sighting> {
+        let p = ctx.position();
+        ctx.data
+            .treasures
+            .iter()
+            .map(|(s, _)| *s)
+            .filter(|s| want(s))
+            .min_by(|a, b| {
+                a.position
+                    .distance_squared(p)
+                    .total_cmp(&b.position.distance_squared(p))
+                    .then(a.treasure.cmp(&b.treasure))
+            })
+    }
+
+    fn within_reach(ctx: &Ctx, p: DVec2) -> bool {
+        ctx.position().distance(p) <= ctx.kind.radius_m + REACH_M
+    }
+}
+
+/// Digs out known treasures.
+struct Excavator {
+    core: Worker,
+    target: Option<TreasureId>,
+}
+
+impl Strategy for Excavator {
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        share_knowledge(ctx, self.core.share_every);
+        if let Some(a) = self.core.explorer.reflexes(ctx) {
+            self.core.heading_to = None;
+            return a;
+        }
+        let Some(t) = Worker::nearest(ctx, |s| s.buried > 0) else {
+            self.target = None;
+            return self.core.explorer.explore(ctx, &[], 0.0);
+        };
+        self.target = Some(t.treasure);
+        if Worker::within_reach(ctx, t.position) {
+            ctx.set_goal(Some(t.position));
+            return Action::Excavate { treasure: t.treasure };
+        }
+        self.core.go(ctx, t.position)
+    }
+}
+
+/// Fetches dug units and delivers them.
+struct Transporter {
+    core: Worker,
+    target: Option<TreasureId>,
+}
+
+impl Strategy for Transporter {
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        share_knowledge(ctx, self.core.share_every);
+        if let Some(a) = self.core.explorer.reflexes(ctx) {
+            self.core.heading_to = None;
+            return a;
+        }
+        let load = ctx.me.load();
+        let full = load >= ctx.kind.carry_capacity;
+        // Loose units first; otherwise wait at a treasure still being dug.
+        let pick = Worker::nearest(ctx, |s| s.loose > 0).or_else(|| Worker::nearest(ctx, |s| s.buried > 0));
+        if load > 0 && (full || pick.is_none_or(|s| s.loose == 0 && load * 2 >= ctx.kind.carry_capacity)) {
+            self.target = None;
+            if ctx.home().contains(ctx.position()) {
+                return Action::Unload;
+            }
+            return self.core.go(ctx, ctx.home().center());
+        }
+        let Some(t) = pick else {
+            self.target = None;
+            if load > 0 {
+                return self.core.go(ctx, ctx.home().center());
+            }
+            return self.core.explorer.explore(ctx, &[], 0.0);
+        };
+        self.target = Some(t.treasure);
+        if Worker::within_reach(ctx, t.position) {
+            ctx.set_goal(Some(t.position));
+            return if t.loose > 0 {
+                Action::Load { treasure: t.treasure }
+            } else {
+                Action::Idle
+            };
+        }
+        self.core.go(ctx, t.position)
+    }
+}

@@ -1,0 +1,389 @@
+//! The kernel: rules enforced every round, adversarial strategies refused, determinism
+//! across thread counts, exploration and delivery end to end.
+
+use std::sync::Arc;
+
+use sim_core::glam::DVec2;
+use sim_core::invariants::InvariantChecker;
+use sim_core::observer::{Observer, ObserverError, RoundReport};
+use sim_core::sim::{Group, Start};
+use sim_core::strategy::{Ctx, Needs, Params, Strategy, StrategyRegistry};
+use sim_core::{
+    Action, Grid, HomeBase, MapData, ObstacleMap, Outcome, RobotType, Scenario, Simulation, TreasureId, TreasureSpec,
+};
+
+/// 48 m × 48 m: outer free space, a room with a door, a few pillars.
+fn rooms_map(treasures: Vec<TreasureSpec>) -> Arc<MapData> {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 48, 48).unwrap();
+    let obstacles = ObstacleMap::from_fn(grid, |x, y| {
+        let wall = (x == 24 && (10..40).contains(&y) && !(20..=22).contains(&y)) || (y == 40 && (24..44).contains(&x));
+        let pillar = (x % 12 == 6) && (y % 12 == 6) && x < 20;
+        wall || pillar
+    });
+    Arc::new(MapData {
+        obstacles,
+        home: HomeBase::Disc {
+            center: DVec2::new(4.5, 4.5),
+            radius_m: 2.0,
+        },
+        treasures,
+    })
+}
+
+fn scenario(map: Arc<MapData>, seed: u64, rounds: u64, groups: Vec<(u32, RobotType, &str)>) -> Scenario {
+    let mut types = Vec::new();
+    let groups = groups
+        .into_iter()
+        .enumerate()
+        .map(|(i, (count, kind, strategy))| {
+            types.push(kind);
+            Group {
+                name: format!("g{i}"),
+                count,
+                type_index: i,
+                strategy: strategy.into(),
+                params: Params::default(),
+                start: Start::Home,
+            }
+        })
+        .collect();
+    Scenario {
+        name: "test".into(),
+        map,
+        seed,
+        rounds,
+        types,
+        groups,
+    }
+}
+
+fn run_checked(sim: &mut Simulation, extra: &mut [&mut dyn Observer]) -> InvariantChecker {
+    let mut checker = InvariantChecker::new();
+    let mut observers: Vec<&mut dyn Observer> = vec![&mut checker];
+    for o in extra.iter_mut() {
+        observers.push(&mut **o);
+    }
+    sim.run(&mut observers).unwrap_or_else(|e| panic!("{e}"));
+    checker
+}
+
+/// Records every round's metrics and every robot's exact position bits.
+#[derive(Default)]
+struct Trace(Vec<(String, Vec<RobotBits>)>);
+
+/// A robot's position and energy, bit for bit.
+type RobotBits = (u64, u64, u64);
+
+impl Observer for Trace {
+    fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
+        let robots = sim
+            .robots()
+            .iter()
+            .map(|r| (r.position.x.to_bits(), r.position.y.to_bits(), r.energy.to_bits()))
+            .collect();
+        self.0
+            .push((format!("{:?} {:?}", report.metrics, report.events), robots));
+        Ok(())
+    }
+}
+
+#[test]
+fn frontier_explores_the_rooms_map() {
+    let map = rooms_map(Vec::new());
+    let registry = StrategyRegistry::with_builtins();
+    let mut sim = Simulation::new(
+        scenario(map, 1, 600, vec![(4, RobotType::explorer(), "frontier")]),
+        &registry,
+    )
+    .unwrap();
+    let checker = run_checked(&mut sim, &mut []);
+    assert_eq!(checker.rounds_checked, 600);
+    let explored = sim.report().metrics.explored_fraction;
+    assert!(explored >= 0.95, "explored {explored}");
+}
+
+fn rounds_to_explore(robots: u32, fraction: f64) -> u64 {
+    let registry = StrategyRegistry::with_builtins();
+    let s = scenario(
+        rooms_map(Vec::new()),
+        7,
+        2000,
+        vec![(robots, RobotType::explorer(), "cooperative")],
+    );
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    while sim.round() < 2000 {
+        if sim.step().metrics.explored_fraction >= fraction {
+            return sim.round();
+        }
+    }
+    panic!("{robots} robots never explored {fraction}");
+}
+
+#[test]
+fn more_robots_explore_faster() {
+    let one = rounds_to_explore(1, 0.9);
+    let eight = rounds_to_explore(8, 0.9);
+    assert!(eight * 2 < one, "1 robot: {one} rounds, 8 robots: {eight} rounds");
+}
+
+#[test]
+fn excavators_and_transporters_deliver_every_treasure() {
+    let treasures = vec![
+        TreasureSpec {
+            position: DVec2::new(12.5, 30.5),
+            quantity: 6,
+        },
+        TreasureSpec {
+            position: DVec2::new(35.5, 20.5),
+            quantity: 4,
+        },
+        TreasureSpec {
+            position: DVec2::new(40.5, 44.5),
+            quantity: 5,
+        },
+    ];
+    let map = rooms_map(treasures);
+    let registry = StrategyRegistry::with_builtins();
+    let s = scenario(
+        map,
+        3,
+        3000,
+        vec![
+            (3, RobotType::explorer(), "cooperative"),
+            (2, RobotType::excavator(), "excavator"),
+            (2, RobotType::transporter(), "transporter"),
+        ],
+    );
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut checker = InvariantChecker::new();
+    checker.on_start(&sim).unwrap();
+    while sim.round() < 3000 && sim.report().metrics.treasures_delivered < 3 {
+        sim.step();
+        let report = sim.report().clone();
+        checker.on_round(&sim, &report).unwrap();
+    }
+    let m = sim.report().metrics;
+    assert_eq!(m.treasures_delivered, 3, "after {} rounds: {m:?}", sim.round());
+    assert_eq!(m.units_delivered, 15);
+    assert!(sim.treasures().iter().all(|t| t.delivered == t.initial));
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let treasures = vec![TreasureSpec {
+        position: DVec2::new(30.5, 30.5),
+        quantity: 3,
+    }];
+    let trace = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let s = scenario(
+                rooms_map(treasures.clone()),
+                42,
+                150,
+                vec![
+                    (6, RobotType::explorer(), "cooperative"),
+                    (3, RobotType::explorer(), "random_walk"),
+                    (2, RobotType::excavator(), "excavator"),
+                    (2, RobotType::transporter(), "transporter"),
+                ],
+            );
+            let mut sim = Simulation::new(s, &StrategyRegistry::with_builtins()).unwrap();
+            let mut t = Trace::default();
+            run_checked(&mut sim, &mut [&mut t]);
+            t
+        })
+    };
+    let one = trace(1);
+    let four = trace(4);
+    assert_eq!(one.0.len(), 150);
+    for (round, (a, b)) in one.0.iter().zip(&four.0).enumerate() {
+        assert_eq!(a, b, "round {} differs", round + 1);
+    }
+    // A different seed gives a different run (the seed is really used).
+    let s = scenario(
+        rooms_map(treasures.clone()),
+        43,
+        150,
+        vec![(3, RobotType::explorer(), "random_walk")],
+    );
+    let s2 = scenario(
+        rooms_map(treasures),
+        42,
+        150,
+        vec![(3, RobotType::explorer(), "random_walk")],
+    );
+    let (mut a, mut b) = (Trace::default(), Trace::default());
+    run_checked(
+        &mut Simulation::new(s, &StrategyRegistry::with_builtins()).unwrap(),
+        &mut [&mut a],
+    );
+    run_checked(
+        &mut Simulation::new(s2, &StrategyRegistry::with_builtins()).unwrap(),
+        &mut [&mut b],
+    );
+    assert_ne!(a.0, b.0);
+}
+
+/// A strategy that always asks for the same action, and records what came of it.
+struct Cheat(fn(&Ctx) -> Action);
+
+impl Strategy for Cheat {
+    fn needs(&self) -> Needs {
+        Needs::NONE
+    }
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        (self.0)(ctx)
+    }
+}
+
+fn cheat_registry() -> StrategyRegistry {
+    let mut r = StrategyRegistry::empty();
+    r.register("teleport", "", |_| {
+        Ok(Box::new(Cheat(|_| Action::MoveTo {
+            to: DVec2::new(40.0, 44.0),
+        })))
+    });
+    r.register("through_wall", "", |_| {
+        Ok(Box::new(Cheat(|c| Action::MoveTo {
+            to: c.position() + DVec2::new(0.9, 0.0),
+        })))
+    });
+    r.register("dig", "", |_| {
+        Ok(Box::new(Cheat(|_| Action::Excavate {
+            treasure: TreasureId(0),
+        })))
+    });
+    r.register("hoard", "", |_| {
+        Ok(Box::new(Cheat(|_| Action::Load {
+            treasure: TreasureId(0),
+        })))
+    });
+    r.register("unload_anywhere", "", |_| Ok(Box::new(Cheat(|_| Action::Unload))));
+    r.register("nan", "", |_| {
+        Ok(Box::new(Cheat(|_| Action::MoveTo {
+            to: DVec2::new(f64::NAN, 1.0),
+        })))
+    });
+    r
+}
+
+#[test]
+fn cheating_strategies_are_refused() {
+    let treasure = TreasureSpec {
+        position: DVec2::new(4.5, 4.5),
+        quantity: 50,
+    };
+    let map = rooms_map(vec![treasure]);
+    let registry = cheat_registry();
+    let kind = RobotType::explorer().with_speed_m_per_round(0.7);
+    let s = scenario(
+        map.clone(),
+        1,
+        40,
+        vec![
+            (2, kind.clone(), "teleport"),
+            (2, kind.clone(), "dig"),
+            (1, RobotType::transporter().with_carry_capacity(3), "hoard"),
+            (1, kind.clone(), "unload_anywhere"),
+            (1, kind, "nan"),
+        ],
+    );
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    let start: Vec<DVec2> = sim.robots().iter().map(|r| r.position).collect();
+    run_checked(&mut sim, &mut []);
+    let robots = sim.robots();
+    // Teleporters walk at speed 0.7 at most: 40 rounds ⇒ ≤ 28 m from the start.
+    for r in &robots[0..2] {
+        assert!(r.position.distance(start[r.id.index()]) <= 28.0 + 1e-9);
+        assert!(r.stats.distance_m <= 28.0 + 1e-9);
+    }
+    // Explorers cannot dig: the treasure is untouched, every attempt refused.
+    assert_eq!(sim.treasures()[0].buried, 50);
+    assert_eq!(robots[2].last_action.1, Outcome::Refused);
+    // Nothing was dug, so nothing can be loaded; unloading with nothing is refused.
+    assert_eq!(robots[4].load(), 0);
+    assert_eq!(robots[5].last_action.1, Outcome::Refused);
+    assert_eq!(robots[6].position, start[6]);
+
+    // A wall walker stops at the wall: start it west of the wall at x = 24.
+    let mut s = scenario(map, 1, 30, vec![(1, RobotType::explorer(), "through_wall")]);
+    s.groups[0].start = Start::At(DVec2::new(20.5, 15.5));
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    run_checked(&mut sim, &mut []);
+    let x = sim.robots()[0].position.x;
+    assert!(x <= 24.0 - 0.125 + 1e-9 && x > 23.0, "stopped at x = {x}");
+}
+
+#[test]
+fn hoarders_are_capped_by_capacity_and_digging_feeds_them() {
+    let treasure = TreasureSpec {
+        position: DVec2::new(4.5, 4.5),
+        quantity: 100,
+    };
+    let mut registry = cheat_registry();
+    registry.register("dig_forever", "", |_| {
+        Ok(Box::new(Cheat(|_| Action::Excavate {
+            treasure: TreasureId(0),
+        })))
+    });
+    let s = scenario(
+        rooms_map(vec![treasure]),
+        1,
+        30,
+        vec![
+            (1, RobotType::excavator().with_excavation(2), "dig_forever"),
+            (1, RobotType::transporter().with_carry_capacity(3), "hoard"),
+        ],
+    );
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    run_checked(&mut sim, &mut []);
+    let t = sim.treasures()[0];
+    assert_eq!(sim.robots()[1].load(), 3, "{t:?}");
+    assert_eq!(t.buried, 100 - 2 * 30);
+}
+
+struct Events<'a>(&'a mut Vec<sim_core::Event>);
+impl Observer for Events<'_> {
+    fn on_round(&mut self, _: &Simulation, r: &RoundReport) -> Result<(), ObserverError> {
+        self.0.extend(r.events.iter().cloned());
+        Ok(())
+    }
+}
+
+#[test]
+fn energy_runs_out_and_disables_for_good() {
+    let registry = StrategyRegistry::with_builtins();
+    // 20 energy, 1 per metre: a random walker dies within ~20 m, far from home.
+    let kind = RobotType::explorer().with_energy_capacity(20.0);
+    let mut s = scenario(rooms_map(Vec::new()), 5, 200, vec![(3, kind, "random_walk")]);
+    s.groups[0].start = Start::At(DVec2::new(30.5, 5.5));
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut events = Vec::new();
+    run_checked(&mut sim, &mut [&mut Events(&mut events)]);
+    assert!(sim.robots().iter().all(|r| !r.alive && r.energy == 0.0));
+    assert_eq!(
+        events
+            .iter()
+            .filter(|e| matches!(e, sim_core::Event::RobotDisabled { .. }))
+            .count(),
+        3
+    );
+    assert_eq!(sim.report().metrics.robots_alive, 0);
+}
+
+#[test]
+fn energy_management_brings_explorers_home_to_recharge() {
+    let registry = StrategyRegistry::with_builtins();
+    let kind = RobotType::explorer().with_energy_capacity(120.0);
+    let s = scenario(rooms_map(Vec::new()), 9, 800, vec![(2, kind, "frontier")]);
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    run_checked(&mut sim, &mut []);
+    assert!(
+        sim.robots().iter().all(|r| r.alive),
+        "{:?}",
+        sim.robots().iter().map(|r| r.energy).collect::<Vec<_>>()
+    );
+    // They walked far more than one tank's worth, so they recharged on the way.
+    assert!(sim.robots().iter().all(|r| r.stats.distance_m > 150.0));
+}
