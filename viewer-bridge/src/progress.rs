@@ -1,0 +1,52 @@
+//! A progress bar observer (drawn only on a terminal).
+
+use indicatif::{ProgressBar, ProgressStyle};
+use sim_core::Simulation;
+use sim_core::observer::{Observer, ObserverError, RoundReport};
+
+/// Shows rounds done, rate and the explored fraction.
+pub struct Progress {
+    bar: Option<ProgressBar>,
+}
+
+impl Progress {
+    /// A bar for `rounds` rounds; `enabled = false` (or no terminal) draws nothing.
+    pub fn new(enabled: bool, rounds: u64) -> Self {
+        let bar = enabled.then(|| {
+            let bar = ProgressBar::new(rounds);
+            bar.set_style(
+                ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {pos}/{len} rounds ({per_sec}, eta {eta}) {msg}",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
+            bar
+        });
+        Self { bar }
+    }
+}
+
+impl Observer for Progress {
+    fn on_round(&mut self, _sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
+        if let Some(bar) = &self.bar {
+            bar.set_position(report.round);
+            if report.round % 10 == 0 {
+                let m = &report.metrics;
+                bar.set_message(format!(
+                    "explored {:.1} %, delivered {}",
+                    100.0 * m.explored_fraction,
+                    m.treasures_delivered
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn on_finish(&mut self, _sim: &Simulation) -> Result<(), ObserverError> {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,158 @@
+//! Resolved run settings and the run itself.
+
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result};
+use sim_core::config::SimConfig;
+use sim_core::metrics::{MetricsCsv, write_robot_stats};
+use sim_core::observer::Observer;
+use sim_core::strategy::StrategyRegistry;
+use sim_core::{MapData, Simulation};
+
+use crate::progress::Progress;
+
+/// Everything a run needs, checked before it starts.
+#[derive(Clone, Debug)]
+pub struct RunConfig {
+    /// The parsed config, with command-line overrides applied.
+    pub config: SimConfig,
+    /// Worker threads for the decide phase (`None`: one per core).
+    pub threads: Option<usize>,
+    /// Per-round metrics CSV.
+    pub metrics: Option<PathBuf>,
+    /// Per-robot statistics CSV.
+    pub robot_stats: Option<PathBuf>,
+    /// Show a progress bar (when stderr is a terminal).
+    pub progress: bool,
+}
+
+/// What a finished run reports.
+#[derive(Clone, Debug)]
+pub struct Summary {
+    /// Run name.
+    pub name: String,
+    /// Rounds played.
+    pub rounds: u64,
+    /// Robots.
+    pub robots: usize,
+    /// Final metrics.
+    pub metrics: sim_core::metrics::RoundMetrics,
+    /// Wall time of the rounds (set-up excluded).
+    pub elapsed: Duration,
+    /// Wall time of loading and set-up.
+    pub setup: Duration,
+}
+
+impl std::fmt::Display for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = &self.metrics;
+        let secs = self.elapsed.as_secs_f64();
+        writeln!(
+            f,
+            "{}: {} rounds with {} robots in {:.2} s ({:.1} rounds/s; set-up {:.2} s)",
+            self.name,
+            self.rounds,
+            self.robots,
+            secs,
+            self.rounds as f64 / secs.max(1e-9),
+            self.setup.as_secs_f64()
+        )?;
+        writeln!(
+            f,
+            "  explored          {:.1} % of the free area",
+            100.0 * m.explored_fraction
+        )?;
+        writeln!(
+            f,
+            "  treasures         {} found, {} excavated, {} delivered ({} units dug, {} delivered)",
+            m.treasures_found, m.treasures_excavated, m.treasures_delivered, m.units_dug, m.units_delivered
+        )?;
+        writeln!(
+            f,
+            "  robots alive      {} (mean energy {:.1})",
+            m.robots_alive, m.mean_energy
+        )?;
+        write!(f, "  distance          {:.1} m in all", m.distance_m)
+    }
+}
+
+/// Run a resolved config with the built-in observers plus `extra` (viewers).
+pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
+    let started = Instant::now();
+    let map: MapData = run.config.load_map()?;
+    let scenario = run.config.clone().into_scenario(Arc::new(map), registry)?;
+    let mut sim =
+        Simulation::new(scenario, registry).with_context(|| format!("setting up {}", run.config.path.display()))?;
+    let setup = started.elapsed();
+
+    let mut metrics = match &run.metrics {
+        Some(p) => Some(MetricsCsv::new(BufWriter::new(
+            File::create(p).with_context(|| format!("cannot create metrics file {}", p.display()))?,
+        ))?),
+        None => None,
+    };
+    let mut progress = Progress::new(run.progress, sim.total_rounds());
+    let mut observers: Vec<&mut dyn Observer> = Vec::new();
+    if let Some(m) = metrics.as_mut() {
+        observers.push(m);
+    }
+    observers.push(&mut progress);
+    for o in extra.iter_mut() {
+        observers.push(&mut **o);
+    }
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(run.threads.unwrap_or(0))
+        .build()
+        .context("cannot start worker threads")?;
+    let t0 = Instant::now();
+    let result = run_rounds(&mut sim, &pool, &mut observers);
+    let elapsed = t0.elapsed();
+    drop(observers);
+    // Whatever happened, keep the outputs of the rounds that were played.
+    if let Some(m) = metrics.as_mut() {
+        sim_core::observer::Observer::on_finish(m, &sim).ok();
+    }
+    if let Some(p) = &run.robot_stats {
+        let file = File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?;
+        write_robot_stats(&sim, BufWriter::new(file)).with_context(|| format!("writing {}", p.display()))?;
+    }
+    result
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("run stopped at round {}", sim.round()))?;
+    Ok(Summary {
+        name: sim.name().to_owned(),
+        rounds: sim.round(),
+        robots: sim.robots().len(),
+        metrics: sim.report().metrics,
+        elapsed,
+        setup,
+    })
+}
+
+/// The run loop with the decide phase on `pool`; observers are called on this thread.
+fn run_rounds(
+    sim: &mut Simulation,
+    pool: &rayon::ThreadPool,
+    observers: &mut [&mut dyn Observer],
+) -> Result<(), sim_core::observer::ObserverError> {
+    for o in observers.iter_mut() {
+        o.on_start(sim)?;
+    }
+    while sim.round() < sim.total_rounds() {
+        pool.install(|| {
+            sim.step();
+        });
+        for o in observers.iter_mut() {
+            o.on_round(sim, sim.report())?;
+        }
+    }
+    for o in observers.iter_mut() {
+        o.on_finish(sim)?;
+    }
+    Ok(())
+}
