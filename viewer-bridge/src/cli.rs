@@ -88,9 +88,9 @@ impl RunArgs {
 
 /// Parse the command line and run, with the strategies of `registry`. Errors are printed
 /// with their causes (`{:#}`) and give exit status 1.
-pub fn main_with(registry: StrategyRegistry) -> ExitCode {
+pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
     let cli = Cli::parse();
-    match dispatch(cli, &registry) {
+    match dispatch(cli, registry) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -11,7 +11,7 @@
 //! fn main() -> std::process::ExitCode {
 //!     let mut registry = StrategyRegistry::with_builtins();
 //!     // registry.register("mine", "my strategy", |params| Ok(Box::new(MyStrategy::new(params)?)));
-//!     viewer_bridge::cli::main_with(registry)
+//!     viewer_bridge::cli::main_with(&registry)
 //! }
 //! ```
 

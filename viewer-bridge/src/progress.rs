@@ -31,7 +31,7 @@ impl Observer for Progress {
     fn on_round(&mut self, _sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
         if let Some(bar) = &self.bar {
             bar.set_position(report.round);
-            if report.round % 10 == 0 {
+            if report.round.is_multiple_of(10) {
                 let m = &report.metrics;
                 bar.set_message(format!(
                     "explored {:.1} %, delivered {}",
