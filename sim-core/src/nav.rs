@@ -349,7 +349,11 @@ mod tests {
         // No path is shorter than the taut string through the door's corners:
         // |(2.5,2.5)-(8,14)| + 1 + |(9,14)-(13.5,2.5)| = 12.747 + 1 + 12.349.
         let taut = DVec2::new(2.5, 2.5).distance(DVec2::new(8.0, 14.0)) + 1.0 + DVec2::new(9.0, 14.0).distance(to);
-        assert!(r.length_m >= taut - 1e-9 && r.length_m < 1.2 * taut, "{} vs {taut}", r.length_m);
+        assert!(
+            r.length_m >= taut - 1e-9 && r.length_m < 1.2 * taut,
+            "{} vs {taut}",
+            r.length_m
+        );
         // Straight segments between waypoints stay in free space.
         let mut prev = from;
         for w in &r.waypoints {

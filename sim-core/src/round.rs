@@ -390,6 +390,9 @@ impl Simulation {
     }
 }
 
+/// Known maps a robot merges per round at most; later ones that round are dropped.
+pub const MAX_MAP_MERGES_PER_ROUND: usize = 4;
+
 /// The shared, read-only state robots perceive in a round.
 struct Snapshot<'a> {
     robots: &'a [Robot],
@@ -466,10 +469,16 @@ fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world: &Snapshot
         }
     }
     if needs.messages {
+        let mut merged = 0;
         for m in &perception.inbox {
             match &*m.payload {
                 Payload::KnownMap(other) => {
-                    if let Some(known) = data.known.as_mut() {
+                    // A robot digests a bounded number of maps a round (first come, first
+                    // served): in a crowd, hundreds of near-identical maps arrive at once.
+                    if let Some(known) = data.known.as_mut()
+                        && merged < MAX_MAP_MERGES_PER_ROUND
+                    {
+                        merged += 1;
                         agent.known_changed |= known.merge(other);
                     }
                 }

@@ -186,6 +186,10 @@ impl Explorer {
 struct Frontier {
     core: Explorer,
     sharing: Option<Sharing>,
+    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds).
+    claims: std::collections::BTreeMap<u32, (DVec2, u64)>,
+    announced: Option<DVec2>,
+    shared_area: f64,
 }
 
 impl Frontier {
@@ -193,6 +197,9 @@ impl Frontier {
         Self {
             core: Explorer::default(),
             sharing,
+            claims: std::collections::BTreeMap::new(),
+            announced: None,
+            shared_area: 0.0,
         }
     }
 }
@@ -200,6 +207,9 @@ impl Frontier {
 impl Strategy for Frontier {
     fn needs(&self) -> Needs {
         Needs {
+            // Other robots are never looked at: the physical unit prevents collisions and
+            // the collision tactic handles being stuck.
+            robots: false,
             treasures: self.sharing.is_some(),
             messages: self.sharing.is_some(),
             ..Needs::ALL
@@ -210,18 +220,32 @@ impl Strategy for Frontier {
         let mut avoid = Vec::new();
         let mut radius = 0.0;
         if let Some(share) = self.sharing {
-            share_knowledge(ctx, share.every_rounds);
+            share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
             radius = share.avoid_radius_m;
-            avoid.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
-                Payload::Position { goal, .. } => goal,
-                _ => None,
-            }));
+            // Only claims near enough to matter are kept, so crowds stay cheap.
+            let near = (4.0 * radius).max(20.0);
+            let p = ctx.position();
+            for m in ctx.messages() {
+                if let Payload::Position { goal, .. } = *m.payload {
+                    match goal {
+                        Some(g) if g.distance(p) <= near => self.claims.insert(m.from.0, (g, ctx.round)),
+                        _ => self.claims.remove(&m.from.0),
+                    };
+                }
+            }
+            let round = ctx.round;
+            if round.is_multiple_of(10) {
+                self.claims.retain(|_, (g, heard)| round <= *heard + 50 && g.distance(p) <= near);
+            }
+            avoid.extend(self.claims.values().map(|c| c.0));
         }
         if let Some(a) = self.core.reflexes(ctx) {
             return a;
         }
         let action = self.core.explore(ctx, &avoid, radius);
-        if self.sharing.is_some() {
+        // Announce a goal only when it changes: claims stay cheap in crowds.
+        if self.sharing.is_some() && *ctx.goal != self.announced {
+            self.announced = *ctx.goal;
             let goal = *ctx.goal;
             ctx.broadcast(Payload::Position {
                 position: ctx.position(),
@@ -232,11 +256,17 @@ impl Strategy for Frontier {
     }
 }
 
-/// Broadcast the known map every `every` rounds (staggered by robot id) and fresh treasure
-/// sightings whenever there are any.
-fn share_knowledge(ctx: &mut Ctx, every: u64) {
+/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by a
+/// quarter since it was last shared (maps of a crowd are near-identical, and merging them
+/// costs receivers time for nothing), and all remembered sightings. Other rounds: fresh
+/// sightings, if any.
+fn share_knowledge(ctx: &mut Ctx, every: u64, shared_area: &mut f64) {
     if (ctx.round + u64::from(ctx.me.id.0)).is_multiple_of(every) {
-        ctx.broadcast_known_map();
+        let area = ctx.known().map_or(0.0, crate::known_map::KnownMap::known_area_m2);
+        if area > 1.25 * *shared_area {
+            *shared_area = area;
+            ctx.broadcast_known_map();
+        }
         let all: Vec<Sighting> = ctx.data.treasures.iter().map(|(s, _)| *s).collect();
         if !all.is_empty() {
             ctx.broadcast(Payload::Sightings(all));
@@ -265,6 +295,7 @@ struct Worker {
     explorer: Explorer,
     share_every: u64,
     heading_to: Option<DVec2>,
+    shared_area: f64,
 }
 
 impl Worker {
@@ -273,6 +304,7 @@ impl Worker {
             explorer: Explorer::default(),
             share_every: p.u64_or("share_every", 10)?.max(1),
             heading_to: None,
+            shared_area: 0.0,
         })
     }
 
@@ -317,7 +349,7 @@ struct Excavator {
 
 impl Strategy for Excavator {
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        share_knowledge(ctx, self.core.share_every);
+        share_knowledge(ctx, self.core.share_every, &mut self.core.shared_area);
         if let Some(a) = self.core.explorer.reflexes(ctx) {
             self.core.heading_to = None;
             return a;
@@ -343,7 +375,7 @@ struct Transporter {
 
 impl Strategy for Transporter {
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        share_knowledge(ctx, self.core.share_every);
+        share_knowledge(ctx, self.core.share_every, &mut self.core.shared_area);
         if let Some(a) = self.core.explorer.reflexes(ctx) {
             self.core.heading_to = None;
             return a;
