@@ -116,7 +116,9 @@ fn kernel(c: &mut Criterion) {
             t.elapsed().as_secs_f64(),
             100.0 * sim.report().metrics.explored_fraction
         );
-        g.bench_function(format!("round_{robots}_robots"), |b| b.iter(|| black_box(sim.step().metrics.messages)));
+        g.bench_function(format!("round_{robots}_robots"), |b| {
+            b.iter(|| black_box(sim.step().metrics.messages))
+        });
         eprintln!(
             "{robots} robots: after {} rounds explored {:.2} %, known maps {:.1} MiB, peak RSS {:.0} MiB",
             sim.round(),

@@ -163,6 +163,7 @@ fn excavators_and_transporters_deliver_every_treasure() {
         checker.on_round(&sim, &report).unwrap();
     }
     let m = sim.report().metrics;
+    eprintln!("all treasures delivered after {} rounds", sim.round());
     assert_eq!(m.treasures_delivered, 3, "after {} rounds: {m:?}", sim.round());
     assert_eq!(m.units_delivered, 15);
     assert!(sim.treasures().iter().all(|t| t.delivered == t.initial));

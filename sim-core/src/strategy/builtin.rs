@@ -235,7 +235,8 @@ impl Strategy for Frontier {
             }
             let round = ctx.round;
             if round.is_multiple_of(10) {
-                self.claims.retain(|_, (g, heard)| round <= *heard + 50 && g.distance(p) <= near);
+                self.claims
+                    .retain(|_, (g, heard)| round <= *heard + 50 && g.distance(p) <= near);
             }
             avoid.extend(self.claims.values().map(|c| c.0));
         }
@@ -257,13 +258,16 @@ impl Strategy for Frontier {
 }
 
 /// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by a
-/// quarter since it was last shared (maps of a crowd are near-identical, and merging them
-/// costs receivers time for nothing), and all remembered sightings. Other rounds: fresh
+/// quarter since it was last shared, and in any case every fifth time (maps of a crowd are
+/// near-identical, and merging them costs receivers time for nothing), and all remembered
+/// sightings. Other rounds: fresh
 /// sightings, if any.
 fn share_knowledge(ctx: &mut Ctx, every: u64, shared_area: &mut f64) {
     if (ctx.round + u64::from(ctx.me.id.0)).is_multiple_of(every) {
         let area = ctx.known().map_or(0.0, crate::known_map::KnownMap::known_area_m2);
-        if area > 1.25 * *shared_area {
+        // Also every fifth time regardless, so robots met late still get the whole map.
+        let refresh = ((ctx.round + u64::from(ctx.me.id.0)) / every).is_multiple_of(5);
+        if area > 1.25 * *shared_area || (refresh && area > 0.0) {
             *shared_area = area;
             ctx.broadcast_known_map();
         }
@@ -308,12 +312,15 @@ impl Worker {
         })
     }
 
-    /// Walk to `to` along a known route (planned once per destination).
+    /// Walk to `to` along a known route (planned once per destination). With no known
+    /// route yet, explore: that is how the robot learns a way there.
     fn go(&mut self, ctx: &mut Ctx, to: DVec2) -> Action {
         if self.heading_to != Some(to) || self.explorer.nav.is_idle() {
             self.heading_to = Some(to);
             if !self.explorer.nav.go_to(ctx, to) {
                 self.explorer.nav.clear();
+                self.heading_to = None;
+                return self.explorer.explore(ctx, &[], 0.0);
             }
         }
         ctx.set_goal(Some(to));
