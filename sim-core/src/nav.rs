@@ -257,7 +257,9 @@ impl NavGraph {
                     let p = self.portal(node, m);
                     let nd = d + at.distance(p);
                     let mark = marks[m.0 as usize];
-                    if (mark.0 != stamp || nd < mark.1) && usable(m) {
+                    // Only nodes found usable are ever stamped, so the test runs once a node.
+                    let better = if mark.0 == stamp { nd < mark.1 } else { usable(m) };
+                    if better {
                         marks[m.0 as usize] = (stamp, nd, n);
                         entry.push((m.0, p));
                         heap.push(Reverse((OrdF64(nd), m.0, (entry.len() - 1) as u32)));
