@@ -8,6 +8,20 @@ if [ -z "${SMARTTEAMS_DATA:-}" ] && [ -d ../shared/data ]; then
   SMARTTEAMS_DATA="$(cd ../shared/data && pwd)"
   export SMARTTEAMS_DATA
 fi
+if [ -z "${SMARTTEAMS_RERUN_PYTHON:-}" ]; then
+  # The Rerun tests read recordings back with the official SDK and its `rerun` binary, pinned
+  # to the crate's version; the venv lives under target/ so `cargo clean` removes it.
+  venv=target/rerun-venv
+  if ! "$venv/bin/python" -c 'import rerun, sys; sys.exit(rerun.__version__ != "0.36.3")' 2>/dev/null; then
+    echo "== rerun-sdk 0.36.3 venv ($venv)"
+    python3 -m venv "$venv"
+    "$venv/bin/pip" install --quiet --disable-pip-version-check rerun-sdk==0.36.3
+  fi
+  SMARTTEAMS_RERUN_PYTHON="$(pwd)/$venv/bin/python"
+  SMARTTEAMS_RERUN_BIN="$(pwd)/$venv/bin/rerun"
+  export SMARTTEAMS_RERUN_PYTHON SMARTTEAMS_RERUN_BIN
+fi
+echo "SMARTTEAMS_RERUN_PYTHON=$SMARTTEAMS_RERUN_PYTHON"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== cargo clippy (ci profile, all targets, -D warnings)"

@@ -9,7 +9,9 @@ use clap::{Parser, Subcommand};
 use sim_core::config::SimConfig;
 use sim_core::strategy::StrategyRegistry;
 
+use crate::rerun_observer::LogOptions;
 use crate::run::{RunConfig, execute};
+use crate::viewer::{DEFAULT_CONNECT_URL, ViewerTarget, connect_url};
 
 /// Smart Teams: simulate robot swarms exploring unknown terrain.
 #[derive(Debug, Parser)]
@@ -25,12 +27,66 @@ pub struct Cli {
 pub enum Command {
     /// Run a simulation described by an XML config.
     Run(RunArgs),
+    /// Show a map alone in Rerun (obstacles, home, treasures; 2D and 3D).
+    View(ViewArgs),
     /// List the strategies this build knows.
     Strategies,
 }
 
-/// Arguments of `smartteams run`.
+/// Where a recording goes (shared by `run` and `view`).
+#[derive(Debug, Default, clap::Args)]
+pub struct ViewerArgs {
+    /// Write the recording to this `.rrd` file. The default when no other viewer option is
+    /// given: the config's `<outputs rrd=…>`, else `<run name>.rrd` in the working directory.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["connect", "spawn", "no_viewer"])]
+    pub rrd: Option<PathBuf>,
+    /// Stream live to a running Rerun viewer (`--connect` alone: this machine, default port;
+    /// `--connect=HOST:PORT` or `--connect=rerun+http://HOST:PORT/proxy`).
+    #[arg(
+        long,
+        value_name = "URL",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = DEFAULT_CONNECT_URL,
+        conflicts_with_all = ["spawn", "no_viewer"]
+    )]
+    pub connect: Option<String>,
+    /// Start a local Rerun viewer (`rerun` on PATH) and stream to it.
+    #[arg(long, conflicts_with = "no_viewer")]
+    pub spawn: bool,
+    /// Log nothing to Rerun.
+    #[arg(long)]
+    pub no_viewer: bool,
+}
+
+impl ViewerArgs {
+    /// The target these options ask for; `default_rrd` when none is given.
+    pub fn target(&self, default_rrd: PathBuf) -> Option<ViewerTarget> {
+        if self.no_viewer {
+            None
+        } else if let Some(url) = &self.connect {
+            Some(ViewerTarget::Connect(connect_url(url)))
+        } else if self.spawn {
+            Some(ViewerTarget::Spawn)
+        } else {
+            Some(ViewerTarget::Rrd(self.rrd.clone().unwrap_or(default_rrd)))
+        }
+    }
+}
+
+/// Arguments of `smartteams view`.
 #[derive(Debug, clap::Args)]
+pub struct ViewArgs {
+    /// The map file (`.stmap`).
+    pub map: PathBuf,
+    /// Where to show it (default: `<map stem>.rrd` in the working directory).
+    #[command(flatten)]
+    pub viewer: ViewerArgs,
+}
+
+/// Arguments of `smartteams run`. `Default` gives an empty config path and the `.rrd` default
+/// viewer; library callers usually set `viewer.no_viewer`.
+#[derive(Debug, Default, clap::Args)]
 pub struct RunArgs {
     /// The simulation config (XML).
     pub config: PathBuf,
@@ -55,6 +111,20 @@ pub struct RunArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Where the recording goes.
+    #[command(flatten)]
+    pub viewer: ViewerArgs,
+    /// Log the world (robots, treasures, links, …) every K rounds only; metrics and events
+    /// are logged every round and the final round always.
+    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub log_every: u64,
+    /// Log each robot's known region (coarse, only robots whose map changed) every K rounds;
+    /// 0 turns it off.
+    #[arg(long, value_name = "K", default_value_t = 20)]
+    pub known_every: u64,
+    /// Re-log the collective explored region every K rounds.
+    #[arg(long, value_name = "K", default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+    pub explored_every: u64,
 }
 
 impl RunArgs {
@@ -76,11 +146,23 @@ impl RunArgs {
         config.check_strategies(registry)?;
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
+        let default_rrd = config
+            .outputs
+            .rrd
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("{}.rrd", config.name)));
+        let viewer = self.viewer.target(default_rrd);
         Ok(RunConfig {
             config,
             threads: self.threads,
             metrics,
             robot_stats,
+            viewer,
+            log: LogOptions {
+                log_every: self.log_every.max(1),
+                explored_every: self.explored_every.max(1),
+                known_every: (self.known_every > 0).then_some(self.known_every),
+            },
             progress: !self.quiet && std::io::stderr().is_terminal(),
         })
     }
@@ -105,6 +187,18 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             for (name, description) in registry.describe() {
                 println!("{name:14} {description}");
             }
+            Ok(())
+        }
+        Command::View(args) => {
+            let stem = args
+                .map
+                .file_stem()
+                .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
+            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}.rrd"))) else {
+                bail!("--no-viewer leaves nothing to show");
+            };
+            crate::run::view_map(&args.map, &target)?;
+            println!("{}: shown in {target}", args.map.display());
             Ok(())
         }
         Command::Run(args) => {

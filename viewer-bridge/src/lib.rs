@@ -1,4 +1,5 @@
-//! The bridge from a Smart Teams simulation to its users: the `smartteams` runner.
+//! The bridge from a Smart Teams simulation to its users: the `smartteams` runner and the
+//! Rerun viewer bridge ([`rerun_observer::RerunObserver`], [`blueprint`], [`layers`]).
 //!
 //! [`cli`] turns raw command-line arguments into a validated [`run::RunConfig`] before any
 //! work starts; [`run::execute`] runs it with the observers the config asks for. A crate
@@ -15,6 +16,10 @@
 //! }
 //! ```
 
+pub mod blueprint;
 pub mod cli;
+pub mod layers;
 pub mod progress;
+pub mod rerun_observer;
 pub mod run;
+pub mod viewer;

@@ -14,6 +14,8 @@ use sim_core::strategy::StrategyRegistry;
 use sim_core::{MapData, Simulation};
 
 use crate::progress::Progress;
+use crate::rerun_observer::{LogOptions, RerunObserver};
+use crate::viewer::ViewerTarget;
 
 /// Everything a run needs, checked before it starts.
 #[derive(Clone, Debug)]
@@ -28,6 +30,10 @@ pub struct RunConfig {
     pub robot_stats: Option<PathBuf>,
     /// Show a progress bar (when stderr is a terminal).
     pub progress: bool,
+    /// Where the Rerun recording goes (`None`: no recording).
+    pub viewer: Option<ViewerTarget>,
+    /// How much the recording holds.
+    pub log: LogOptions,
 }
 
 /// What a finished run reports.
@@ -45,6 +51,8 @@ pub struct Summary {
     pub elapsed: Duration,
     /// Wall time of loading and set-up.
     pub setup: Duration,
+    /// Where the recording went, and how many rounds of world state it holds.
+    pub recording: Option<(ViewerTarget, u64)>,
 }
 
 impl std::fmt::Display for Summary {
@@ -76,7 +84,11 @@ impl std::fmt::Display for Summary {
             "  robots alive      {} (mean energy {:.1})",
             m.robots_alive, m.mean_energy
         )?;
-        write!(f, "  distance          {:.1} m in all", m.distance_m)
+        write!(f, "  distance          {:.1} m in all", m.distance_m)?;
+        if let Some((target, logged)) = &self.recording {
+            write!(f, "\n  recording         {target} ({logged} rounds of world state)")?;
+        }
+        Ok(())
     }
 }
 
@@ -95,12 +107,22 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         ))?),
         None => None,
     };
+    let mut rerun = match &run.viewer {
+        Some(target) => Some(RerunObserver::new(
+            crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?,
+            run.log,
+        )),
+        None => None,
+    };
     let mut progress = Progress::new(run.progress, sim.total_rounds());
     let mut observers: Vec<&mut dyn Observer> = Vec::new();
     if let Some(m) = metrics.as_mut() {
         observers.push(m);
     }
     observers.push(&mut progress);
+    if let Some(r) = rerun.as_mut() {
+        observers.push(r);
+    }
     for o in extra.iter_mut() {
         observers.push(&mut **o);
     }
@@ -131,7 +153,23 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         metrics: sim.report().metrics,
         elapsed,
         setup,
+        recording: rerun.map(|r| (run.viewer.clone().unwrap_or(ViewerTarget::Spawn), r.logged_rounds())),
     })
+}
+
+/// Show the map at `path` alone in Rerun (`smartteams view`).
+pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
+    let map = MapData::load(path)?;
+    let name = path
+        .file_stem()
+        .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
+    let rec = crate::viewer::open(&name, target, crate::blueprint::map_only())?;
+    crate::layers::log_static_map(&rec, &map)?;
+    crate::layers::log_static_treasures(&rec, &map)?;
+    rec.flush_with_timeout(Duration::from_secs(10))
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("sending the map to {target}"))?;
+    Ok(())
 }
 
 /// The run loop with the decide phase on `pool`; observers are called on this thread.

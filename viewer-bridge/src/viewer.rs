@@ -1,0 +1,109 @@
+//! Where a recording goes: an `.rrd` file, a running viewer over gRPC, or a spawned viewer.
+
+use std::net::{TcpStream, ToSocketAddrs};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+
+/// The application id every Smart Teams recording carries (recordings of one application
+/// share blueprints in the viewer).
+pub const APPLICATION_ID: &str = "smartteams";
+
+/// The URL `--connect` uses without a value: a viewer on this machine, default port.
+pub const DEFAULT_CONNECT_URL: &str = rerun::DEFAULT_CONNECT_URL;
+
+/// One destination for the recording.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ViewerTarget {
+    /// Write an `.rrd` file.
+    Rrd(PathBuf),
+    /// Stream to a running viewer (`rerun+http://host:port/proxy`).
+    Connect(String),
+    /// Start a local viewer (the `rerun` executable on `PATH`) and stream to it.
+    Spawn,
+}
+
+impl std::fmt::Display for ViewerTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ViewerTarget::Rrd(p) => write!(f, "{}", p.display()),
+            ViewerTarget::Connect(url) => write!(f, "{url}"),
+            ViewerTarget::Spawn => write!(f, "a spawned viewer"),
+        }
+    }
+}
+
+/// Turn what a user typed after `--connect` into a proxy URL: a full `rerun+http(s)://…/proxy`
+/// URL is kept, `host:port` or `host` is expanded.
+pub fn connect_url(arg: &str) -> String {
+    if arg.contains("://") {
+        arg.to_owned()
+    } else if arg.contains(':') {
+        format!("rerun+http://{arg}/proxy")
+    } else {
+        format!("rerun+http://{arg}:{}/proxy", rerun::DEFAULT_SERVER_PORT)
+    }
+}
+
+/// `host:port` of a proxy URL.
+fn authority(url: &str) -> Option<&str> {
+    let rest = url.split_once("://")?.1;
+    Some(rest.split('/').next().unwrap_or(rest))
+}
+
+/// Open a recording stream to `target`, with `blueprint` as its default layout.
+///
+/// `--connect` checks first that something listens at the address: the SDK would otherwise
+/// retry for ever while buffering, and a run would stall on the full buffer.
+pub fn open(
+    name: &str,
+    target: &ViewerTarget,
+    blueprint: rerun::blueprint::Blueprint,
+) -> Result<rerun::RecordingStream> {
+    let builder = rerun::RecordingStreamBuilder::new(APPLICATION_ID)
+        .recording_name(name)
+        .with_blueprint(blueprint);
+    let rec = match target {
+        ViewerTarget::Rrd(path) => builder
+            .save(path)
+            .with_context(|| format!("cannot write the recording {}", path.display()))?,
+        ViewerTarget::Connect(url) => {
+            let Some(auth) = authority(url) else {
+                bail!("not a Rerun proxy URL: {url} (expected rerun+http://HOST:PORT/proxy)");
+            };
+            let reachable = auth
+                .to_socket_addrs()
+                .ok()
+                .into_iter()
+                .flatten()
+                .any(|a| TcpStream::connect_timeout(&a, Duration::from_secs(2)).is_ok());
+            if !reachable {
+                bail!("no Rerun viewer listens at {url}: start one (`rerun`) or use --spawn / --rrd");
+            }
+            builder
+                .connect_grpc_opts(url.clone())
+                .with_context(|| format!("cannot connect to {url}"))?
+        }
+        ViewerTarget::Spawn => builder
+            .spawn()
+            .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?,
+    };
+    // Wall-clock times would make two recordings of the same run differ; rounds are the time.
+    rec.set_log_time_enabled(false);
+    rec.set_log_tick_enabled(false);
+    Ok(rec)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn connect_urls() {
+        assert_eq!(connect_url("10.0.0.2:9000"), "rerun+http://10.0.0.2:9000/proxy");
+        assert_eq!(connect_url("viewer"), "rerun+http://viewer:9876/proxy");
+        assert_eq!(connect_url(DEFAULT_CONNECT_URL), DEFAULT_CONNECT_URL);
+        assert_eq!(authority(DEFAULT_CONNECT_URL), Some("127.0.0.1:9876"));
+    }
+}

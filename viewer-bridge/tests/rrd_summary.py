@@ -1,0 +1,57 @@
+"""Summarise an .rrd with the official Rerun SDK (rerun-sdk 0.36.3), as JSON on stdout.
+
+Used by viewer-bridge/tests/rerun_rrd.rs. Output:
+  rows:    {"<entity>|<static 0/1>": rows}
+  rounds:  {"<entity>": sorted rounds with a row}        (temporal chunks only)
+  scalars: {"<entity>": {"<round>": value}}             (entities with a Scalars column)
+  instances: {"<entity>": {"<round>": instances}}      (world/robots, world/treasures)
+"""
+
+import json
+import sys
+from collections import defaultdict
+
+from rerun.experimental import RrdReader
+
+
+def main(path: str) -> None:
+    rows: dict[str, int] = defaultdict(int)
+    rounds: dict[str, set[int]] = defaultdict(set)
+    scalars: dict[str, dict[str, float]] = defaultdict(dict)
+    instances: dict[str, dict[str, int]] = defaultdict(dict)
+    for chunk in RrdReader(path).stream():
+        entity = str(chunk.entity_path)
+        static = bool(chunk.is_static)
+        rows[f"{entity}|{int(static)}"] += chunk.num_rows
+        if static:
+            continue
+        batch = chunk.to_record_batch()
+        names = batch.schema.names
+        if "round" not in names:
+            continue
+        rs = batch.column(names.index("round")).to_pylist()
+        rounds[entity].update(int(r) for r in rs)
+        scalar_cols = [n for n in names if n.endswith(":scalars")]
+        if scalar_cols:
+            values = batch.column(names.index(scalar_cols[0])).to_pylist()
+            for r, v in zip(rs, values):
+                if v:
+                    scalars[entity][str(r)] = float(v[0])
+        pos_cols = [n for n in names if n.endswith(":positions")]
+        if pos_cols:
+            values = batch.column(names.index(pos_cols[0])).to_pylist()
+            for r, v in zip(rs, values):
+                instances[entity][str(r)] = len(v or [])
+    json.dump(
+        {
+            "rows": rows,
+            "rounds": {e: sorted(r) for e, r in rounds.items()},
+            "scalars": scalars,
+            "instances": instances,
+        },
+        sys.stdout,
+    )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
