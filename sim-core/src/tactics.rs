@@ -270,25 +270,32 @@ impl Navigator {
         Some(Action::MoveTo { to: target })
     }
 
-    /// Route to the nearest frontier: the closest free leaf (by path) that the known map
-    /// touches but does not cover, ending at the nearest unknown point inside it. Leaves
-    /// whose unknown part lies within `avoid_radius_m` of a point in `avoid` (team mates'
-    /// goals) are skipped.
+    /// Route to the nearest frontier (by path): the closest free leaf the known map touches
+    /// that is either partly unknown (the route ends at its nearest unknown point) or borders
+    /// a free leaf not known at all (the route ends just across their shared edge). Targets
+    /// within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
     pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Option<Route> {
         let known = ctx.known()?;
         let nav = ctx.nav();
         let p = ctx.position();
+        let step_in = 0.5 * known.grid().cell_m();
+        let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
         nav.search(
             p,
             |n| known.touches_known(&nav.bounds(n)),
             |n| {
                 let b = nav.bounds(n);
-                if known.is_box_known(&b) {
-                    return None;
+                if !known.is_box_known(&b) {
+                    return nearest_unknown(known, &b, p).filter(|t| clear(*t));
                 }
-                let target = nearest_unknown(known, &b, p)?;
-                let clear = avoid.iter().all(|a| a.distance(target) > avoid_radius_m);
-                clear.then_some(target)
+                nav.neighbors(n)
+                    .filter(|&m| !known.touches_known(&nav.bounds(m)))
+                    .map(|m| {
+                        let portal = nav.portal(n, m);
+                        let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
+                        portal + inward * step_in
+                    })
+                    .find(|t| clear(*t))
             },
             SEARCH_BUDGET,
         )
