@@ -79,6 +79,19 @@ impl KnownMap {
         self.tree.all_in(area, true)
     }
 
+    /// Whether some cell of a grid square is known (one descent; see
+    /// [`RegionQuadtree::square_value`]).
+    #[inline]
+    pub fn touches_square(&self, sq: crate::quadtree::Square) -> bool {
+        self.tree.square_value(sq) != Some(false)
+    }
+
+    /// Whether every cell of a grid square is known.
+    #[inline]
+    pub fn covers_square(&self, sq: crate::quadtree::Square) -> bool {
+        self.tree.square_value(sq) == Some(true)
+    }
+
     /// Whether some cell overlapping the shape is known.
     pub fn touches_known<S: Shape>(&self, shape: &S) -> bool {
         self.tree.any_leaf_in(shape, true)

@@ -17,10 +17,11 @@ pub enum Retention {
 #[derive(Clone, Debug)]
 pub struct MemoryList<K: Eq + Hash + Copy, T> {
     retention: Retention,
-    /// Sightings in the order they were recorded; older ones of a key are stale.
-    log: VecDeque<(K, u64, u64, T)>,
-    /// Key → sequence number of its live sighting.
-    live: HashMap<K, u64>,
+    /// Sightings in the order they were recorded (key, sequence number, round); entries
+    /// whose sequence number is no longer the key's live one are stale.
+    log: VecDeque<(K, u64, u64)>,
+    /// Key → (sequence number, round, item) of its live sighting.
+    live: HashMap<K, (u64, u64, T)>,
     next_seq: u64,
 }
 
@@ -39,8 +40,8 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
     pub fn record(&mut self, key: K, item: T, round: u64) {
         let seq = self.next_seq;
         self.next_seq += 1;
-        self.live.insert(key, seq);
-        self.log.push_back((key, seq, round, item));
+        self.live.insert(key, (seq, round, item));
+        self.log.push_back((key, seq, round));
         self.evict(round);
     }
 
@@ -49,10 +50,14 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         self.live.remove(&key);
     }
 
+    fn is_live(&self, key: K, seq: u64) -> bool {
+        self.live.get(&key).is_some_and(|e| e.0 == seq)
+    }
+
     /// Drop what the policy no longer keeps at `round`.
     pub fn evict(&mut self, round: u64) {
-        while let Some(&(k, seq, seen, _)) = self.log.front() {
-            let stale = self.live.get(&k) != Some(&seq);
+        while let Some(&(k, seq, seen)) = self.log.front() {
+            let stale = !self.is_live(k, seq);
             let expired = match self.retention {
                 Retention::LastN(n) => self.live.len() > n,
                 Retention::LastRounds(m) => seen + m < round,
@@ -69,7 +74,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         // Keep the log from filling with stale entries behind a long-lived front.
         if self.log.len() > 2 * self.live.len() + 16 {
             let live = &self.live;
-            self.log.retain(|(k, seq, _, _)| live.get(k) == Some(seq));
+            self.log.retain(|(k, seq, _)| live.get(k).is_some_and(|e| e.0 == *seq));
         }
     }
 
@@ -85,16 +90,15 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
 
     /// Items with the round each was last seen, oldest first.
     pub fn iter(&self) -> impl Iterator<Item = (&T, u64)> {
-        self.log
-            .iter()
-            .filter(|(k, seq, _, _)| self.live.get(k) == Some(seq))
-            .map(|(_, _, round, item)| (item, *round))
+        self.log.iter().filter_map(|(k, seq, _)| {
+            let (s, round, item) = self.live.get(k)?;
+            (s == seq).then_some((item, *round))
+        })
     }
 
     /// The live item of a key.
     pub fn get(&self, key: K) -> Option<&T> {
-        let seq = *self.live.get(&key)?;
-        self.log.iter().rev().find(|e| e.1 == seq).map(|e| &e.3)
+        self.live.get(&key).map(|e| &e.2)
     }
 }
 

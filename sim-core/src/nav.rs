@@ -275,7 +275,7 @@ impl NavGraph {
         let goal = self.node_at(to)?;
         self.search(
             from,
-            |n| known.touches_known(&self.bounds(n)),
+            |n| known.touches_square(self.square(n)),
             |n| (n == goal).then_some(to),
             max_nodes,
         )

@@ -391,7 +391,7 @@ impl Simulation {
 }
 
 /// Known maps a robot merges per round at most; later ones that round are dropped.
-pub const MAX_MAP_MERGES_PER_ROUND: usize = 4;
+pub const MAX_MAP_MERGES_PER_ROUND: usize = 2;
 
 /// The shared, read-only state robots perceive in a round.
 struct Snapshot<'a> {

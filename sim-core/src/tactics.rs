@@ -282,14 +282,13 @@ impl Navigator {
         let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
         nav.search(
             p,
-            |n| known.touches_known(&nav.bounds(n)),
+            |n| known.touches_square(nav.square(n)),
             |n| {
-                let b = nav.bounds(n);
-                if !known.is_box_known(&b) {
-                    return nearest_unknown(known, &b, p).filter(|t| clear(*t));
+                if !known.covers_square(nav.square(n)) {
+                    return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
                 nav.neighbors(n)
-                    .filter(|&m| !known.touches_known(&nav.bounds(m)))
+                    .filter(|&m| !known.touches_square(nav.square(m)))
                     .map(|m| {
                         let portal = nav.portal(n, m);
                         let inward = (nav.bounds(m).center() - portal).normalize_or_zero();

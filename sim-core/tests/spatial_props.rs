@@ -417,3 +417,24 @@ fn known_map_memory_is_reused_after_merges_into_big_leaves() {
     assert_eq!(other.memory_bytes(), peak);
     other.validate().unwrap();
 }
+
+proptest! {
+    #![proptest_config(config(128))]
+
+    #[test]
+    fn square_value_matches_the_cells(w in world_strategy()) {
+        let tree = RegionQuadtree::from_bitgrid(w.grid, &w.bits, true).unwrap();
+        let depth = w.grid.depth();
+        for level in 0..=depth {
+            let side = 1u32 << level;
+            for y in (0..w.grid.side_cells()).step_by(side as usize) {
+                for x in (0..w.grid.side_cells()).step_by(side as usize) {
+                    let cells: Vec<bool> = (y..y + side).flat_map(|cy| (x..x + side).map(move |cx| (cx, cy)))
+                        .map(|(cx, cy)| w.blocked(cx, cy)).collect();
+                    let want = if cells.iter().all(|&c| c) { Some(true) } else if cells.iter().all(|&c| !c) { Some(false) } else { None };
+                    prop_assert_eq!(tree.square_value(Square { x, y, level }), want, "square ({}, {}) level {}", x, y, level);
+                }
+            }
+        }
+    }
+}

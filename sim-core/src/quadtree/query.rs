@@ -167,6 +167,24 @@ impl RegionQuadtree {
         count
     }
 
+    /// The value of every cell of `sq` if they all agree, `None` if they differ. One descent
+    /// from the root: the cheap test for squares of the grid (navigation nodes are such).
+    #[inline]
+    pub fn square_value(&self, sq: Square) -> Option<bool> {
+        let mut n = self.root;
+        let mut level = self.grid.depth();
+        while level > sq.level {
+            if is_leaf(n) {
+                break;
+            }
+            level -= 1;
+            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
+            n = self.groups[n as usize][i as usize];
+        }
+        // A leaf on the way covers the square; an internal node at its level is mixed.
+        if is_leaf(n) { Some(n == FULL) } else { None }
+    }
+
     /// Number of cells of `sq` holding `value`.
     pub fn count_cells_in(&self, sq: Square, value: bool) -> u64 {
         let mut n = self.root;

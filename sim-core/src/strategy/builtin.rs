@@ -264,8 +264,8 @@ impl Strategy for Frontier {
     }
 }
 
-/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by a
-/// quarter since it was last shared, and in any case every fifth time (maps of a crowd are
+/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by
+/// half since it was last shared, and in any case every fifth time (maps of a crowd are
 /// near-identical, and merging them costs receivers time for nothing), and all remembered
 /// sightings. Other rounds: fresh
 /// sightings, if any.
@@ -274,7 +274,7 @@ fn share_knowledge(ctx: &mut Ctx, every: u64, shared_area: &mut f64) {
         let area = ctx.known().map_or(0.0, crate::known_map::KnownMap::known_area_m2);
         // Also every fifth time regardless, so robots met late still get the whole map.
         let refresh = ((ctx.round + u64::from(ctx.me.id.0)) / every).is_multiple_of(5);
-        if area > 1.25 * *shared_area || (refresh && area > 0.0) {
+        if area > 1.5 * *shared_area || (refresh && area > 0.0) {
             *shared_area = area;
             ctx.broadcast_known_map();
         }
