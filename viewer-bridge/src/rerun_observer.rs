@@ -79,6 +79,8 @@ pub struct RerunObserver {
     /// Robots whose known map changed since their region was last logged.
     known_dirty: Vec<bool>,
     logged_rounds: u64,
+    /// Wall time spent in this observer (the simulation thread's share of logging).
+    busy: std::time::Duration,
 }
 
 impl RerunObserver {
@@ -96,6 +98,7 @@ impl RerunObserver {
             last_known_round: None,
             known_dirty: Vec::new(),
             logged_rounds: 0,
+            busy: std::time::Duration::ZERO,
         }
     }
 
@@ -107,6 +110,12 @@ impl RerunObserver {
     /// Rounds whose world state was logged so far (round 0, the start, included).
     pub fn logged_rounds(&self) -> u64 {
         self.logged_rounds
+    }
+
+    /// Wall time spent logging on the simulation's thread so far (encoding and writing happen
+    /// on Rerun's own threads besides).
+    pub fn busy(&self) -> std::time::Duration {
+        self.busy
     }
 
     /// Whether the world is logged after `round` of a run of `total` rounds.
@@ -352,12 +361,14 @@ fn log_paths(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recording
 fn log_links(rec: &rerun::RecordingStream, sim: &Simulation, report: &RoundReport) -> rerun::RecordingStreamResult<()> {
     let robots = sim.robots();
     let pos = |id: RobotId| robots.get(id.0 as usize).map(|r| to_2d(r.position));
+    // A broadcast and its answer are one line. Only a bounded prefix is sorted: a dense swarm
+    // sends O(n²) deliveries a round and sorting them all cost more than drawing them.
     let mut pairs: Vec<(u32, u32)> = report
         .links
         .iter()
+        .take(2 * MAX_LINKS)
         .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
         .collect();
-    // A broadcast and its answer are one line.
     pairs.sort_unstable();
     pairs.dedup();
     pairs.truncate(MAX_LINKS);
@@ -428,6 +439,25 @@ impl Observer for RerunObserver {
     }
 
     fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
+        let t0 = std::time::Instant::now();
+        self.on_round_inner(sim, report)?;
+        self.busy += t0.elapsed();
+        Ok(())
+    }
+
+    fn on_finish(&mut self, _sim: &Simulation) -> Result<(), ObserverError> {
+        // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
+        let t0 = std::time::Instant::now();
+        if let Err(e) = self.rec.flush_with_timeout(std::time::Duration::from_secs(10)) {
+            eprintln!("warning: could not flush the Rerun stream: {e}");
+        }
+        self.busy += t0.elapsed();
+        Ok(())
+    }
+}
+
+impl RerunObserver {
+    fn on_round_inner(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
         self.rec.set_time_sequence(TIMELINE, report.round as i64);
         for id in &report.known_changed {
             if let Some(d) = self.known_dirty.get_mut(id.0 as usize) {
@@ -438,14 +468,6 @@ impl Observer for RerunObserver {
         log_events(&self.rec, report)?;
         if self.is_logged_round(report.round, sim.total_rounds()) {
             self.log_world(sim, Some(report))?;
-        }
-        Ok(())
-    }
-
-    fn on_finish(&mut self, _sim: &Simulation) -> Result<(), ObserverError> {
-        // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
-        if let Err(e) = self.rec.flush_with_timeout(std::time::Duration::from_secs(10)) {
-            eprintln!("warning: could not flush the Rerun stream: {e}");
         }
         Ok(())
     }

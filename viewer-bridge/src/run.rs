@@ -51,8 +51,9 @@ pub struct Summary {
     pub elapsed: Duration,
     /// Wall time of loading and set-up.
     pub setup: Duration,
-    /// Where the recording went, and how many rounds of world state it holds.
-    pub recording: Option<(ViewerTarget, u64)>,
+    /// Where the recording went, how many rounds of world state it holds, and the time the
+    /// simulation thread spent logging.
+    pub recording: Option<(ViewerTarget, u64, Duration)>,
 }
 
 impl std::fmt::Display for Summary {
@@ -85,8 +86,12 @@ impl std::fmt::Display for Summary {
             m.robots_alive, m.mean_energy
         )?;
         write!(f, "  distance          {:.1} m in all", m.distance_m)?;
-        if let Some((target, logged)) = &self.recording {
-            write!(f, "\n  recording         {target} ({logged} rounds of world state)")?;
+        if let Some((target, logged, busy)) = &self.recording {
+            write!(
+                f,
+                "\n  recording         {target} ({logged} rounds of world state; logging {:.2} s)",
+                busy.as_secs_f64()
+            )?;
         }
         Ok(())
     }
@@ -153,7 +158,13 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         metrics: sim.report().metrics,
         elapsed,
         setup,
-        recording: rerun.map(|r| (run.viewer.clone().unwrap_or(ViewerTarget::Spawn), r.logged_rounds())),
+        recording: rerun.map(|r| {
+            (
+                run.viewer.clone().unwrap_or(ViewerTarget::Spawn),
+                r.logged_rounds(),
+                r.busy(),
+            )
+        }),
     })
 }
 
