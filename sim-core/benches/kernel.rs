@@ -117,13 +117,13 @@ fn kernel(c: &mut Criterion) {
             100.0 * sim.report().metrics.explored_fraction
         );
         g.bench_function(format!("round_{robots}_robots"), |b| {
-            b.iter(|| black_box(sim.step().metrics.messages))
+            b.iter(|| black_box(sim.step().metrics.messages));
         });
         eprintln!(
             "{robots} robots: after {} rounds explored {:.2} %, known maps {:.1} MiB, peak RSS {:.0} MiB",
             sim.round(),
             100.0 * sim.report().metrics.explored_fraction,
-            sim.robot_memory_bytes() as f64 / (1 << 20) as f64,
+            sim.robot_memory_bytes() as f64 / f64::from(1 << 20),
             peak_rss_mib()
         );
     }

@@ -67,8 +67,12 @@ impl Tactic for CollisionAvoidance {
         let p = ctx.position();
         let moved = self.last_position.map_or(f64::INFINITY, |q| q.distance(p));
         self.last_position = Some(p);
-        let tried_to_move = matches!(ctx.me.last_action.0, Action::MoveTo { .. });
-        if tried_to_move && moved < 0.01 * ctx.kind.speed_m_per_round {
+        // Held back by a wall or a robot; standing still by choice is not being stuck.
+        let held_back = matches!(
+            ctx.me.last_action,
+            (Action::MoveTo { .. }, Outcome::Trimmed | Outcome::Refused)
+        );
+        if held_back && moved < 0.01 * ctx.kind.speed_m_per_round {
             self.stuck += 1;
         } else {
             self.stuck = 0;
