@@ -37,6 +37,49 @@ pub enum Event {
     },
     /// The whole free area has been explored.
     MapExplored,
+    /// A robot joined the group of a leader (team behaviour).
+    GroupJoined {
+        /// The follower.
+        robot: RobotId,
+        /// The leader.
+        leader: RobotId,
+    },
+    /// A robot left its leader's group (the leader went out of range or silent).
+    GroupLeft {
+        /// The former follower.
+        robot: RobotId,
+        /// The former leader.
+        leader: RobotId,
+    },
+    /// Something a strategy chose to report.
+    Note {
+        /// The robot.
+        robot: RobotId,
+        /// What it says.
+        text: String,
+    },
+}
+
+/// What a strategy may report through [`Ctx::report`](crate::strategy::Ctx::report).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StrategyEvent {
+    /// This robot now follows `leader`.
+    JoinedGroup(RobotId),
+    /// This robot stopped following `leader`.
+    LeftGroup(RobotId),
+    /// Free text for the event log.
+    Note(String),
+}
+
+impl StrategyEvent {
+    /// The kernel event for robot `robot`.
+    pub fn into_event(self, robot: RobotId) -> Event {
+        match self {
+            StrategyEvent::JoinedGroup(leader) => Event::GroupJoined { robot, leader },
+            StrategyEvent::LeftGroup(leader) => Event::GroupLeft { robot, leader },
+            StrategyEvent::Note(text) => Event::Note { robot, text },
+        }
+    }
 }
 
 impl std::fmt::Display for Event {
@@ -51,6 +94,11 @@ impl std::fmt::Display for Event {
                 write!(f, "treasure {} fully delivered by robot {}", treasure.0, by.0)
             }
             Event::MapExplored => write!(f, "the whole free area is explored"),
+            Event::GroupJoined { robot, leader } => {
+                write!(f, "robot {} joined the group of robot {}", robot.0, leader.0)
+            }
+            Event::GroupLeft { robot, leader } => write!(f, "robot {} left the group of robot {}", robot.0, leader.0),
+            Event::Note { robot, text } => write!(f, "robot {}: {text}", robot.0),
         }
     }
 }

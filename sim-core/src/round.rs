@@ -80,6 +80,7 @@ impl Simulation {
             .zip(self.robots.par_iter())
             .for_each(|(agent, robot)| {
                 agent.outbox.clear();
+                agent.events.clear();
                 agent.known_changed = false;
                 if !robot.alive {
                     agent.action = Action::Idle;
@@ -98,6 +99,7 @@ impl Simulation {
                     outbox: &mut agent.outbox,
                     goal: &mut agent.goal,
                     path: &mut agent.path,
+                    events: &mut agent.events,
                 };
                 agent.action = agent.strategy.decide(&mut ctx);
             });
@@ -119,6 +121,9 @@ impl Simulation {
             }
             if agent.known_changed {
                 self.report.known_changed.push(robot.id);
+            }
+            for e in &agent.events {
+                self.report.events.push(e.clone().into_event(robot.id));
             }
         }
     }

@@ -73,6 +73,7 @@ pub(crate) struct Agent {
     pub(crate) goal: Option<DVec2>,
     pub(crate) path: Vec<DVec2>,
     pub(crate) known_changed: bool,
+    pub(crate) events: Vec<crate::observer::StrategyEvent>,
 }
 
 /// A running simulation.
@@ -199,6 +200,7 @@ impl Simulation {
                     goal: None,
                     path: Vec::new(),
                     known_changed: false,
+                    events: Vec::new(),
                 });
             }
         }

@@ -14,6 +14,7 @@ use crate::geometry::Aabb;
 use crate::messages::Payload;
 use crate::model::{Action, Outcome};
 use crate::nav::Route;
+use crate::observer::StrategyEvent;
 use crate::robot_index::RobotId;
 use crate::strategy::Ctx;
 
@@ -325,7 +326,7 @@ fn nearest_unknown(known: &crate::known_map::KnownMap, area: &Aabb, p: DVec2) ->
 }
 
 /// Team behaviour: robots of the same type that hear each other form a group led by the
-/// lowest id in range; followers keep within `spacing_m` of the leader; the group breaks up
+/// lowest id in range; followers keep to their own slot `spacing_m` from the leader; the group breaks up
 /// when the leader has not been heard for `timeout_rounds`.
 #[derive(Clone, Debug)]
 pub struct Team {
@@ -366,6 +367,7 @@ impl Tactic for Team {
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let my_type = ctx.me.type_index;
         let me = ctx.me.id;
+        let before = self.leader.map(|l| l.0);
         for m in ctx.messages() {
             if let Payload::Position { position, .. } = *m.payload
                 && m.from < me
@@ -381,16 +383,26 @@ impl Tactic for Team {
                 }
             }
         }
-        if let Some((_, _, heard)) = self.leader
+        if let Some((leader, _, heard)) = self.leader
             && ctx.round > heard + self.timeout_rounds
         {
             self.leader = None;
+            ctx.report(StrategyEvent::LeftGroup(leader));
+        }
+        if self.leader.map(|l| l.0) != before
+            && let Some((new, _, _)) = self.leader
+        {
+            if let Some(old) = before {
+                ctx.report(StrategyEvent::LeftGroup(old));
+            }
+            ctx.report(StrategyEvent::JoinedGroup(new));
         }
         let (_, at, _) = self.leader?;
-        let p = ctx.position();
-        if p.distance(at) > self.spacing_m {
-            let to = at + (p - at).normalize_or_zero() * self.spacing_m;
-            return Some(Action::MoveTo { to });
+        // Each follower keeps its own slot around the leader (golden-angle spread by id), so
+        // followers do not queue for the same spot.
+        let slot = at + DVec2::from_angle(f64::from(me.0) * 2.399_963_229_728_653) * self.spacing_m;
+        if ctx.position().distance(slot) > 0.25 * self.spacing_m {
+            return Some(Action::MoveTo { to: slot });
         }
         None
     }

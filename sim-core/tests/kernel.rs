@@ -388,3 +388,32 @@ fn energy_management_brings_explorers_home_to_recharge() {
     // They walked far more than one tank's worth, so they recharged on the way.
     assert!(sim.robots().iter().all(|r| r.stats.distance_m > 150.0));
 }
+
+#[test]
+fn team_groups_form_and_follow_their_leader() {
+    let registry = StrategyRegistry::with_builtins();
+    let mut s = scenario(rooms_map(Vec::new()), 4, 120, vec![(4, RobotType::explorer(), "team")]);
+    s.rounds = 120;
+    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut events = Vec::new();
+    run_checked(&mut sim, &mut [&mut Events(&mut events)]);
+    // Robots 1–3 hear robot 0 (lowest id in range) in round 2 and join its group.
+    for follower in 1..4 {
+        assert!(
+            events.contains(&sim_core::Event::GroupJoined {
+                robot: sim_core::RobotId(follower),
+                leader: sim_core::RobotId(0),
+            }),
+            "{events:?}"
+        );
+    }
+    // Followers stay near the leader: spacing 2 m, plus the leader's position is a round old
+    // when heard and it walks on at 1 m a round; walls and team mates can hold one back.
+    let leader = sim.robots()[0].position;
+    let gaps: Vec<f64> = sim.robots()[1..].iter().map(|r| r.position.distance(leader)).collect();
+    assert!(
+        gaps.iter().sum::<f64>() / 3.0 <= 4.5 && gaps.iter().all(|&g| g <= 8.0),
+        "{gaps:?}"
+    );
+    assert!(sim.report().metrics.explored_fraction > 0.1);
+}

@@ -155,7 +155,9 @@ fn config_errors_name_file_line_column_and_what_was_expected() {
     );
     assert!(e.contains("bad.xml:3:3"), "{e}");
     assert!(
-        e.contains("unknown strategy 'frontir' (known: cooperative, excavator, frontier, random_walk, transporter)"),
+        e.contains(
+            "unknown strategy 'frontir' (known: cooperative, excavator, frontier, random_walk, team, transporter)"
+        ),
         "{e}"
     );
 

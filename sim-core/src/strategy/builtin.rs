@@ -7,7 +7,7 @@ use rand::Rng;
 use super::{Ctx, Needs, Params, Strategy, StrategyRegistry};
 use crate::messages::{Payload, Sighting};
 use crate::model::{Action, REACH_M};
-use crate::tactics::{BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, blocked};
+use crate::tactics::{BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, blocked};
 use crate::treasure_index::TreasureId;
 
 /// Register every built-in strategy.
@@ -43,6 +43,26 @@ pub fn register_all(r: &mut StrategyRegistry) {
             p.only(&["share_every", "avoid_radius_m"])?;
             let share = Sharing::from_params(p)?;
             Ok(Box::new(Frontier::new(Some(share))))
+        },
+    );
+    r.register(
+        "team",
+        "explorers in groups: the lowest id in radio range leads (frontier exploration), the others follow it",
+        |p| {
+            p.only(&["spacing_m", "timeout_rounds"])?;
+            let spacing_m = p.f64_or("spacing_m", 2.0)?;
+            if spacing_m <= 0.0 {
+                return Err(format!("spacing_m must be > 0, got {spacing_m}"));
+            }
+            Ok(Box::new(TeamExplorer {
+                core: Explorer::default(),
+                team: {
+                    let mut team = Team::default();
+                    team.spacing_m = spacing_m;
+                    team.timeout_rounds = p.u64_or("timeout_rounds", 5)?;
+                    team
+                },
+            }))
         },
     );
     r.register(
@@ -422,5 +442,43 @@ impl Strategy for Transporter {
             };
         }
         self.core.go(ctx, t.position)
+    }
+}
+
+/// Team behaviour: leaders explore frontiers, followers keep close to their leader; groups
+/// form and break up as robots come into and out of radio range (events in the log).
+struct TeamExplorer {
+    core: Explorer,
+    team: Team,
+}
+
+impl Strategy for TeamExplorer {
+    fn needs(&self) -> Needs {
+        Needs {
+            treasures: false,
+            ..Needs::ALL
+        }
+    }
+
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        if let Some(a) = self.core.reflexes(ctx) {
+            return a;
+        }
+        let action = match self.team.suggest(ctx) {
+            Some(follow) => follow,
+            // A leader explores, at 60 % of its speed so that followers can keep up.
+            None if self.team.leader().is_none() => match self.core.explore(ctx, &[], 0.0) {
+                Action::MoveTo { to } => {
+                    let p = ctx.position();
+                    Action::MoveTo {
+                        to: p + (to - p).clamp_length_max(0.6 * ctx.kind.speed_m_per_round),
+                    }
+                }
+                other => other,
+            },
+            None => Action::Idle,
+        };
+        Team::announce(ctx);
+        action
     }
 }

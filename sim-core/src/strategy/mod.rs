@@ -173,6 +173,7 @@ pub struct Ctx<'a> {
     pub(crate) outbox: &'a mut Vec<(Recipient, Payload)>,
     pub(crate) goal: &'a mut Option<DVec2>,
     pub(crate) path: &'a mut Vec<DVec2>,
+    pub(crate) events: &'a mut Vec<crate::observer::StrategyEvent>,
 }
 
 impl<'a> Ctx<'a> {
@@ -265,6 +266,10 @@ impl<'a> Ctx<'a> {
     /// Publish the current goal (for viewers and team mates).
     pub fn set_goal(&mut self, goal: Option<DVec2>) {
         *self.goal = goal;
+    }
+    /// Report an event for the run's event log (group changes, notes).
+    pub fn report(&mut self, event: crate::observer::StrategyEvent) {
+        self.events.push(event);
     }
     /// Publish the planned path (for viewers).
     pub fn set_path(&mut self, path: &[DVec2]) {
