@@ -15,6 +15,8 @@ use crate::quadtree::update::PartialCells;
 #[derive(Clone, Debug)]
 pub struct KnownMap {
     tree: RegionQuadtree,
+    /// Cells known, kept up to date by every mutation (maps only grow).
+    known_cells: u64,
 }
 
 impl KnownMap {
@@ -22,12 +24,14 @@ impl KnownMap {
     pub fn new(grid: Grid) -> Self {
         Self {
             tree: RegionQuadtree::uniform(grid, false),
+            known_cells: 0,
         }
     }
 
     /// Wrap a tree whose `FULL` leaves are known space.
     pub fn from_tree(tree: RegionQuadtree) -> Self {
-        Self { tree }
+        let known_cells = tree.count_cells(true);
+        Self { tree, known_cells }
     }
 
     /// The grid.
@@ -52,21 +56,23 @@ impl KnownMap {
 
     /// Mark as known every map cell lying wholly inside `shape`.
     pub fn mark<S: Shape>(&mut self, shape: &S) -> bool {
-        let clipped = Clipped {
-            shape,
-            clip: self.grid().extent(),
-        };
-        self.tree.fill(&clipped, true, PartialCells::Exclude)
+        let before = self.known_cells;
+        self.mark_reporting(shape, |_| {});
+        self.known_cells > before
     }
 
     /// [`mark`](Self::mark), calling `newly_known` with the squares that became known.
-    pub fn mark_reporting<S: Shape>(&mut self, shape: &S, newly_known: impl FnMut(crate::quadtree::Square)) {
+    pub fn mark_reporting<S: Shape>(&mut self, shape: &S, mut newly_known: impl FnMut(crate::quadtree::Square)) {
         let clipped = Clipped {
             shape,
             clip: self.grid().extent(),
         };
-        self.tree
-            .fill_reporting(&clipped, true, PartialCells::Exclude, newly_known);
+        let mut added = 0;
+        self.tree.fill_reporting(&clipped, true, PartialCells::Exclude, |sq| {
+            added += sq.cells();
+            newly_known(sq);
+        });
+        self.known_cells += added;
     }
 
     /// Whether the cell holding `p` is known (false outside the map).
@@ -100,12 +106,21 @@ impl KnownMap {
     /// Add everything `other` knows (both over the same map). Returns whether anything new
     /// became known.
     pub fn merge(&mut self, other: &KnownMap) -> bool {
-        self.tree.union_with(&other.tree)
+        let changed = self.tree.union_with(&other.tree);
+        if changed {
+            self.known_cells = self.tree.count_cells(true);
+        }
+        changed
+    }
+
+    /// Number of known cells (kept up to date, no traversal).
+    pub fn known_cells(&self) -> u64 {
+        self.known_cells
     }
 
     /// Known area in m².
     pub fn known_area_m2(&self) -> f64 {
-        self.tree.count_cells(true) as f64 * self.grid().cell_area_m2()
+        self.known_cells as f64 * self.grid().cell_area_m2()
     }
 
     /// Known free area in m² (explored space a robot could stand on).
@@ -125,6 +140,11 @@ impl KnownMap {
 
     /// Check the tree's invariants.
     pub fn validate(&self) -> Result<(), String> {
-        self.tree.validate()
+        self.tree.validate()?;
+        let counted = self.tree.count_cells(true);
+        if counted != self.known_cells {
+            return Err(format!("cached known cells {} ≠ {counted} counted", self.known_cells));
+        }
+        Ok(())
     }
 }

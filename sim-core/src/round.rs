@@ -478,13 +478,18 @@ fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world: &Snapshot
         for m in &perception.inbox {
             match &*m.payload {
                 Payload::KnownMap(other) => {
-                    // A robot digests a bounded number of maps a round (first come, first
-                    // served): in a crowd, hundreds of near-identical maps arrive at once.
+                    // Maps only grow: one no larger than the last merged from its sender is
+                    // contained in ours already. Of the rest, a robot digests a bounded number
+                    // a round (first come, first served): in a crowd hundreds arrive at once.
+                    let cells = other.known_cells();
+                    let seen = agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
                     if let Some(known) = data.known.as_mut()
+                        && !seen
                         && merged < MAX_MAP_MERGES_PER_ROUND
                     {
                         merged += 1;
                         agent.known_changed |= known.merge(other);
+                        agent.merged_from.insert(m.from, cells);
                     }
                 }
                 Payload::Sightings(list) => {

@@ -74,6 +74,9 @@ pub(crate) struct Agent {
     pub(crate) path: Vec<DVec2>,
     pub(crate) known_changed: bool,
     pub(crate) events: Vec<crate::observer::StrategyEvent>,
+    /// Known cells of the last map merged from each sender: a map that has not grown since
+    /// is already contained in ours (maps only grow), so merging it again is skipped.
+    pub(crate) merged_from: std::collections::HashMap<RobotId, u64>,
 }
 
 /// A running simulation.
@@ -201,6 +204,7 @@ impl Simulation {
                     path: Vec::new(),
                     known_changed: false,
                     events: Vec::new(),
+                    merged_from: std::collections::HashMap::new(),
                 });
             }
         }

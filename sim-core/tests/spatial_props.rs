@@ -266,8 +266,10 @@ proptest! {
             let k = step % 2;
             let c = w.random_point(&mut rng);
             let r = rng.random_range(0.0..6.0) * w.grid.cell_m();
-            maps[k].mark_disc(c, r);
+            let before = maps[k].known_cells();
+            let grew = maps[k].mark_disc(c, r);
             maps[k].validate().unwrap();
+            prop_assert_eq!(grew, maps[k].known_cells() > before);
             for (i, (x, y)) in w.cells().enumerate() {
                 let cell = w.grid.square(x, y, 0);
                 // Known iff wholly inside some marked disc, and inside the map.
