@@ -2,8 +2,10 @@
 //!
 //! The library behind the `smartteams` simulator: the spatial structures of the paper
 //! (obstacle region quadtree, treasure PR-quadtree, robot index, per-robot known maps), the
-//! compact map file, and (in later modules) the round loop, strategies and configuration.
-//! It knows nothing of Rerun, images or command lines.
+//! compact map file, the navigation graph, the round loop ([`round`]: perceive → decide →
+//! resolve → observe), strategies and tactics, the XML config and the metrics. Viewers watch
+//! a run through the [`Observer`] trait; sim-core knows nothing of Rerun, images or command
+//! lines. A whole run: [`config::SimConfig::load`] → [`Scenario`] → [`Simulation::run`].
 //!
 //! ```
 //! use sim_core::glam::DVec2;
