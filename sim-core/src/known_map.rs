@@ -1,7 +1,7 @@
 //! A robot's knowledge of the terrain: a region quadtree where `1` = explored (paper §4.2).
 //!
 //! Only *which* cells are known is stored; what is in them is read from the kernel's
-//! [`ObstacleMap`](crate::ObstacleMap) on demand, never copied.
+//! [`ObstacleMap`] on demand, never copied.
 
 use glam::DVec2;
 
