@@ -135,7 +135,8 @@ impl Simulation {
             if !self.robots[i].alive {
                 continue;
             }
-            let kind = self.types[self.robots[i].type_index].clone();
+            let types = Arc::clone(&self.types);
+            let kind = &types[self.robots[i].type_index];
             let action = self.agents[i].action;
             // Living and sensing cost energy whatever the action.
             let sense = if self.agents[i].needs.senses() {
@@ -145,7 +146,7 @@ impl Simulation {
             };
             self.spend(i, kind.energy_idle + sense);
             let outcome = if self.robots[i].alive {
-                self.apply(i, &kind, action)
+                self.apply(i, kind, action)
             } else {
                 Outcome::Refused
             };
@@ -156,7 +157,7 @@ impl Simulation {
                 }
                 self.spend(i, kind.energy_per_message);
                 let size = payload.size_bytes();
-                self.send(i, &kind, round, to, payload);
+                self.send(i, kind, round, to, payload);
                 messages += 1;
                 bytes += size;
                 self.robots[i].stats.messages_sent += 1;

@@ -87,7 +87,8 @@ pub struct Simulation {
     pub(crate) round: u64,
     pub(crate) map: Arc<MapData>,
     pub(crate) nav: NavGraph,
-    pub(crate) types: Vec<RobotType>,
+    /// Shared so the resolve loop can hold a type while it mutates the simulation.
+    pub(crate) types: Arc<[RobotType]>,
     pub(crate) groups: Vec<Group>,
     pub(crate) robots: Vec<Robot>,
     pub(crate) agents: Vec<Agent>,
@@ -218,7 +219,7 @@ impl Simulation {
             rounds,
             round: 0,
             nav,
-            types,
+            types: types.into(),
             groups,
             robots,
             agents,

@@ -8,7 +8,6 @@ use super::{Ctx, Needs, Params, Strategy, StrategyRegistry};
 use crate::messages::{Payload, Sighting};
 use crate::model::{Action, REACH_M};
 use crate::tactics::{BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, blocked};
-use crate::treasure_index::TreasureId;
 
 /// Register every built-in strategy.
 pub fn register_all(r: &mut StrategyRegistry) {
@@ -70,10 +69,7 @@ pub fn register_all(r: &mut StrategyRegistry) {
         "goes to known treasures and digs them out; explores when it knows none",
         |p| {
             p.only(&["share_every"])?;
-            Ok(Box::new(Excavator {
-                core: Worker::new(p)?,
-                target: None,
-            }))
+            Ok(Box::new(Excavator { core: Worker::new(p)? }))
         },
     );
     r.register(
@@ -81,10 +77,7 @@ pub fn register_all(r: &mut StrategyRegistry) {
         "fetches dug units (waiting at treasures being dug) and delivers them home",
         |p| {
             p.only(&["share_every"])?;
-            Ok(Box::new(Transporter {
-                core: Worker::new(p)?,
-                target: None,
-            }))
+            Ok(Box::new(Transporter { core: Worker::new(p)? }))
         },
     );
 }
@@ -146,8 +139,6 @@ struct Explorer {
     coll: CollisionAvoidance,
     energy: EnergyManagement,
     target: Option<DVec2>,
-    /// No frontier left within reach: exploration is complete.
-    done: bool,
     /// Round of the last failed frontier search (retried every 20 rounds).
     failed_at: Option<u64>,
 }
@@ -183,12 +174,10 @@ impl Explorer {
             {
                 self.target = route.waypoints.last().copied();
                 self.nav.follow(route);
-                self.done = false;
                 self.failed_at = None;
             } else {
                 self.target = None;
                 self.nav.clear();
-                self.done = true;
                 self.failed_at = Some(ctx.round);
             }
         }
@@ -370,6 +359,17 @@ impl Worker {
             })
     }
 
+    /// What every worker does first: share what it knows, then let energy management and
+    /// collision avoidance take over if they want to (dropping the current route).
+    fn begin_round(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        share_knowledge(ctx, self.share_every, &mut self.shared_area);
+        let reflex = self.explorer.reflexes(ctx);
+        if reflex.is_some() {
+            self.heading_to = None;
+        }
+        reflex
+    }
+
     fn within_reach(ctx: &Ctx, p: DVec2) -> bool {
         ctx.position().distance(p) <= ctx.kind.radius_m + REACH_M
     }
@@ -378,21 +378,16 @@ impl Worker {
 /// Digs out known treasures.
 struct Excavator {
     core: Worker,
-    target: Option<TreasureId>,
 }
 
 impl Strategy for Excavator {
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        share_knowledge(ctx, self.core.share_every, &mut self.core.shared_area);
-        if let Some(a) = self.core.explorer.reflexes(ctx) {
-            self.core.heading_to = None;
+        if let Some(a) = self.core.begin_round(ctx) {
             return a;
         }
         let Some(t) = Worker::nearest(ctx, |s| s.buried > 0) else {
-            self.target = None;
             return self.core.explorer.explore(ctx, &[], 0.0);
         };
-        self.target = Some(t.treasure);
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
             return Action::Excavate { treasure: t.treasure };
@@ -404,14 +399,11 @@ impl Strategy for Excavator {
 /// Fetches dug units and delivers them.
 struct Transporter {
     core: Worker,
-    target: Option<TreasureId>,
 }
 
 impl Strategy for Transporter {
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        share_knowledge(ctx, self.core.share_every, &mut self.core.shared_area);
-        if let Some(a) = self.core.explorer.reflexes(ctx) {
-            self.core.heading_to = None;
+        if let Some(a) = self.core.begin_round(ctx) {
             return a;
         }
         let load = ctx.me.load();
@@ -419,20 +411,17 @@ impl Strategy for Transporter {
         // Loose units first; otherwise wait at a treasure still being dug.
         let pick = Worker::nearest(ctx, |s| s.loose > 0).or_else(|| Worker::nearest(ctx, |s| s.buried > 0));
         if load > 0 && (full || pick.is_none_or(|s| s.loose == 0 && load * 2 >= ctx.kind.carry_capacity)) {
-            self.target = None;
             if ctx.home().contains(ctx.position()) {
                 return Action::Unload;
             }
             return self.core.go(ctx, ctx.home().center());
         }
         let Some(t) = pick else {
-            self.target = None;
             if load > 0 {
                 return self.core.go(ctx, ctx.home().center());
             }
             return self.core.explorer.explore(ctx, &[], 0.0);
         };
-        self.target = Some(t.treasure);
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
             return if t.loose > 0 {
