@@ -125,6 +125,10 @@ pub struct RunArgs {
     /// Re-log the collective explored region every K rounds.
     #[arg(long, value_name = "K", default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
     pub explored_every: u64,
+    /// Draw at most N communication links a round (an even sample of the round's distinct
+    /// sender–receiver pairs; the messages chart keeps the full count); 0 draws none.
+    #[arg(long, value_name = "N", default_value_t = crate::rerun_observer::DEFAULT_MAX_LINKS)]
+    pub max_links: usize,
 }
 
 impl RunArgs {
@@ -162,6 +166,7 @@ impl RunArgs {
                 log_every: self.log_every.max(1),
                 explored_every: self.explored_every.max(1),
                 known_every: (self.known_every > 0).then_some(self.known_every),
+                max_links: self.max_links,
             },
             progress: !self.quiet && std::io::stderr().is_terminal(),
         })

@@ -9,17 +9,21 @@
 //! | `world/home` | home base | static |
 //! | `world/treasures` | remaining treasures, radius by remaining quantity | logged rounds |
 //! | `world/robots` | robots (class id = type) + detail columns `energy`, `action`, `goal`, `load`, … | logged rounds |
-//! | `world/paths`, `world/links` | planned paths; message links of the round | logged rounds |
+//! | `world/paths`, `world/links` | planned paths; message links of the round (an even sample of at most `max_links`) | logged rounds |
 //! | `world/explored` | collective explored region (raster) | every `explored_every` logged rounds |
 //! | `world/known/<id>` | one robot's known region, coarse | when it changed, every `known_every` rounds |
 //! | `world3d/…` | ground, obstacle boxes with heights, robots on the plane | static / logged rounds |
 //! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`METRIC_ENTITIES`]) | every round |
 //! | `events` | `TextLog` of the round's events | every round with events |
+//!
+//! The simulation thread copies each round into a frame; a logging thread builds the
+//! archetypes (see [`RerunObserver`]).
 
+use sim_core::Simulation;
 use sim_core::geometry::Aabb;
-use sim_core::model::{Action, Outcome};
-use sim_core::observer::{Event, Observer, ObserverError, RoundReport};
-use sim_core::{RobotId, Simulation};
+use sim_core::glam::DVec2;
+use sim_core::model::Outcome;
+use sim_core::observer::{Event, Link, Observer, ObserverError, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
 
@@ -41,8 +45,14 @@ pub const METRIC_ENTITIES: [(&str, &str); 11] = [
     ("message_bytes", "metrics/messages/message_bytes"),
 ];
 
-/// Most communication links drawn in one round (a dense swarm can send O(n²)).
-pub const MAX_LINKS: usize = 20_000;
+/// Most communication links drawn in one round by default: a dense swarm delivers O(n²)
+/// messages a round, and beyond a few thousand lines the view is a solid blot while the
+/// recording grows by ~20 bytes a line (20,000 links were half of a 1,000-robot recording).
+pub const DEFAULT_MAX_LINKS: usize = 5_000;
+
+/// World frames that may wait for the logging thread before the simulation waits (or, for a
+/// live viewer, skips a round's world).
+pub const QUEUE_ROUNDS: usize = 4;
 
 /// How much the observer logs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,6 +66,9 @@ pub struct LogOptions {
     /// Per-robot known regions: `None` = off; `Some(k)` = every k rounds, for robots whose map
     /// changed since they were last logged.
     pub known_every: Option<u64>,
+    /// Most communication links drawn a round: an even sample of the round's distinct
+    /// sender–receiver pairs (the `messages` chart keeps the full count).
+    pub max_links: usize,
 }
 
 impl Default for LogOptions {
@@ -64,27 +77,50 @@ impl Default for LogOptions {
             log_every: 1,
             explored_every: 10,
             known_every: Some(20),
+            max_links: DEFAULT_MAX_LINKS,
         }
     }
 }
 
-/// Logs a simulation to Rerun. Log errors (serialisation only: transport trouble such as a
-/// vanished viewer is absorbed by the sink) stop the run like any observer error.
+/// What the simulation does when the logging thread falls [`QUEUE_ROUNDS`] behind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WhenBehind {
+    /// Wait for it: nothing is lost (right for `.rrd` files, whose writer always catches up).
+    Wait,
+    /// Leave out the world of that round (metrics and events are still queued): a slow or
+    /// paused live viewer never holds up the run. The final round is always queued.
+    SkipWorld,
+}
+
+/// Logs a simulation to Rerun.
+///
+/// The simulation thread only copies what a round shows into a [`Frame`]; a logging thread
+/// turns frames into Rerun archetypes and logs them, so the serialisation overlaps the next
+/// round (whose resolve phase leaves a core idle). Log errors (serialisation only: transport
+/// trouble such as a vanished viewer is absorbed by the sink) stop the run like any observer
+/// error.
 pub struct RerunObserver {
     rec: rerun::RecordingStream,
     opts: LogOptions,
+    when_behind: WhenBehind,
+    frames: Option<crossbeam_channel::Sender<Frame>>,
+    worker: Option<std::thread::JoinHandle<rerun::RecordingStreamResult<std::time::Duration>>>,
     explored: Option<Raster>,
     last_explored_round: Option<u64>,
     last_known_round: Option<u64>,
     /// Robots whose known map changed since their region was last logged.
     known_dirty: Vec<bool>,
     logged_rounds: u64,
-    /// Wall time spent in this observer (the simulation thread's share of logging).
+    skipped_rounds: u64,
+    /// Wall time spent in this observer on the simulation's thread.
     busy: std::time::Duration,
+    /// Wall time the logging thread spent logging (known once it has finished).
+    worker_busy: std::time::Duration,
 }
 
 impl RerunObserver {
-    /// An observer logging to `rec` with `opts`.
+    /// An observer logging to `rec` with `opts`; it waits for a logging thread that falls
+    /// behind ([`WhenBehind::Wait`], see [`RerunObserver::with_when_behind`]).
     pub fn new(rec: rerun::RecordingStream, opts: LogOptions) -> Self {
         Self {
             rec,
@@ -92,14 +128,26 @@ impl RerunObserver {
                 log_every: opts.log_every.max(1),
                 explored_every: opts.explored_every.max(1),
                 known_every: opts.known_every.map(|k| k.max(1)),
+                max_links: opts.max_links,
             },
+            when_behind: WhenBehind::Wait,
+            frames: None,
+            worker: None,
             explored: None,
             last_explored_round: None,
             last_known_round: None,
             known_dirty: Vec::new(),
             logged_rounds: 0,
+            skipped_rounds: 0,
             busy: std::time::Duration::ZERO,
+            worker_busy: std::time::Duration::ZERO,
         }
+    }
+
+    /// What to do when the logging thread falls behind (default [`WhenBehind::Wait`]).
+    pub fn with_when_behind(mut self, when_behind: WhenBehind) -> Self {
+        self.when_behind = when_behind;
+        self
     }
 
     /// The recording stream.
@@ -112,10 +160,21 @@ impl RerunObserver {
         self.logged_rounds
     }
 
-    /// Wall time spent logging on the simulation's thread so far (encoding and writing happen
-    /// on Rerun's own threads besides).
+    /// Rounds whose world was left out because a live viewer fell behind
+    /// ([`WhenBehind::SkipWorld`]).
+    pub fn skipped_rounds(&self) -> u64 {
+        self.skipped_rounds
+    }
+
+    /// Wall time spent logging on the simulation's thread so far (copying each logged round).
     pub fn busy(&self) -> std::time::Duration {
         self.busy
+    }
+
+    /// Wall time the logging thread spent building and logging archetypes (known after
+    /// [`Observer::on_finish`]); Rerun's own encoder and writer threads come on top.
+    pub fn worker_busy(&self) -> std::time::Duration {
+        self.worker_busy
     }
 
     /// Whether the world is logged after `round` of a run of `total` rounds.
@@ -123,18 +182,56 @@ impl RerunObserver {
         round.is_multiple_of(self.opts.log_every) || round >= total
     }
 
-    fn log_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> rerun::RecordingStreamResult<()> {
+    /// A copy of what the world shows after this round.
+    fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
         let round = sim.round();
-        let rec = &self.rec;
-        self.logged_rounds += 1;
-        log_robots(rec, sim)?;
-        log_treasures(rec, sim)?;
-        log_paths(rec, sim)?;
-        if let Some(report) = report {
-            log_links(rec, sim, report)?;
-        }
         let final_round = round >= sim.total_rounds();
-        if final_round
+        let robots = sim
+            .robots()
+            .iter()
+            .map(|r| RobotRow {
+                id: r.id.0,
+                type_index: r.type_index,
+                class: class_of(sim, r.type_index, r.alive),
+                alive: r.alive,
+                position: r.position,
+                z_m: sim.types()[r.type_index].radius_m as f32,
+                energy: r.energy,
+                action: r.last_action.0.name(),
+                outcome: r.last_action.1,
+                goal: r.goal,
+                load: r.load(),
+            })
+            .collect();
+        let treasures = sim
+            .treasures()
+            .iter()
+            .filter(|t| t.buried + t.loose > 0)
+            .map(|t| TreasureRow {
+                position: t.position,
+                remaining: t.buried + t.loose,
+                found: t.found_round.is_some(),
+            })
+            .collect();
+        let paths = sim
+            .robots()
+            .iter()
+            .filter(|r| r.alive && !r.path.is_empty())
+            .map(|r| {
+                let points = std::iter::once(to_2d(r.position))
+                    .chain(r.path.iter().map(|&p| to_2d(p)))
+                    .collect();
+                (r.type_index as u16, points)
+            })
+            .collect();
+        let links = report.map(|report| {
+            let pos = |id: u32| sim.robots().get(id as usize).map(|r| to_2d(r.position));
+            sample_links(&report.links, self.opts.max_links)
+                .into_iter()
+                .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
+                .collect()
+        });
+        let explored = if final_round
             || self
                 .last_explored_round
                 .is_none_or(|r| round >= r + self.opts.explored_every)
@@ -144,16 +241,14 @@ impl RerunObserver {
                 .explored
                 .get_or_insert_with(|| Raster::for_grid(sim.obstacles().grid(), layers::MAX_EXPLORED_PX));
             raster.fill_from(sim.explored().tree(), true);
-            rec.log(
-                "world/explored",
-                &[
-                    &raster.transform_2d() as &dyn rerun::AsComponents,
-                    &rerun::Image::from_l8(raster.to_l8(), [raster.width, raster.height])
-                        .with_opacity(0.3)
-                        .with_draw_order(draw_order::EXPLORED),
-                ],
-            )?;
-        }
+            Some((
+                raster.transform_2d(),
+                rerun::Image::from_l8(raster.to_l8(), [raster.width, raster.height]),
+            ))
+        } else {
+            None
+        };
+        let mut known = Vec::new();
         if let Some(every) = self.opts.known_every
             && (final_round || self.last_known_round.is_none_or(|r| round >= r + every))
         {
@@ -164,19 +259,134 @@ impl RerunObserver {
                     continue;
                 }
                 self.known_dirty[i] = false;
-                if let Some(known) = sim.known_map(robot.id) {
-                    let boxes: Vec<Aabb> = layers::coarse_known_boxes(known.tree());
-                    rec.log(
-                        format!("world/known/{}", robot.id.0),
-                        &layers::boxes_2d(&boxes)
-                            .with_class_ids([class_of(sim, robot.type_index, true)])
-                            .with_draw_order(draw_order::KNOWN),
-                    )?;
+                if let Some(map) = sim.known_map(robot.id) {
+                    known.push(KnownRegion {
+                        robot: robot.id.0,
+                        class: class_of(sim, robot.type_index, true),
+                        boxes: layers::coarse_known_boxes(map.tree()),
+                    });
                 }
+            }
+        }
+        World {
+            robots,
+            treasures,
+            paths,
+            links,
+            explored,
+            known,
+            cell_m: sim.obstacles().grid().cell_m(),
+        }
+    }
+
+    /// Hand `frame` to the logging thread, waiting or leaving its world out when the thread
+    /// is [`QUEUE_ROUNDS`] behind (see [`WhenBehind`]).
+    fn send(&mut self, mut frame: Frame, final_round: bool) -> Result<(), ObserverError> {
+        let Some(tx) = &self.frames else {
+            return Err(ObserverError::from("the Rerun logging thread is not running"));
+        };
+        if self.when_behind == WhenBehind::SkipWorld
+            && !final_round
+            && frame.world.is_some()
+            && tx.len() >= QUEUE_ROUNDS
+        {
+            frame.world = None;
+            self.skipped_rounds += 1;
+        }
+        if frame.world.is_some() {
+            self.logged_rounds += 1;
+        }
+        if tx.send(frame).is_err() {
+            // The thread stopped: its result says why.
+            self.frames = None;
+            self.join_worker()?;
+            return Err(ObserverError::from("the Rerun logging thread stopped"));
+        }
+        Ok(())
+    }
+
+    /// Wait for the logging thread (after its queue was closed) and take its result.
+    fn join_worker(&mut self) -> Result<(), ObserverError> {
+        if let Some(worker) = self.worker.take() {
+            match worker.join() {
+                Ok(Ok(busy)) => self.worker_busy = busy,
+                Ok(Err(e)) => return Err(e.into()),
+                Err(_) => return Err(ObserverError::from("the Rerun logging thread panicked")),
             }
         }
         Ok(())
     }
+}
+
+/// One round as the logging thread needs it: owned copies, no references into the simulation.
+struct Frame {
+    round: u64,
+    /// Metric values in [`METRIC_ENTITIES`] order (none for round 0).
+    metrics: Option<[f64; 11]>,
+    /// The round's events: (is a warning, text).
+    events: Vec<(bool, String)>,
+    /// The world, on logged rounds.
+    world: Option<World>,
+}
+
+struct World {
+    robots: Vec<RobotRow>,
+    treasures: Vec<TreasureRow>,
+    /// (class id, 2D points from the robot along its path).
+    paths: Vec<(u16, Vec<[f32; 2]>)>,
+    /// 2D end points of the round's drawn links (none at the start).
+    links: Option<Vec<[[f32; 2]; 2]>>,
+    explored: Option<(rerun::Transform3D, rerun::Image)>,
+    known: Vec<KnownRegion>,
+    cell_m: f64,
+}
+
+struct RobotRow {
+    id: u32,
+    type_index: usize,
+    class: u16,
+    alive: bool,
+    position: DVec2,
+    z_m: f32,
+    energy: f64,
+    action: &'static str,
+    outcome: Outcome,
+    goal: Option<DVec2>,
+    load: u32,
+}
+
+struct TreasureRow {
+    position: DVec2,
+    remaining: u32,
+    found: bool,
+}
+
+struct KnownRegion {
+    robot: u32,
+    class: u16,
+    boxes: Vec<Aabb>,
+}
+
+/// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
+/// evenly over them: a dense swarm delivers O(n²) messages a round, so deliveries are first
+/// thinned by a stride, then the distinct pairs by even spacing. Deterministic.
+pub fn sample_links(links: &[Link], max: usize) -> Vec<(u32, u32)> {
+    if max == 0 {
+        return Vec::new();
+    }
+    let stride = links.len().div_ceil(2 * max).max(1);
+    let mut pairs: Vec<(u32, u32)> = links
+        .iter()
+        .step_by(stride)
+        .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    if pairs.len() > max {
+        let n = pairs.len();
+        pairs = (0..max).map(|i| pairs[i * n / max]).collect();
+    }
+    pairs
 }
 
 /// The class id of a robot of type `type_index` (disabled robots share one extra class).
@@ -221,33 +431,77 @@ fn log_annotations(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Rec
     rec.log_static("world3d", &ctx)
 }
 
-fn log_robots(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::RecordingStreamResult<()> {
+/// The logging thread: log every frame until the queue closes; returns its busy time.
+fn log_frames(
+    rec: &rerun::RecordingStream,
+    frames: &crossbeam_channel::Receiver<Frame>,
+    type_names: &[String],
+) -> rerun::RecordingStreamResult<std::time::Duration> {
+    let mut busy = std::time::Duration::ZERO;
+    for frame in frames {
+        let t0 = std::time::Instant::now();
+        // Rerun's time cursor is per thread: this thread sets its own.
+        rec.set_time_sequence(TIMELINE, frame.round as i64);
+        if let Some(values) = &frame.metrics {
+            log_metrics(rec, values)?;
+        }
+        log_events(rec, &frame.events)?;
+        if let Some(world) = &frame.world {
+            log_robots(rec, &world.robots, type_names)?;
+            log_treasures(rec, &world.treasures, world.cell_m)?;
+            log_paths(rec, &world.paths)?;
+            if let Some(links) = &world.links {
+                log_links(rec, links)?;
+            }
+            if let Some((transform, image)) = &world.explored {
+                rec.log(
+                    "world/explored",
+                    &[
+                        transform as &dyn rerun::AsComponents,
+                        &image.clone().with_opacity(0.3).with_draw_order(draw_order::EXPLORED),
+                    ],
+                )?;
+            }
+            for region in &world.known {
+                rec.log(
+                    format!("world/known/{}", region.robot),
+                    &layers::boxes_2d(&region.boxes)
+                        .with_class_ids([region.class])
+                        .with_draw_order(draw_order::KNOWN),
+                )?;
+            }
+        }
+        busy += t0.elapsed();
+    }
+    Ok(busy)
+}
+
+fn log_robots(
+    rec: &rerun::RecordingStream,
+    robots: &[RobotRow],
+    type_names: &[String],
+) -> rerun::RecordingStreamResult<()> {
     use rerun::external::arrow::array::{ArrayRef, BooleanArray, Float64Array, StringArray, UInt32Array};
     use std::sync::Arc;
 
-    let robots = sim.robots();
-    let positions: Vec<[f32; 2]> = robots.iter().map(|r| to_2d(r.position)).collect();
-    let classes: Vec<u16> = robots.iter().map(|r| class_of(sim, r.type_index, r.alive)).collect();
+    let classes: Vec<u16> = robots.iter().map(|r| r.class).collect();
     let labels: Vec<String> = robots
         .iter()
-        .map(|r| match r.load() {
-            0 => r.id.0.to_string(),
-            load => format!("{} +{load}", r.id.0),
+        .map(|r| match r.load {
+            0 => r.id.to_string(),
+            load => format!("{} +{load}", r.id),
         })
         .collect();
-    let action = |a: &(Action, Outcome)| {
-        let outcome = match a.1 {
-            Outcome::Done => "done",
-            Outcome::Trimmed => "trimmed",
-            Outcome::Refused => "refused",
-        };
-        format!("{} ({outcome})", a.0.name())
+    let outcome = |o: Outcome| match o {
+        Outcome::Done => "done",
+        Outcome::Trimmed => "trimmed",
+        Outcome::Refused => "refused",
     };
     let detail = rerun::AnyValues::default()
         .with_component_from_data(
             "type",
             Arc::new(StringArray::from_iter_values(
-                robots.iter().map(|r| sim.types()[r.type_index].name.as_str()),
+                robots.iter().map(|r| type_names[r.type_index].as_str()),
             )) as ArrayRef,
         )
         .with_component_from_data(
@@ -261,7 +515,7 @@ fn log_robots(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recordin
         .with_component_from_data(
             "action",
             Arc::new(StringArray::from_iter_values(
-                robots.iter().map(|r| action(&r.last_action)),
+                robots.iter().map(|r| format!("{} ({})", r.action, outcome(r.outcome))),
             )),
         )
         .with_component_from_data(
@@ -273,7 +527,7 @@ fn log_robots(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recordin
         )
         .with_component_from_data(
             "load",
-            Arc::new(UInt32Array::from_iter_values(robots.iter().map(sim_core::Robot::load))),
+            Arc::new(UInt32Array::from_iter_values(robots.iter().map(|r| r.load))),
         )
         .with_component_from_data(
             "position",
@@ -286,7 +540,7 @@ fn log_robots(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recordin
     rec.log(
         "world/robots",
         &[
-            &rerun::Points2D::new(positions)
+            &rerun::Points2D::new(robots.iter().map(|r| to_2d(r.position)))
                 .with_radii([rerun::Radius::new_ui_points(4.0)])
                 .with_class_ids(classes.clone())
                 .with_labels(labels)
@@ -296,18 +550,17 @@ fn log_robots(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recordin
     )?;
     rec.log(
         "world3d/robots",
-        &rerun::Points3D::new(robots.iter().map(|r| {
-            let z = sim.types()[r.type_index].radius_m as f32;
-            [r.position.x as f32, r.position.y as f32, z]
-        }))
-        .with_radii([rerun::Radius::new_ui_points(3.0)])
-        .with_class_ids(classes),
+        &rerun::Points3D::new(robots.iter().map(|r| [r.position.x as f32, r.position.y as f32, r.z_m]))
+            .with_radii([rerun::Radius::new_ui_points(3.0)])
+            .with_class_ids(classes),
     )
 }
 
-fn log_treasures(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::RecordingStreamResult<()> {
-    let cell_m = sim.obstacles().grid().cell_m();
-    let remaining: Vec<_> = sim.treasures().iter().filter(|t| t.buried + t.loose > 0).collect();
+fn log_treasures(
+    rec: &rerun::RecordingStream,
+    treasures: &[TreasureRow],
+    cell_m: f64,
+) -> rerun::RecordingStreamResult<()> {
     let color = |found: bool| {
         if found {
             rerun::Color::from_rgb(255, 215, 0)
@@ -315,79 +568,55 @@ fn log_treasures(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Recor
             rerun::Color::from_unmultiplied_rgba(255, 215, 0, 110)
         }
     };
+    let radii: Vec<f32> = treasures
+        .iter()
+        .map(|t| layers::treasure_radius(t.remaining, cell_m))
+        .collect();
+    let colors: Vec<rerun::Color> = treasures.iter().map(|t| color(t.found)).collect();
     rec.log(
         "world/treasures",
-        &rerun::Points2D::new(remaining.iter().map(|t| to_2d(t.position)))
-            .with_radii(
-                remaining
-                    .iter()
-                    .map(|t| layers::treasure_radius(t.buried + t.loose, cell_m)),
-            )
-            .with_colors(remaining.iter().map(|t| color(t.found_round.is_some())))
-            .with_labels(remaining.iter().map(|t| (t.buried + t.loose).to_string()))
+        &rerun::Points2D::new(treasures.iter().map(|t| to_2d(t.position)))
+            .with_radii(radii.iter().copied())
+            .with_colors(colors.iter().copied())
+            .with_labels(treasures.iter().map(|t| t.remaining.to_string()))
             .with_draw_order(draw_order::TREASURES),
     )?;
     rec.log(
         "world3d/treasures",
         &rerun::Points3D::new(
-            remaining
+            treasures
                 .iter()
                 .map(|t| [t.position.x as f32, t.position.y as f32, 0.2]),
         )
-        .with_radii(
-            remaining
-                .iter()
-                .map(|t| layers::treasure_radius(t.buried + t.loose, cell_m)),
-        )
-        .with_colors(remaining.iter().map(|t| color(t.found_round.is_some()))),
+        .with_radii(radii)
+        .with_colors(colors),
     )
 }
 
-fn log_paths(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::RecordingStreamResult<()> {
-    let with_path: Vec<_> = sim.robots().iter().filter(|r| r.alive && !r.path.is_empty()).collect();
+fn log_paths(rec: &rerun::RecordingStream, paths: &[(u16, Vec<[f32; 2]>)]) -> rerun::RecordingStreamResult<()> {
     rec.log(
         "world/paths",
-        &rerun::LineStrips2D::new(with_path.iter().map(|r| {
-            std::iter::once(to_2d(r.position))
-                .chain(r.path.iter().map(|&p| to_2d(p)))
-                .collect::<Vec<_>>()
-        }))
-        .with_class_ids(with_path.iter().map(|r| r.type_index as u16))
-        .with_radii([rerun::Radius::new_ui_points(1.0)])
-        .with_draw_order(draw_order::PATHS),
+        &rerun::LineStrips2D::new(paths.iter().map(|(_, points)| points.iter().copied()))
+            .with_class_ids(paths.iter().map(|(class, _)| *class))
+            .with_radii([rerun::Radius::new_ui_points(1.0)])
+            .with_draw_order(draw_order::PATHS),
     )
 }
 
-fn log_links(rec: &rerun::RecordingStream, sim: &Simulation, report: &RoundReport) -> rerun::RecordingStreamResult<()> {
-    let robots = sim.robots();
-    let pos = |id: RobotId| robots.get(id.0 as usize).map(|r| to_2d(r.position));
-    // A broadcast and its answer are one line. Only a bounded prefix is sorted: a dense swarm
-    // sends O(n²) deliveries a round and sorting them all cost more than drawing them.
-    let mut pairs: Vec<(u32, u32)> = report
-        .links
-        .iter()
-        .take(2 * MAX_LINKS)
-        .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
-        .collect();
-    pairs.sort_unstable();
-    pairs.dedup();
-    pairs.truncate(MAX_LINKS);
+fn log_links(rec: &rerun::RecordingStream, links: &[[[f32; 2]; 2]]) -> rerun::RecordingStreamResult<()> {
     rec.log(
         "world/links",
-        &rerun::LineStrips2D::new(
-            pairs
-                .iter()
-                .filter_map(|&(a, b)| Some([pos(RobotId(a))?, pos(RobotId(b))?])),
-        )
-        .with_colors([rerun::Color::from_unmultiplied_rgba(120, 220, 255, 140)])
-        .with_radii([rerun::Radius::new_ui_points(0.75)])
-        .with_draw_order(draw_order::LINKS),
+        &rerun::LineStrips2D::new(links.iter().copied())
+            .with_colors([rerun::Color::from_unmultiplied_rgba(120, 220, 255, 140)])
+            .with_radii([rerun::Radius::new_ui_points(0.75)])
+            .with_draw_order(draw_order::LINKS),
     )
 }
 
-fn log_metrics(rec: &rerun::RecordingStream, report: &RoundReport) -> rerun::RecordingStreamResult<()> {
+/// A round's metric values in [`METRIC_ENTITIES`] order.
+fn metric_values(report: &RoundReport) -> [f64; 11] {
     let m = &report.metrics;
-    let values: [f64; 11] = [
+    [
         m.explored_fraction,
         f64::from(m.treasures_found),
         f64::from(m.treasures_excavated),
@@ -399,23 +628,24 @@ fn log_metrics(rec: &rerun::RecordingStream, report: &RoundReport) -> rerun::Rec
         m.units_dug as f64,
         m.units_delivered as f64,
         m.message_bytes as f64,
-    ];
+    ]
+}
+
+fn log_metrics(rec: &rerun::RecordingStream, values: &[f64; 11]) -> rerun::RecordingStreamResult<()> {
     for ((_, path), v) in METRIC_ENTITIES.iter().zip(values) {
-        rec.log(*path, &rerun::Scalars::single(v))?;
+        rec.log(*path, &rerun::Scalars::single(*v))?;
     }
     Ok(())
 }
 
-fn log_events(rec: &rerun::RecordingStream, report: &RoundReport) -> rerun::RecordingStreamResult<()> {
-    for e in &report.events {
-        let level = match e {
-            Event::RobotDisabled { .. } => rerun::TextLogLevel::WARN,
-            _ => rerun::TextLogLevel::INFO,
+fn log_events(rec: &rerun::RecordingStream, events: &[(bool, String)]) -> rerun::RecordingStreamResult<()> {
+    for (warning, text) in events {
+        let level = if *warning {
+            rerun::TextLogLevel::WARN
+        } else {
+            rerun::TextLogLevel::INFO
         };
-        rec.log(
-            "events",
-            &rerun::TextLog::new(format!("round {}: {e}", report.round)).with_level(level),
-        )?;
+        rec.log("events", &rerun::TextLog::new(text.as_str()).with_level(level))?;
     }
     Ok(())
 }
@@ -429,26 +659,97 @@ fn log_series_styles(rec: &rerun::RecordingStream) -> rerun::RecordingStreamResu
 
 impl Observer for RerunObserver {
     fn on_start(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
+        let t0 = std::time::Instant::now();
         self.rec.set_time_sequence(TIMELINE, 0);
         log_annotations(&self.rec, sim)?;
         layers::log_static_map(&self.rec, sim.map())?;
         log_series_styles(&self.rec)?;
         self.known_dirty = vec![true; sim.robots().len()];
-        self.log_world(sim, None)?;
+
+        let (tx, rx) = match self.when_behind {
+            WhenBehind::Wait => crossbeam_channel::bounded(QUEUE_ROUNDS),
+            WhenBehind::SkipWorld => crossbeam_channel::unbounded(),
+        };
+        let rec = self.rec.clone();
+        let type_names: Vec<String> = sim.types().iter().map(|t| t.name.clone()).collect();
+        self.worker = Some(
+            std::thread::Builder::new()
+                .name("rerun-observer".into())
+                .spawn(move || log_frames(&rec, &rx, &type_names))?,
+        );
+        self.frames = Some(tx);
+        let world = self.snapshot_world(sim, None);
+        self.send(
+            Frame {
+                round: 0,
+                metrics: None,
+                events: Vec::new(),
+                world: Some(world),
+            },
+            false,
+        )?;
+        self.busy += t0.elapsed();
         Ok(())
     }
 
     fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
         let t0 = std::time::Instant::now();
-        self.on_round_inner(sim, report)?;
+        for id in &report.known_changed {
+            if let Some(d) = self.known_dirty.get_mut(id.0 as usize) {
+                *d = true;
+            }
+        }
+        let final_round = report.round >= sim.total_rounds();
+        let world = self
+            .is_logged_round(report.round, sim.total_rounds())
+            .then(|| self.snapshot_world(sim, Some(report)));
+        let events = report
+            .events
+            .iter()
+            .map(|e| {
+                (
+                    matches!(e, Event::RobotDisabled { .. }),
+                    format!("round {}: {e}", report.round),
+                )
+            })
+            .collect();
+        self.send(
+            Frame {
+                round: report.round,
+                metrics: Some(metric_values(report)),
+                events,
+                world,
+            },
+            final_round,
+        )?;
         self.busy += t0.elapsed();
         Ok(())
     }
 
     fn on_finish(&mut self, _sim: &Simulation) -> Result<(), ObserverError> {
-        // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
         let t0 = std::time::Instant::now();
-        if let Err(e) = self.rec.flush_with_timeout(std::time::Duration::from_secs(10)) {
+        // Closing the queue lets the logging thread finish what is queued and stop.
+        self.frames = None;
+        match self.when_behind {
+            WhenBehind::Wait => self.join_worker()?,
+            WhenBehind::SkipWorld => {
+                // A paused viewer can block the logging thread for ever: give it a while,
+                // then leave it (it holds its own handle on the stream).
+                let deadline = t0 + FINISH_TIMEOUT;
+                while self.worker.as_ref().is_some_and(|w| !w.is_finished()) && std::time::Instant::now() < deadline {
+                    std::thread::sleep(std::time::Duration::from_millis(20));
+                }
+                if self.worker.as_ref().is_some_and(std::thread::JoinHandle::is_finished) {
+                    self.join_worker()?;
+                } else {
+                    self.worker = None;
+                    eprintln!("warning: the Rerun viewer is not taking data; the last rounds may not reach it");
+                    return Ok(());
+                }
+            }
+        }
+        // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
+        if let Err(e) = self.rec.flush_with_timeout(FINISH_TIMEOUT) {
             eprintln!("warning: could not flush the Rerun stream: {e}");
         }
         self.busy += t0.elapsed();
@@ -456,19 +757,63 @@ impl Observer for RerunObserver {
     }
 }
 
-impl RerunObserver {
-    fn on_round_inner(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
-        self.rec.set_time_sequence(TIMELINE, report.round as i64);
-        for id in &report.known_changed {
-            if let Some(d) = self.known_dirty.get_mut(id.0 as usize) {
-                *d = true;
-            }
+/// How long the end of a run waits for a live viewer to take the rest of the recording.
+const FINISH_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim_core::RobotId;
+    use std::collections::BTreeSet;
+
+    fn link(from: u32, to: u32) -> Link {
+        Link {
+            from: RobotId(from),
+            to: RobotId(to),
         }
-        log_metrics(&self.rec, report)?;
-        log_events(&self.rec, report)?;
-        if self.is_logged_round(report.round, sim.total_rounds()) {
-            self.log_world(sim, Some(report))?;
+    }
+
+    /// Every robot of `n` broadcasts to every other: n(n−1) deliveries, n(n−1)/2 pairs.
+    fn all_to_all(n: u32) -> Vec<Link> {
+        (0..n)
+            .flat_map(|a| (0..n).filter(move |&b| b != a).map(move |b| link(a, b)))
+            .collect()
+    }
+
+    #[test]
+    fn few_links_are_all_drawn_once() {
+        let links = [link(3, 1), link(1, 3), link(2, 5), link(5, 2), link(2, 5)];
+        assert_eq!(sample_links(&links, 10), vec![(1, 3), (2, 5)]);
+        assert_eq!(sample_links(&links, 0), vec![]);
+        assert_eq!(sample_links(&[], 10), vec![]);
+    }
+
+    #[test]
+    fn a_dense_round_is_sampled_evenly_within_the_cap() {
+        // 200 robots all in range: 39,800 deliveries, 19,900 distinct pairs.
+        let links = all_to_all(200);
+        let all: BTreeSet<(u32, u32)> = links
+            .iter()
+            .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
+            .collect();
+        assert_eq!(all.len(), 19_900);
+        let sample = sample_links(&links, 1_000);
+        assert!(sample.len() <= 1_000 && sample.len() >= 900, "{} pairs", sample.len());
+        let distinct: BTreeSet<_> = sample.iter().copied().collect();
+        assert_eq!(distinct.len(), sample.len(), "no pair twice");
+        assert!(distinct.is_subset(&all), "only real pairs");
+        // Even: every quarter of the senders shows up, not just the first ones (a prefix of
+        // the deliveries would hold robot 0's and 1's links only).
+        for quarter in 0..4 {
+            let lo = quarter * 50;
+            assert!(
+                sample.iter().any(|&(_, b)| (lo..lo + 50).contains(&b)),
+                "no link reaches robots {lo}..{}",
+                lo + 50
+            );
         }
-        Ok(())
+        assert!(sample.iter().filter(|&&(a, _)| a == 0).count() < 100);
+        // Deterministic.
+        assert_eq!(sample, sample_links(&links, 1_000));
     }
 }

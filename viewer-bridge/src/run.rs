@@ -14,7 +14,7 @@ use sim_core::strategy::StrategyRegistry;
 use sim_core::{MapData, Simulation};
 
 use crate::progress::Progress;
-use crate::rerun_observer::{LogOptions, RerunObserver};
+use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
 use crate::viewer::ViewerTarget;
 
 /// Everything a run needs, checked before it starts.
@@ -51,9 +51,23 @@ pub struct Summary {
     pub elapsed: Duration,
     /// Wall time of loading and set-up.
     pub setup: Duration,
-    /// Where the recording went, how many rounds of world state it holds, and the time the
-    /// simulation thread spent logging.
-    pub recording: Option<(ViewerTarget, u64, Duration)>,
+    /// Where the recording went and what it cost.
+    pub recording: Option<RecordingSummary>,
+}
+
+/// What the recording of a run holds and cost.
+#[derive(Clone, Debug)]
+pub struct RecordingSummary {
+    /// Where it went.
+    pub target: ViewerTarget,
+    /// Rounds whose world state was logged (round 0 included).
+    pub logged_rounds: u64,
+    /// Rounds whose world was left out because a live viewer fell behind.
+    pub skipped_rounds: u64,
+    /// Time the simulation thread spent copying rounds for the logger.
+    pub sim_thread: Duration,
+    /// Time the logging thread spent building and logging archetypes.
+    pub logging_thread: Duration,
 }
 
 impl std::fmt::Display for Summary {
@@ -86,12 +100,22 @@ impl std::fmt::Display for Summary {
             m.robots_alive, m.mean_energy
         )?;
         write!(f, "  distance          {:.1} m in all", m.distance_m)?;
-        if let Some((target, logged, busy)) = &self.recording {
+        if let Some(r) = &self.recording {
             write!(
                 f,
-                "\n  recording         {target} ({logged} rounds of world state; logging {:.2} s)",
-                busy.as_secs_f64()
+                "\n  recording         {} ({} rounds of world state; logging {:.2} s on the simulation thread, {:.2} s on the logging thread)",
+                r.target,
+                r.logged_rounds,
+                r.sim_thread.as_secs_f64(),
+                r.logging_thread.as_secs_f64()
             )?;
+            if r.skipped_rounds > 0 {
+                write!(
+                    f,
+                    "\n  viewer behind     the world of {} rounds was left out (metrics and events were sent)",
+                    r.skipped_rounds
+                )?;
+            }
         }
         Ok(())
     }
@@ -113,10 +137,17 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         None => None,
     };
     let mut rerun = match &run.viewer {
-        Some(target) => Some(RerunObserver::new(
-            crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?,
-            run.log,
-        )),
+        Some(target) => Some(
+            RerunObserver::new(
+                crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?,
+                run.log,
+            )
+            // A file writer always catches up; a live viewer may be slow or paused.
+            .with_when_behind(match target {
+                ViewerTarget::Rrd(_) => WhenBehind::Wait,
+                ViewerTarget::Connect(_) | ViewerTarget::Spawn => WhenBehind::SkipWorld,
+            }),
+        ),
         None => None,
     };
     let mut progress = Progress::new(run.progress, sim.total_rounds());
@@ -158,12 +189,12 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         metrics: sim.report().metrics,
         elapsed,
         setup,
-        recording: rerun.map(|r| {
-            (
-                run.viewer.clone().unwrap_or(ViewerTarget::Spawn),
-                r.logged_rounds(),
-                r.busy(),
-            )
+        recording: rerun.map(|r| RecordingSummary {
+            target: run.viewer.clone().unwrap_or(ViewerTarget::Spawn),
+            logged_rounds: r.logged_rounds(),
+            skipped_rounds: r.skipped_rounds(),
+            sim_thread: r.busy(),
+            logging_thread: r.worker_busy(),
         }),
     })
 }
