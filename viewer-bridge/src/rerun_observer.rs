@@ -8,10 +8,10 @@
 //! | `world/obstacles/raster`, `world/obstacles/boxes` | obstacle raster; exact outlines if ≤ 50k | static |
 //! | `world/home` | home base | static |
 //! | `world/treasures` | remaining treasures, radius by remaining quantity | logged rounds |
-//! | `world/robots` | robots (class id = type) + detail columns `energy`, `action`, `goal`, `load`, … | logged rounds |
+//! | `world/robots` | robots (class id = type) + detail columns `type`, `energy`, `alive`, `action`, `outcome`, `goal_x`/`goal_y`, `load`, `x`/`y` (world coordinates) | logged rounds |
 //! | `world/paths`, `world/links` | planned paths; message links of the round (an even sample of at most `max_links`) | logged rounds |
 //! | `world/explored` | collective explored region (raster) | every `explored_every` logged rounds |
-//! | `world/known/<id>` | one robot's known region, coarse | when it changed, every `known_every` rounds |
+//! | `world/known/<id>` | one robot's known region, coarse | every `known_every` rounds, if its coarse region changed |
 //! | `world3d/…` | ground, obstacle boxes with heights, robots on the plane | static / logged rounds |
 //! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`METRIC_ENTITIES`]) | every round |
 //! | `events` | `TextLog` of the round's events | every round with events |
@@ -110,6 +110,9 @@ pub struct RerunObserver {
     last_known_round: Option<u64>,
     /// Robots whose known map changed since their region was last logged.
     known_dirty: Vec<bool>,
+    /// Each robot's coarse region as last logged: a finer change that leaves it the same is
+    /// not logged again.
+    known_logged: Vec<Vec<Aabb>>,
     logged_rounds: u64,
     skipped_rounds: u64,
     /// Wall time spent in this observer on the simulation's thread.
@@ -137,6 +140,7 @@ impl RerunObserver {
             last_explored_round: None,
             last_known_round: None,
             known_dirty: Vec::new(),
+            known_logged: Vec::new(),
             logged_rounds: 0,
             skipped_rounds: 0,
             busy: std::time::Duration::ZERO,
@@ -260,11 +264,15 @@ impl RerunObserver {
                 }
                 self.known_dirty[i] = false;
                 if let Some(map) = sim.known_map(robot.id) {
-                    known.push(KnownRegion {
-                        robot: robot.id.0,
-                        class: class_of(sim, robot.type_index, true),
-                        boxes: layers::coarse_known_boxes(map.tree()),
-                    });
+                    let boxes = layers::coarse_known_boxes(map.tree());
+                    if self.known_logged[i] != boxes {
+                        self.known_logged[i].clone_from(&boxes);
+                        known.push(KnownRegion {
+                            robot: robot.id.0,
+                            class: class_of(sim, robot.type_index, true),
+                            boxes,
+                        });
+                    }
                 }
             }
         }
@@ -438,6 +446,7 @@ fn log_frames(
     type_names: &[String],
 ) -> rerun::RecordingStreamResult<std::time::Duration> {
     let mut busy = std::time::Duration::ZERO;
+    let mut labels = Labels::default();
     for frame in frames {
         let t0 = std::time::Instant::now();
         // Rerun's time cursor is per thread: this thread sets its own.
@@ -447,7 +456,7 @@ fn log_frames(
         }
         log_events(rec, &frame.events)?;
         if let Some(world) = &frame.world {
-            log_robots(rec, &world.robots, type_names)?;
+            log_robots(rec, &world.robots, type_names, &mut labels)?;
             log_treasures(rec, &world.treasures, world.cell_m)?;
             log_paths(rec, &world.paths)?;
             if let Some(links) = &world.links {
@@ -476,27 +485,46 @@ fn log_frames(
     Ok(busy)
 }
 
+/// Per-robot labels, rebuilt only when a robot's load changes (most rounds none does).
+#[derive(Default)]
+struct Labels(Vec<(u32, String)>);
+
+impl Labels {
+    fn update(&mut self, robots: &[RobotRow]) -> &[(u32, String)] {
+        let label = |r: &RobotRow| match r.load {
+            0 => r.id.to_string(),
+            load => format!("{} +{load}", r.id),
+        };
+        self.0.truncate(robots.len());
+        for (i, r) in robots.iter().enumerate() {
+            match self.0.get_mut(i) {
+                Some(l) if l.0 == r.load => {}
+                Some(l) => *l = (r.load, label(r)),
+                None => self.0.push((r.load, label(r))),
+            }
+        }
+        &self.0
+    }
+}
+
 fn log_robots(
     rec: &rerun::RecordingStream,
     robots: &[RobotRow],
     type_names: &[String],
+    labels: &mut Labels,
 ) -> rerun::RecordingStreamResult<()> {
     use rerun::external::arrow::array::{ArrayRef, BooleanArray, Float64Array, StringArray, UInt32Array};
     use std::sync::Arc;
 
     let classes: Vec<u16> = robots.iter().map(|r| r.class).collect();
-    let labels: Vec<String> = robots
-        .iter()
-        .map(|r| match r.load {
-            0 => r.id.to_string(),
-            load => format!("{} +{load}", r.id),
-        })
-        .collect();
     let outcome = |o: Outcome| match o {
         Outcome::Done => "done",
         Outcome::Trimmed => "trimmed",
         Outcome::Refused => "refused",
     };
+    let f64s = |values: &mut dyn Iterator<Item = Option<f64>>| Arc::new(values.collect::<Float64Array>()) as ArrayRef;
+    // Numbers and static strings only: formatting 1,000 robots' values a round cost more than
+    // the rest of this function.
     let detail = rerun::AnyValues::default()
         .with_component_from_data(
             "type",
@@ -504,46 +532,34 @@ fn log_robots(
                 robots.iter().map(|r| type_names[r.type_index].as_str()),
             )) as ArrayRef,
         )
-        .with_component_from_data(
-            "energy",
-            Arc::new(Float64Array::from_iter_values(robots.iter().map(|r| r.energy))),
-        )
+        .with_component_from_data("energy", f64s(&mut robots.iter().map(|r| Some(r.energy))))
         .with_component_from_data(
             "alive",
             Arc::new(robots.iter().map(|r| Some(r.alive)).collect::<BooleanArray>()),
         )
         .with_component_from_data(
             "action",
-            Arc::new(StringArray::from_iter_values(
-                robots.iter().map(|r| format!("{} ({})", r.action, outcome(r.outcome))),
-            )),
+            Arc::new(StringArray::from_iter_values(robots.iter().map(|r| r.action))),
         )
         .with_component_from_data(
-            "goal",
-            Arc::new(StringArray::from_iter_values(robots.iter().map(|r| match r.goal {
-                Some(g) => format!("({:.1}, {:.1})", g.x, g.y),
-                None => "none".to_owned(),
-            }))),
+            "outcome",
+            Arc::new(StringArray::from_iter_values(robots.iter().map(|r| outcome(r.outcome)))),
         )
+        .with_component_from_data("goal_x", f64s(&mut robots.iter().map(|r| r.goal.map(|g| g.x))))
+        .with_component_from_data("goal_y", f64s(&mut robots.iter().map(|r| r.goal.map(|g| g.y))))
         .with_component_from_data(
             "load",
             Arc::new(UInt32Array::from_iter_values(robots.iter().map(|r| r.load))),
         )
-        .with_component_from_data(
-            "position",
-            Arc::new(StringArray::from_iter_values(
-                robots
-                    .iter()
-                    .map(|r| format!("({:.2}, {:.2})", r.position.x, r.position.y)),
-            )),
-        );
+        .with_component_from_data("x", f64s(&mut robots.iter().map(|r| Some(r.position.x))))
+        .with_component_from_data("y", f64s(&mut robots.iter().map(|r| Some(r.position.y))));
     rec.log(
         "world/robots",
         &[
             &rerun::Points2D::new(robots.iter().map(|r| to_2d(r.position)))
                 .with_radii([rerun::Radius::new_ui_points(4.0)])
                 .with_class_ids(classes.clone())
-                .with_labels(labels)
+                .with_labels(labels.update(robots).iter().map(|(_, l)| l.as_str()))
                 .with_draw_order(draw_order::ROBOTS) as &dyn rerun::AsComponents,
             &detail,
         ],
@@ -665,6 +681,7 @@ impl Observer for RerunObserver {
         layers::log_static_map(&self.rec, sim.map())?;
         log_series_styles(&self.rec)?;
         self.known_dirty = vec![true; sim.robots().len()];
+        self.known_logged = vec![Vec::new(); sim.robots().len()];
 
         let (tx, rx) = match self.when_behind {
             WhenBehind::Wait => crossbeam_channel::bounded(QUEUE_ROUNDS),

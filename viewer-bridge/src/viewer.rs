@@ -52,6 +52,19 @@ fn authority(url: &str) -> Option<&str> {
     Some(rest.split('/').next().unwrap_or(rest))
 }
 
+/// How Rerun groups rows into chunks for an `.rrd` file: nobody watches a file while it is
+/// written, so rows gather for up to 10 s (the default is 200 ms, for live viewers). Every
+/// chunk carries ~2 KB of schema, and per-robot known regions logged every 20 rounds would
+/// otherwise each be a chunk of their own: with 1,000 robots this cut the benchmark's file
+/// from 46 to 30 MB and its encoding time alike (BENCHMARKS.md). `RERUN_FLUSH_*` environment
+/// variables still override it.
+fn file_batching() -> rerun::log::ChunkBatcherConfig {
+    rerun::log::ChunkBatcherConfig {
+        flush_tick: Duration::from_secs(10),
+        ..rerun::log::ChunkBatcherConfig::DEFAULT
+    }
+}
+
 /// Open a recording stream to `target`, with `blueprint` as its default layout.
 ///
 /// `--connect` checks first that something listens at the address: the SDK would otherwise
@@ -66,6 +79,7 @@ pub fn open(
         .with_blueprint(blueprint);
     let rec = match target {
         ViewerTarget::Rrd(path) => builder
+            .batcher_config(file_batching())
             .save(path)
             .with_context(|| format!("cannot write the recording {}", path.display()))?,
         ViewerTarget::Connect(url) => {
