@@ -5,6 +5,8 @@ Used by viewer-bridge/tests/rerun_rrd.rs. Output:
   rounds:  {"<entity>": sorted rounds with a row}        (temporal chunks only)
   scalars: {"<entity>": {"<round>": value}}             (entities with a Scalars column)
   instances: {"<entity>": {"<round>": instances}}      (world/robots, world/treasures)
+  robots:  {"round": last round, "<column>": values}    (/world/robots detail columns and
+                                                        2D positions at its last round)
 """
 
 import json
@@ -19,6 +21,7 @@ def main(path: str) -> None:
     rounds: dict[str, set[int]] = defaultdict(set)
     scalars: dict[str, dict[str, float]] = defaultdict(dict)
     instances: dict[str, dict[str, int]] = defaultdict(dict)
+    robots: dict = {"round": -1}
     for chunk in RrdReader(path).stream():
         entity = str(chunk.entity_path)
         static = bool(chunk.is_static)
@@ -42,12 +45,20 @@ def main(path: str) -> None:
             values = batch.column(names.index(pos_cols[0])).to_pylist()
             for r, v in zip(rs, values):
                 instances[entity][str(r)] = len(v or [])
+        if entity == "/world/robots":
+            for i, r in enumerate(rs):
+                if r > robots["round"]:
+                    robots = {"round": int(r)}
+                    for name in names:
+                        if name not in ("rerun.controls.RowId", "round"):
+                            robots[name] = batch.column(names.index(name))[i].as_py()
     json.dump(
         {
             "rows": rows,
             "rounds": {e: sorted(r) for e, r in rounds.items()},
             "scalars": scalars,
             "instances": instances,
+            "robots": robots,
         },
         sys.stdout,
     )
