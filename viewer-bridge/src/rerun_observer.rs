@@ -476,6 +476,7 @@ fn log_frames(
                     format!("world/known/{}", region.robot),
                     &layers::boxes_2d(&region.boxes)
                         .with_class_ids([region.class])
+                        .with_show_labels(false)
                         .with_draw_order(draw_order::KNOWN),
                 )?;
             }
@@ -568,7 +569,8 @@ fn log_robots(
         "world3d/robots",
         &rerun::Points3D::new(robots.iter().map(|r| [r.position.x as f32, r.position.y as f32, r.z_m]))
             .with_radii([rerun::Radius::new_ui_points(3.0)])
-            .with_class_ids(classes),
+            .with_class_ids(classes)
+            .with_show_labels(false),
     )
 }
 
@@ -614,6 +616,8 @@ fn log_paths(rec: &rerun::RecordingStream, paths: &[(u16, Vec<[f32; 2]>)]) -> re
         "world/paths",
         &rerun::LineStrips2D::new(paths.iter().map(|(_, points)| points.iter().copied()))
             .with_class_ids(paths.iter().map(|(class, _)| *class))
+            // The class (type) name on every path only cluttered the map; robots carry labels.
+            .with_show_labels(false)
             .with_radii([rerun::Radius::new_ui_points(1.0)])
             .with_draw_order(draw_order::PATHS),
     )
