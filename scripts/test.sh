@@ -18,7 +18,9 @@ if [ -z "${SMARTTEAMS_RERUN_PYTHON:-}" ]; then
     "$venv/bin/pip" install --quiet --disable-pip-version-check rerun-sdk==0.36.3
   fi
   SMARTTEAMS_RERUN_PYTHON="$(pwd)/$venv/bin/python"
-  SMARTTEAMS_RERUN_BIN="$(pwd)/$venv/bin/rerun"
+  # The native viewer binary, not the venv's `rerun` script: that script runs the binary as a
+  # child, so tests that kill or pause "the viewer" would only hit the script.
+  SMARTTEAMS_RERUN_BIN="$("$venv/bin/python" -c 'import os, rerun_cli; print(os.path.join(os.path.dirname(rerun_cli.__file__), "rerun"))')"
   export SMARTTEAMS_RERUN_PYTHON SMARTTEAMS_RERUN_BIN
 fi
 echo "SMARTTEAMS_RERUN_PYTHON=$SMARTTEAMS_RERUN_PYTHON"

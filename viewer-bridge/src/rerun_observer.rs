@@ -82,14 +82,49 @@ impl Default for LogOptions {
     }
 }
 
+/// How long the logging thread may go without finishing a frame before a live viewer counts
+/// as stalled (paused, frozen, or its network gone quiet) under [`WhenBehind::SkipWorld`].
+pub const STALL_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// What the simulation does when the logging thread falls [`QUEUE_ROUNDS`] behind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WhenBehind {
     /// Wait for it: nothing is lost (right for `.rrd` files, whose writer always catches up).
     Wait,
-    /// Leave out the world of that round (metrics and events are still queued): a slow or
-    /// paused live viewer never holds up the run. The final round is always queued.
+    /// Wait for it while it makes progress, so a live viewer that keeps up, however slowly,
+    /// sees every logged round; once it has finished no frame for [`STALL_TIMEOUT`] (a paused
+    /// or frozen viewer), leave out the world of the rounds played meanwhile (their metrics
+    /// and events are still queued), so the run never hangs on its viewer. The final round is
+    /// always queued.
     SkipWorld,
+}
+
+/// When the logging thread last finished a frame, shared with the simulation thread.
+#[derive(Debug)]
+struct Progress {
+    epoch: std::time::Instant,
+    /// Nanoseconds after `epoch`.
+    last_ns: std::sync::atomic::AtomicU64,
+}
+
+impl Progress {
+    fn new() -> Self {
+        Self {
+            epoch: std::time::Instant::now(),
+            last_ns: std::sync::atomic::AtomicU64::new(0),
+        }
+    }
+
+    fn tick(&self) {
+        let ns = self.epoch.elapsed().as_nanos() as u64;
+        self.last_ns.store(ns, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Time since the last finished frame (or since the start).
+    fn idle(&self) -> std::time::Duration {
+        let last = std::time::Duration::from_nanos(self.last_ns.load(std::sync::atomic::Ordering::Relaxed));
+        self.epoch.elapsed().saturating_sub(last)
+    }
 }
 
 /// Logs a simulation to Rerun.
@@ -104,6 +139,7 @@ pub struct RerunObserver {
     opts: LogOptions,
     when_behind: WhenBehind,
     frames: Option<crossbeam_channel::Sender<Frame>>,
+    progress: std::sync::Arc<Progress>,
     worker: Option<std::thread::JoinHandle<rerun::RecordingStreamResult<std::time::Duration>>>,
     explored: Option<Raster>,
     last_explored_round: Option<u64>,
@@ -135,6 +171,7 @@ impl RerunObserver {
             },
             when_behind: WhenBehind::Wait,
             frames: None,
+            progress: std::sync::Arc::new(Progress::new()),
             worker: None,
             explored: None,
             last_explored_round: None,
@@ -293,13 +330,17 @@ impl RerunObserver {
         let Some(tx) = &self.frames else {
             return Err(ObserverError::from("the Rerun logging thread is not running"));
         };
-        if self.when_behind == WhenBehind::SkipWorld
-            && !final_round
-            && frame.world.is_some()
-            && tx.len() >= QUEUE_ROUNDS
-        {
-            frame.world = None;
-            self.skipped_rounds += 1;
+        if self.when_behind == WhenBehind::SkipWorld && !final_round && frame.world.is_some() {
+            // The queue is unbounded here (metrics and events always go through): wait for a
+            // logging thread that is behind but moving, skip the world while it is stalled.
+            while tx.len() >= QUEUE_ROUNDS {
+                if self.progress.idle() >= STALL_TIMEOUT {
+                    frame.world = None;
+                    self.skipped_rounds += 1;
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_micros(200));
+            }
         }
         if frame.world.is_some() {
             self.logged_rounds += 1;
@@ -311,6 +352,14 @@ impl RerunObserver {
             return Err(ObserverError::from("the Rerun logging thread stopped"));
         }
         Ok(())
+    }
+
+    /// Let go of a live stream whose viewer takes no data. Dropping the last handle of a
+    /// `RecordingStream` joins Rerun's sender thread, which waits for ever on a paused viewer
+    /// (its gRPC queue is full and the connection stays open): one handle is leaked instead,
+    /// and the stream's threads end with the process.
+    fn abandon_stream(&self) {
+        std::mem::forget(self.rec.clone());
     }
 
     /// Wait for the logging thread (after its queue was closed) and take its result.
@@ -444,6 +493,7 @@ fn log_frames(
     rec: &rerun::RecordingStream,
     frames: &crossbeam_channel::Receiver<Frame>,
     type_names: &[String],
+    progress: &Progress,
 ) -> rerun::RecordingStreamResult<std::time::Duration> {
     let mut busy = std::time::Duration::ZERO;
     let mut labels = Labels::default();
@@ -482,6 +532,7 @@ fn log_frames(
             }
         }
         busy += t0.elapsed();
+        progress.tick();
     }
     Ok(busy)
 }
@@ -693,10 +744,12 @@ impl Observer for RerunObserver {
         };
         let rec = self.rec.clone();
         let type_names: Vec<String> = sim.types().iter().map(|t| t.name.clone()).collect();
+        let progress = std::sync::Arc::clone(&self.progress);
+        progress.tick();
         self.worker = Some(
             std::thread::Builder::new()
                 .name("rerun-observer".into())
-                .spawn(move || log_frames(&rec, &rx, &type_names))?,
+                .spawn(move || log_frames(&rec, &rx, &type_names, &progress))?,
         );
         self.frames = Some(tx);
         let world = self.snapshot_world(sim, None);
@@ -765,6 +818,7 @@ impl Observer for RerunObserver {
                 } else {
                     self.worker = None;
                     eprintln!("warning: the Rerun viewer is not taking data; the last rounds may not reach it");
+                    self.abandon_stream();
                     return Ok(());
                 }
             }
@@ -772,6 +826,9 @@ impl Observer for RerunObserver {
         // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
         if let Err(e) = self.rec.flush_with_timeout(FINISH_TIMEOUT) {
             eprintln!("warning: could not flush the Rerun stream: {e}");
+            if self.when_behind == WhenBehind::SkipWorld {
+                self.abandon_stream();
+            }
         }
         self.busy += t0.elapsed();
         Ok(())

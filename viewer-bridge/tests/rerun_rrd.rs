@@ -3,8 +3,10 @@
 //! streams live to a `rerun` receiver on loopback, which is killed mid-run.
 //!
 //! They need `SMARTTEAMS_RERUN_PYTHON` (a Python with `rerun-sdk==0.36.3`; `scripts/test.sh`
-//! makes a venv and sets it) and skip with a note when it is unset. The `rerun` binary is taken
-//! from `SMARTTEAMS_RERUN_BIN`, else from beside that Python.
+//! makes a venv and sets it) and skip with a note when it is unset. The native `rerun` binary is
+//! taken from `SMARTTEAMS_RERUN_BIN`, else from that Python's `rerun_cli` package. Not the
+//! `rerun` script of the venv: it runs the binary as a child process, so killing or stopping
+//! the script would leave the real receiver running.
 
 use std::collections::BTreeMap;
 use std::net::TcpListener;
@@ -27,7 +29,18 @@ fn python() -> Option<PathBuf> {
 }
 
 fn rerun_bin(python: &Path) -> PathBuf {
-    std::env::var_os("SMARTTEAMS_RERUN_BIN").map_or_else(|| python.with_file_name("rerun"), PathBuf::from)
+    if let Some(bin) = std::env::var_os("SMARTTEAMS_RERUN_BIN") {
+        return PathBuf::from(bin);
+    }
+    let out = Command::new(python)
+        .args([
+            "-c",
+            "import os, rerun_cli; print(os.path.join(os.path.dirname(rerun_cli.__file__), 'rerun'))",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    PathBuf::from(String::from_utf8(out.stdout).unwrap().trim())
 }
 
 fn smartteams() -> Command {
@@ -112,7 +125,15 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
         ],
     );
     let s = summarise(&python, &rrd);
+    check_layers(&s, rounds);
+    check_robot_detail(&s, rounds, &dir.path().join("robots.csv"));
+    check_metrics(&s, rounds, &metrics);
+    rrd_verify(&python, &rrd);
+}
 
+/// The static layers once each; the world state at round 0 and every 4th round up to the last;
+/// the explored layer thinned; one known-region entity per robot.
+fn check_layers(s: &Value, rounds: u64) {
     // The static layers, once each.
     for entity in [
         "world",
@@ -141,7 +162,7 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
             .copied()
             .filter(|&r| r > 0 || entity != "world/links")
             .collect();
-        assert_eq!(rounds_of(&s, entity), expected, "{entity}");
+        assert_eq!(rounds_of(s, entity), expected, "{entity}");
         assert_eq!(
             s["rows"][format!("/{entity}|0")].as_u64(),
             Some(expected.len() as u64),
@@ -155,10 +176,21 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
             "robots at {r}"
         );
     }
-    let explored = rounds_of(&s, "world/explored");
+    let explored = rounds_of(s, "world/explored");
     assert_eq!(explored.first(), Some(&0));
     assert_eq!(explored.last(), Some(&rounds));
     assert!(explored.len() < logged.len(), "explored is thinned: {explored:?}");
+    let known: Vec<&String> = s["rounds"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .filter(|k| k.starts_with("/world/known/"))
+        .collect();
+    assert_eq!(known.len(), 20, "one known-region entity per robot: {known:?}");
+}
+
+/// The selection panel's detail of the last round equals the robot-stats CSV of the same run.
+fn check_robot_detail(s: &Value, rounds: u64, robot_stats: &Path) {
     // The selection panel's detail of the last round = the robot-stats CSV of the same run.
     let robots = &s["robots"];
     assert_eq!(robots["round"].as_u64(), Some(rounds));
@@ -173,7 +205,7 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
     for name in ["action", "outcome", "goal_x", "goal_y", "load"] {
         assert_eq!(column(name).len(), 20, "{name}");
     }
-    let mut stats = csv::Reader::from_path(dir.path().join("robots.csv")).unwrap();
+    let mut stats = csv::Reader::from_path(robot_stats).unwrap();
     let headers = stats.headers().unwrap().clone();
     let at = |name: &str| headers.iter().position(|h| h == name).unwrap();
     let mut n = 0;
@@ -193,17 +225,11 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
         n += 1;
     }
     assert_eq!(n, 20);
+}
 
-    let known: Vec<&String> = s["rounds"]
-        .as_object()
-        .unwrap()
-        .keys()
-        .filter(|k| k.starts_with("/world/known/"))
-        .collect();
-    assert_eq!(known.len(), 20, "one known-region entity per robot: {known:?}");
-
-    // Metrics: one row per round, equal to the CSV of the same run.
-    let csv = read_metrics(&metrics);
+/// Metrics: one row per round, equal to the CSV of the same run.
+fn check_metrics(s: &Value, rounds: u64, metrics: &Path) {
+    let csv = read_metrics(metrics);
     for (column, entity) in viewer_bridge::rerun_observer::METRIC_ENTITIES {
         let values = s["scalars"][format!("/{entity}")]
             .as_object()
@@ -219,10 +245,12 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
             );
         }
     }
+}
 
-    let verify = Command::new(rerun_bin(&python))
+fn rrd_verify(python: &Path, rrd: &Path) {
+    let verify = Command::new(rerun_bin(python))
         .args(["rrd", "verify"])
-        .arg(&rrd)
+        .arg(rrd)
         .output()
         .unwrap();
     assert!(
@@ -428,5 +456,108 @@ fn a_paused_viewer_does_not_hold_up_the_run() {
     assert!(
         summary.contains(&format!("{rounds} rounds with 20 robots")),
         "{summary}"
+    );
+}
+
+/// Rerun spawns its viewer on the default port and, when something already listens there,
+/// streams to that instead: the `--spawn` tests take turns and need the port free.
+fn spawn_port() -> Option<std::sync::MutexGuard<'static, ()>> {
+    static PORT: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let guard = PORT.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if std::net::TcpStream::connect(("127.0.0.1", RERUN_DEFAULT_PORT)).is_ok() {
+        eprintln!("note: port {RERUN_DEFAULT_PORT} is in use; skipping a --spawn test");
+        return None;
+    }
+    Some(guard)
+}
+
+/// Rerun's default viewer port (what `--spawn` uses).
+const RERUN_DEFAULT_PORT: u16 = 9876;
+
+/// `--spawn` starts the `rerun` found on `PATH` and streams the run to it. The `rerun` put on
+/// `PATH` here wraps the real binary and adds `--save` (there is no display for a window), so
+/// what the spawned process received can be read back.
+#[cfg(unix)]
+#[test]
+fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
+    use std::os::unix::fs::PermissionsExt;
+
+    let Some(python) = python() else { return };
+    let Some(_port) = spawn_port() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let bin = dir.path().join("bin");
+    std::fs::create_dir(&bin).unwrap();
+    let saved = dir.path().join("spawned.rrd");
+    let pid_file = dir.path().join("viewer.pid");
+    let args_file = dir.path().join("viewer.args");
+    let script = format!(
+        "#!/bin/sh\n\
+         # `rerun --version` is how the SDK checks the viewer's version first.\n\
+         [ \"$1\" = --version ] && exec '{real}' --version\n\
+         echo $$ > '{pid}'\n\
+         echo \"$@\" > '{args}'\n\
+         # The viewer's output would keep the run's pipes open after it ends.\n\
+         exec '{real}' \"$@\" --bind 127.0.0.1 --save '{saved}' >/dev/null 2>&1\n",
+        real = rerun_bin(&python).display(),
+        pid = pid_file.display(),
+        args = args_file.display(),
+        saved = saved.display(),
+    );
+    let wrapper = bin.join("rerun");
+    std::fs::write(&wrapper, script).unwrap();
+    std::fs::set_permissions(&wrapper, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let path = std::env::join_paths(
+        std::iter::once(bin.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())),
+    )
+    .unwrap();
+
+    let out = smartteams()
+        .arg("run")
+        .arg(workspace().join("configs/demo.xml"))
+        .args(["--rounds", "20", "-q", "--spawn"])
+        .arg("--metrics")
+        .arg(dir.path().join("metrics.csv"))
+        .env("PATH", path)
+        .output()
+        .unwrap();
+    // The spawned viewer outlives the run (as a real one would): stop it before asserting.
+    std::thread::sleep(Duration::from_secs(2));
+    let pid = std::fs::read_to_string(&pid_file).unwrap_or_default();
+    if !pid.trim().is_empty() {
+        Command::new("kill").arg(pid.trim()).status().unwrap();
+    }
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let args = std::fs::read_to_string(&args_file).expect("the run did not start `rerun` from PATH");
+    assert!(
+        args.contains(&format!("--port={RERUN_DEFAULT_PORT}")),
+        "viewer started with {args}"
+    );
+    let s = summarise(&python, &saved);
+    assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
+    assert_eq!(
+        s["rows"]["/world/obstacles/raster|1"].as_u64(),
+        Some(1),
+        "the static map arrived"
+    );
+}
+
+#[test]
+fn spawn_without_a_viewer_on_path_says_how_to_get_one() {
+    let Some(_port) = spawn_port() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = smartteams()
+        .arg("run")
+        .arg(workspace().join("configs/demo.xml"))
+        .args(["--rounds", "2", "-q", "--spawn"])
+        .arg("--metrics")
+        .arg(dir.path().join("metrics.csv"))
+        .env("PATH", dir.path())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot start the Rerun viewer") && err.contains("pip install rerun-sdk==0.36.3"),
+        "{err}"
     );
 }
