@@ -471,6 +471,19 @@ fn spawn_port() -> Option<std::sync::MutexGuard<'static, ()>> {
     Some(guard)
 }
 
+/// `smartteams run … --spawn` of the demo for `rounds` rounds, with `path` as its `PATH`.
+fn run_spawned(dir: &Path, rounds: u64, path: &std::ffi::OsStr) -> std::process::Output {
+    smartteams()
+        .arg("run")
+        .arg(workspace().join("configs/demo.xml"))
+        .args(["--rounds", &rounds.to_string(), "-q", "--spawn"])
+        .arg("--metrics")
+        .arg(dir.join("metrics.csv"))
+        .env("PATH", path)
+        .output()
+        .unwrap()
+}
+
 /// Rerun's default viewer port (what `--spawn` uses).
 const RERUN_DEFAULT_PORT: u16 = 9876;
 
@@ -511,15 +524,7 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     )
     .unwrap();
 
-    let out = smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", "20", "-q", "--spawn"])
-        .arg("--metrics")
-        .arg(dir.path().join("metrics.csv"))
-        .env("PATH", path)
-        .output()
-        .unwrap();
+    let out = run_spawned(dir.path(), 20, &path);
     // The spawned viewer outlives the run (as a real one would): stop it before asserting.
     std::thread::sleep(Duration::from_secs(2));
     let pid = std::fs::read_to_string(&pid_file).unwrap_or_default();
@@ -545,15 +550,7 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
 fn spawn_without_a_viewer_on_path_says_how_to_get_one() {
     let Some(_port) = spawn_port() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let out = smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", "2", "-q", "--spawn"])
-        .arg("--metrics")
-        .arg(dir.path().join("metrics.csv"))
-        .env("PATH", dir.path())
-        .output()
-        .unwrap();
+    let out = run_spawned(dir.path(), 2, dir.path().as_os_str());
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
