@@ -60,17 +60,18 @@ pub struct ViewerArgs {
 }
 
 impl ViewerArgs {
-    /// The target these options ask for; `default_rrd` when none is given.
-    pub fn target(&self, default_rrd: PathBuf) -> Option<ViewerTarget> {
-        if self.no_viewer {
+    /// The target these options ask for; `default_rrd` when none is given. Fails on a
+    /// `--connect` value that is no viewer address.
+    pub fn target(&self, default_rrd: PathBuf) -> Result<Option<ViewerTarget>> {
+        Ok(if self.no_viewer {
             None
         } else if let Some(url) = &self.connect {
-            Some(ViewerTarget::Connect(connect_url(url)))
+            Some(ViewerTarget::Connect(connect_url(url)?))
         } else if self.spawn {
             Some(ViewerTarget::Spawn)
         } else {
             Some(ViewerTarget::Rrd(self.rrd.clone().unwrap_or(default_rrd)))
-        }
+        })
     }
 }
 
@@ -155,7 +156,7 @@ impl RunArgs {
             .rrd
             .clone()
             .unwrap_or_else(|| PathBuf::from(format!("{}.rrd", config.name)));
-        let viewer = self.viewer.target(default_rrd);
+        let viewer = self.viewer.target(default_rrd)?;
         Ok(RunConfig {
             config,
             threads: self.threads,
@@ -199,7 +200,7 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
                 .map
                 .file_stem()
                 .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
-            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}.rrd"))) else {
+            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}.rrd")))? else {
                 bail!("--no-viewer leaves nothing to show");
             };
             crate::run::view_map(&args.map, &target)?;

@@ -35,15 +35,22 @@ impl std::fmt::Display for ViewerTarget {
 }
 
 /// Turn what a user typed after `--connect` into a proxy URL: a full `rerun+http(s)://…/proxy`
-/// URL is kept, `host:port` or `host` is expanded.
-pub fn connect_url(arg: &str) -> String {
-    if arg.contains("://") {
+/// URL is kept, `host:port` or `host` is expanded; any other scheme is refused.
+pub fn connect_url(arg: &str) -> Result<String> {
+    let url = if arg.contains("://") {
         arg.to_owned()
     } else if arg.contains(':') {
         format!("rerun+http://{arg}/proxy")
     } else {
         format!("rerun+http://{arg}:{}/proxy", rerun::DEFAULT_SERVER_PORT)
+    };
+    let scheme_ok = ["rerun+http://", "rerun+https://", "rerun://"]
+        .iter()
+        .any(|s| url.starts_with(s));
+    if !scheme_ok || authority(&url).is_none_or(str::is_empty) {
+        bail!("--connect={arg}: not a Rerun viewer address (expected HOST, HOST:PORT or rerun+http://HOST:PORT/proxy)");
     }
+    Ok(url)
 }
 
 /// `host:port` of a proxy URL.
@@ -78,10 +85,22 @@ pub fn open(
         .recording_name(name)
         .with_blueprint(blueprint);
     let rec = match target {
-        ViewerTarget::Rrd(path) => builder
-            .batcher_config(file_batching())
-            .save(path)
-            .with_context(|| format!("cannot write the recording {}", path.display()))?,
+        ViewerTarget::Rrd(path) => {
+            // Rerun's own error repeats itself three times over; say it once.
+            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
+                && !dir.is_dir()
+            {
+                bail!(
+                    "cannot write the recording {}: the folder {} does not exist",
+                    path.display(),
+                    dir.display()
+                );
+            }
+            builder
+                .batcher_config(file_batching())
+                .save(path)
+                .with_context(|| format!("cannot write the recording {}", path.display()))?
+        }
         ViewerTarget::Connect(url) => {
             let Some(auth) = authority(url) else {
                 bail!("not a Rerun proxy URL: {url} (expected rerun+http://HOST:PORT/proxy)");
@@ -115,9 +134,16 @@ mod tests {
 
     #[test]
     fn connect_urls() {
-        assert_eq!(connect_url("10.0.0.2:9000"), "rerun+http://10.0.0.2:9000/proxy");
-        assert_eq!(connect_url("viewer"), "rerun+http://viewer:9876/proxy");
-        assert_eq!(connect_url(DEFAULT_CONNECT_URL), DEFAULT_CONNECT_URL);
+        assert_eq!(
+            connect_url("10.0.0.2:9000").unwrap(),
+            "rerun+http://10.0.0.2:9000/proxy"
+        );
+        assert_eq!(connect_url("viewer").unwrap(), "rerun+http://viewer:9876/proxy");
+        assert_eq!(connect_url(DEFAULT_CONNECT_URL).unwrap(), DEFAULT_CONNECT_URL);
+        for bad in ["foo://bar", "http://host:9876/proxy", "rerun+http:///proxy"] {
+            let err = connect_url(bad).unwrap_err().to_string();
+            assert!(err.contains(bad) && err.contains("expected"), "{bad}: {err}");
+        }
         assert_eq!(authority(DEFAULT_CONNECT_URL), Some("127.0.0.1:9876"));
     }
 }

@@ -558,3 +558,33 @@ fn spawn_without_a_viewer_on_path_says_how_to_get_one() {
         "{err}"
     );
 }
+
+#[test]
+fn bad_viewer_options_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no-such-folder/run.rrd");
+    let run = |viewer: &[&str]| {
+        let out = smartteams()
+            .arg("run")
+            .arg(workspace().join("configs/demo.xml"))
+            .args(["--rounds", "2", "-q"])
+            .args(viewer)
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{viewer:?} succeeded");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run(&["--rrd", missing.to_str().unwrap()]);
+    assert!(
+        err.contains(&format!("{}", missing.display())) && err.contains("does not exist"),
+        "{err}"
+    );
+    let err = run(&["--connect=ftp://viewer:21"]);
+    assert!(
+        err.contains("ftp://viewer:21") && err.contains("expected HOST"),
+        "{err}"
+    );
+    let port = free_port();
+    let err = run(&[&format!("--connect=127.0.0.1:{port}")]);
+    assert!(err.contains("no Rerun viewer listens"), "{err}");
+}
