@@ -47,13 +47,20 @@ fn smartteams() -> Command {
     Command::new(env!("CARGO_BIN_EXE_smartteams"))
 }
 
+/// `smartteams run configs/demo.xml --rounds ROUNDS`, for more arguments to follow.
+fn demo_run(rounds: u64) -> Command {
+    let mut cmd = smartteams();
+    cmd.arg("run")
+        .arg(workspace().join("configs/demo.xml"))
+        .args(["--rounds", &rounds.to_string()]);
+    cmd
+}
+
 /// Run the demo for `rounds` rounds into `dir`, with extra arguments; returns the metrics CSV.
 fn run_demo(dir: &Path, rounds: u64, extra: &[&str]) -> PathBuf {
     let metrics = dir.join("metrics.csv");
-    let out = smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", &rounds.to_string(), "-q", "--metrics"])
+    let out = demo_run(rounds)
+        .args(["-q", "--metrics"])
         .arg(&metrics)
         .arg("--robot-stats")
         .arg(dir.join("robots.csv"))
@@ -289,13 +296,17 @@ fn view_writes_a_map_recording() {
     }
 }
 
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
-
-/// A headless `rerun` that receives on `port` and saves what arrives to `save`.
-fn receiver(python: &Path, port: u16, save: &Path) -> Child {
-    let child = Command::new(rerun_bin(python))
+/// A headless `rerun` that receives on a free port and saves what arrives to `save`; returns
+/// it and its port.
+///
+/// Receivers start one at a time: a port is free only until the receiver binds it (about a
+/// second later), and a second receiver handed the same port would fail to bind while the
+/// first one's listener made it look started.
+fn receiver(python: &Path, save: &Path) -> (Child, u16) {
+    static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = STARTING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let mut child = Command::new(rerun_bin(python))
         .args(["--bind", "127.0.0.1", "--port", &port.to_string(), "--save"])
         .arg(save)
         .stdout(Stdio::null())
@@ -304,10 +315,11 @@ fn receiver(python: &Path, port: u16, save: &Path) -> Child {
         .unwrap();
     let t0 = Instant::now();
     while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(child.try_wait().unwrap().is_none(), "rerun receiver exited");
         assert!(t0.elapsed() < Duration::from_secs(30), "rerun receiver did not start");
         std::thread::sleep(Duration::from_millis(100));
     }
-    child
+    (child, port)
 }
 
 #[test]
@@ -316,9 +328,8 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     let dir = tempfile::tempdir().unwrap();
 
     // 1. A short run streamed to a receiver arrives whole.
-    let port = free_port();
     let saved = dir.path().join("received.rrd");
-    let mut rx = receiver(&python, port, &saved);
+    let (mut rx, port) = receiver(&python, &saved);
     let url = format!("--connect=127.0.0.1:{port}");
     run_demo(dir.path(), 20, &[url.as_str()]);
     // The receiver writes as data arrives; give it a moment, then stop it.
@@ -336,12 +347,9 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     );
 
     // 2. The receiver is killed mid-run: the run still completes.
-    let port = free_port();
-    let mut rx = receiver(&python, port, &dir.path().join("killed.rrd"));
-    let mut run = smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", "400", "-q"])
+    let (mut rx, port) = receiver(&python, &dir.path().join("killed.rrd"));
+    let mut run = demo_run(400)
+        .arg("-q")
         .arg(format!("--connect=127.0.0.1:{port}"))
         .arg("--metrics")
         .arg(dir.path().join("m2.csv"))
@@ -408,13 +416,9 @@ fn same_seed_same_recording_whatever_the_thread_count() {
 fn a_paused_viewer_does_not_hold_up_the_run() {
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let port = free_port();
-    let mut rx = receiver(&python, port, &dir.path().join("paused.rrd"));
+    let (mut rx, port) = receiver(&python, &dir.path().join("paused.rrd"));
     let rounds = 3000;
-    let mut run = smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", &rounds.to_string()])
+    let mut run = demo_run(rounds as u64)
         .arg(format!("--connect=127.0.0.1:{port}"))
         .arg("--metrics")
         .arg(dir.path().join("m.csv"))
@@ -473,10 +477,8 @@ fn spawn_port() -> Option<std::sync::MutexGuard<'static, ()>> {
 
 /// `smartteams run … --spawn` of the demo for `rounds` rounds, with `path` as its `PATH`.
 fn run_spawned(dir: &Path, rounds: u64, path: &std::ffi::OsStr) -> std::process::Output {
-    smartteams()
-        .arg("run")
-        .arg(workspace().join("configs/demo.xml"))
-        .args(["--rounds", &rounds.to_string(), "-q", "--spawn"])
+    demo_run(rounds)
+        .args(["-q", "--spawn"])
         .arg("--metrics")
         .arg(dir.join("metrics.csv"))
         .env("PATH", path)
@@ -564,19 +566,13 @@ fn bad_viewer_options_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("no-such-folder/run.rrd");
     let run = |viewer: &[&str]| {
-        let out = smartteams()
-            .arg("run")
-            .arg(workspace().join("configs/demo.xml"))
-            .args(["--rounds", "2", "-q"])
-            .args(viewer)
-            .output()
-            .unwrap();
+        let out = demo_run(2).arg("-q").args(viewer).output().unwrap();
         assert!(!out.status.success(), "{viewer:?} succeeded");
         String::from_utf8_lossy(&out.stderr).into_owned()
     };
     let err = run(&["--rrd", missing.to_str().unwrap()]);
     assert!(
-        err.contains(&format!("{}", missing.display())) && err.contains("does not exist"),
+        err.contains(&missing.display().to_string()) && err.contains("does not exist"),
         "{err}"
     );
     let err = run(&["--connect=ftp://viewer:21"]);
@@ -584,7 +580,8 @@ fn bad_viewer_options_are_clear_errors() {
         err.contains("ftp://viewer:21") && err.contains("expected HOST"),
         "{err}"
     );
-    let port = free_port();
-    let err = run(&[&format!("--connect=127.0.0.1:{port}")]);
+    // Port 1 (tcpmux, privileged) has no listener on any machine this runs on; a port picked
+    // as free could be taken meanwhile by another test's receiver.
+    let err = run(&["--connect=127.0.0.1:1"]);
     assert!(err.contains("no Rerun viewer listens"), "{err}");
 }
