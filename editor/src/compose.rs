@@ -20,9 +20,10 @@ use std::path::Path;
 
 use quick_xml::events::Event;
 use serde::Deserialize;
-use sim_core::geometry::Aabb;
 use sim_core::glam::DVec2;
-use sim_core::{Grid, HomeBase, MapData, TreasureSpec};
+use sim_core::spatial::Aabb;
+use sim_core::spatial::Grid;
+use sim_core::world::{HomeBase, MapData, TreasureSpec};
 
 use crate::progress::Progress;
 use crate::shapes::{Obstacle, ShapeSet};

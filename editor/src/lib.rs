@@ -3,13 +3,12 @@
 //! Maps come from generators ([`generate`]), images and foreign map formats ([`import`]) and
 //! XML scenes of shapes ([`compose`]); [`place`] sets the home base and scatters treasures,
 //! [`validate`] checks a map, [`stats`] describes it and [`preview`] draws it. Everything is
-//! written as sim-core's map file ([`sim_core::MapData`]).
+//! written as sim-core's map file ([`sim_core::world::MapData`]).
 //!
 //! Orientation everywhere: image row 0 is the top of the map, world y points up, and the
 //! map's lower-left corner is its origin.
 
 pub mod compose;
-pub mod connectivity;
 pub mod error;
 pub mod generate;
 pub mod import;

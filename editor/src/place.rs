@@ -4,11 +4,12 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_core::glam::DVec2;
-use sim_core::quadtree::Square;
-use sim_core::{HomeBase, MapData, ObstacleMap, TreasureSpec};
+use sim_core::spatial::ObstacleMap;
+use sim_core::spatial::Square;
+use sim_core::world::{HomeBase, MapData, TreasureSpec};
 
-use crate::connectivity::Components;
 use crate::{EditorError, Result};
+use sim_core::spatial::Components;
 
 /// How treasures are spread.
 #[derive(Clone, Copy, Debug, PartialEq)]

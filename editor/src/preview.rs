@@ -5,8 +5,8 @@ use std::io::Cursor;
 use std::path::Path;
 
 use image::{ImageFormat, Rgb, RgbImage};
-use sim_core::MapData;
 use sim_core::glam::DVec2;
+use sim_core::world::MapData;
 
 use crate::{EditorError, Result};
 
@@ -138,6 +138,6 @@ pub fn write_png(img: &RgbImage, path: &Path) -> Result<()> {
             path: path.to_path_buf(),
             cause,
         })?;
-    sim_core::mapfile::write_atomically(path, &bytes)?;
+    sim_core::world::write_atomically(path, &bytes)?;
     Ok(())
 }

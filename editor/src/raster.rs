@@ -1,8 +1,8 @@
 //! Small helpers for maps built from a full raster (imports, caves, mazes, rooms).
 
 use sim_core::glam::DVec2;
-use sim_core::quadtree::build::BitGrid;
-use sim_core::{Grid, ObstacleMap};
+use sim_core::spatial::BitGrid;
+use sim_core::spatial::{Grid, ObstacleMap};
 
 use crate::{EditorError, Result};
 

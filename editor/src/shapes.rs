@@ -13,11 +13,11 @@
 use parry2d::math::{Pose, Vector};
 use parry2d::query::intersection_test;
 use parry2d::shape::{Cuboid, SharedShape};
-use sim_core::geometry::Aabb;
 use sim_core::glam::DVec2;
-use sim_core::quadtree::Square;
-use sim_core::quadtree::build::Region;
-use sim_core::{Grid, ObstacleMap};
+use sim_core::spatial::Aabb;
+use sim_core::spatial::Region;
+use sim_core::spatial::Square;
+use sim_core::spatial::{Grid, ObstacleMap};
 
 use crate::progress::Progress;
 

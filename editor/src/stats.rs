@@ -3,7 +3,7 @@
 use std::fmt;
 
 use serde::Serialize;
-use sim_core::MapData;
+use sim_core::world::MapData;
 
 /// Figures describing a map.
 #[derive(Clone, Debug, PartialEq, Serialize)]

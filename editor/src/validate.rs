@@ -2,10 +2,10 @@
 
 use std::fmt;
 
-use sim_core::geometry::Aabb;
-use sim_core::{HomeBase, MapData};
+use sim_core::spatial::Aabb;
+use sim_core::world::{HomeBase, MapData};
 
-use crate::connectivity::Components;
+use sim_core::spatial::Components;
 
 /// One thing wrong with a map.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,7 +1,7 @@
 //! Generator densities and structure, checked cell by cell.
 
-use editor::connectivity::Components;
 use editor::generate::{GenerateOptions, Kind, generate};
+use sim_core::spatial::Components;
 
 fn opts(w: f64, h: f64, seed: u64, density: Option<f64>) -> GenerateOptions {
     GenerateOptions {
@@ -13,7 +13,7 @@ fn opts(w: f64, h: f64, seed: u64, density: Option<f64>) -> GenerateOptions {
     }
 }
 
-fn blocked_fraction(map: &sim_core::ObstacleMap) -> f64 {
+fn blocked_fraction(map: &sim_core::spatial::ObstacleMap) -> f64 {
     let g = map.grid();
     // Count cells one by one (independent of the tree's area sums).
     let mut n = 0u64;
@@ -101,15 +101,15 @@ fn generators_are_deterministic() {
     ] {
         let a = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
         let b = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
-        let ma = sim_core::MapData {
+        let ma = sim_core::world::MapData {
             obstacles: a,
-            home: sim_core::HomeBase::Disc {
+            home: sim_core::world::HomeBase::Disc {
                 center: sim_core::glam::DVec2::new(1.0, 1.0),
                 radius_m: 1.0,
             },
             treasures: vec![],
         };
-        let mb = sim_core::MapData {
+        let mb = sim_core::world::MapData {
             obstacles: b,
             ..ma.clone()
         };

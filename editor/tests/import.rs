@@ -11,7 +11,8 @@ use editor::import::{ImportOptions, Unknown, import};
 use editor::preview::{PreviewOptions, render};
 use image::{GrayImage, Luma};
 use sim_core::glam::DVec2;
-use sim_core::{HomeBase, MapData, ObstacleMap};
+use sim_core::spatial::ObstacleMap;
+use sim_core::world::{HomeBase, MapData};
 
 fn test_image(w: u32, h: u32, seed: u64) -> GrayImage {
     GrayImage::from_fn(w, h, |x, y| {

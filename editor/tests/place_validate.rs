@@ -3,7 +3,8 @@
 use editor::place::{PlaceOptions, Spread, place};
 use editor::validate::{Problem, validate};
 use sim_core::glam::DVec2;
-use sim_core::{Grid, HomeBase, MapData, ObstacleMap, TreasureSpec};
+use sim_core::spatial::{Grid, ObstacleMap};
+use sim_core::world::{HomeBase, MapData, TreasureSpec};
 
 /// A 40 × 30 map: a wall at x = 20 splits it; a closed box around (30..35, 20..25) on the right.
 fn split_map() -> MapData {

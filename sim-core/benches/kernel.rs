@@ -11,10 +11,11 @@ use std::time::Instant;
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use sim_core::agent::{Params, StrategyRegistry};
+use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
-use sim_core::sim::{Group, Start};
-use sim_core::strategy::{Params, StrategyRegistry};
-use sim_core::{Grid, HomeBase, MapData, ObstacleMap, RobotType, Scenario, Simulation, TreasureSpec};
+use sim_core::spatial::{Grid, ObstacleMap};
+use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
 
 /// Peak resident set size of this process, from /proc (Linux), in MiB.
 fn peak_rss_mib() -> f64 {
@@ -67,22 +68,19 @@ fn big_map() -> Arc<MapData> {
 }
 
 fn simulation(map: &Arc<MapData>, robots: u32) -> Simulation {
-    let scenario = Scenario {
-        name: format!("bench-{robots}"),
-        map: map.clone(),
-        seed: 7,
-        rounds: u64::MAX,
-        types: vec![RobotType::explorer().with_comm_radius_m(20.0)],
-        groups: vec![Group {
-            name: "explorers".into(),
-            count: robots,
-            type_index: 0,
-            strategy: "cooperative".into(),
-            params: Params::from_pairs([("share_every", "20")]),
-            start: Start::Home,
-        }],
-    };
-    Simulation::new(scenario, &StrategyRegistry::with_builtins()).unwrap()
+    let scenario = ScenarioBuilder::new(map.clone())
+        .with_name(format!("bench-{robots}"))
+        .with_seed(7)
+        .with_rounds(u64::MAX)
+        .with_types(vec![RobotType::explorer().with_comm_radius_m(20.0)])
+        .with_group(
+            Group::new("cooperative", 0, robots)
+                .with_name("explorers")
+                .with_params(Params::from_pairs([("share_every", "20")])),
+        )
+        .build(&StrategyRegistry::with_builtins())
+        .unwrap();
+    Simulation::new(scenario).unwrap()
 }
 
 fn kernel(c: &mut Criterion) {

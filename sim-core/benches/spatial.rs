@@ -18,7 +18,8 @@ use rand_chacha::ChaCha8Rng;
 use rstar::RTree;
 use rstar::primitives::Rectangle;
 use sim_core::glam::DVec2;
-use sim_core::{Grid, HomeBase, KnownMap, MapData, ObstacleMap, RobotId, RobotIndex};
+use sim_core::spatial::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex};
+use sim_core::world::{HomeBase, MapData};
 
 #[global_allocator]
 static ALLOC: Cap<System> = Cap::new(System, usize::MAX);
@@ -179,7 +180,7 @@ fn robot_index(c: &mut Criterion) {
     let robots: Vec<(RobotId, DVec2)> = (0..100_000)
         .map(|i| {
             (
-                RobotId(i),
+                RobotId::new(i),
                 DVec2::new(rng.random_range(0.0..3000.0), rng.random_range(0.0..3000.0)),
             )
         })

@@ -5,7 +5,7 @@ use rand_chacha::ChaCha8Rng;
 use rstar::RTree;
 use rstar::primitives::Rectangle;
 use sim_core::glam::DVec2;
-use sim_core::{Grid, ObstacleMap};
+use sim_core::spatial::{Grid, ObstacleMap};
 
 fn main() {
     let mut args = std::env::args().skip(1);

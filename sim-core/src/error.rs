@@ -5,9 +5,23 @@ use std::path::PathBuf;
 /// Everything that can go wrong in sim-core.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
-    /// A parameter that makes no sense (negative radius, zero-sized map, …).
+    /// A parameter that makes no sense (negative radius, zero-sized map, unknown strategy, …).
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// A problem caused by one group of robots of a scenario (its index lets a config point
+    /// at the element that declared it).
+    #[error("group '{name}': {message}")]
+    Group {
+        /// The group's index in the scenario.
+        index: usize,
+        /// The group's name.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A data structure that breaks its own invariants (what `validate` reports).
+    #[error("{0}")]
+    Malformed(String),
     /// A map file that cannot be read: where and why.
     #[error("map file {}: {problem} (at byte {offset})", path.display())]
     MapFile {
@@ -28,6 +42,14 @@ pub enum Error {
         /// Column (1-based; 0 if unknown).
         column: usize,
         /// What is wrong, and what was expected.
+        message: String,
+    },
+    /// A problem with a command-line argument (for example `--map`): which and what.
+    #[error("{argument}: {message}")]
+    Argument {
+        /// The argument as the user gave it (`--map maps/x.stmap`).
+        argument: String,
+        /// What is wrong.
         message: String,
     },
     /// An I/O failure on a named file.

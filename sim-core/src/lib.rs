@@ -1,15 +1,26 @@
 //! # Smart Teams simulation core
 //!
-//! The library behind the `smartteams` simulator: the spatial structures of the paper
-//! (obstacle region quadtree, treasure PR-quadtree, robot index, per-robot known maps), the
-//! compact map file, the navigation graph, the round loop ([`round`]: perceive → decide →
-//! resolve → observe), strategies and tactics, the XML config and the metrics. Viewers watch
-//! a run through the [`Observer`] trait; sim-core knows nothing of Rerun, images or command
-//! lines. A whole run: [`config::SimConfig::load`] → [`Scenario`] → [`Simulation::run`].
+//! The library behind the `smartteams` simulator, in five layers, each a module that
+//! imports only from the layers before it:
+//!
+//! 1. [`spatial`]: geometry, the region quadtree behind obstacle and known maps, the
+//!    treasure and robot indexes, the navigation graph, and the ids that key them;
+//! 2. [`world`]: robot types, robots, treasures, actions, messages, memory lists, the map
+//!    file, and what a round reports (events, links, metrics);
+//! 3. [`agent`]: strategies, their context [`Ctx`](agent::Ctx), parameters, the registry,
+//!    tactics and the built-in strategies;
+//! 4. [`engine`]: a validated [`Scenario`](engine::Scenario) and the
+//!    [`Simulation`](engine::Simulation) that runs it (perceive → decide → resolve);
+//! 5. [`io`]: the [`Observer`](io::Observer) trait viewers implement, the CSV writers, the
+//!    XML config and the invariant checker.
+//!
+//! Every public item has one path: `sim_core::<layer>::<Item>`. sim-core knows nothing of
+//! Rerun, images or command lines. A whole run: [`io::SimConfig::load`] →
+//! [`io::SimConfig::scenario`] → [`engine::Simulation::new`] → [`engine::Simulation::run`].
 //!
 //! ```
 //! use sim_core::glam::DVec2;
-//! use sim_core::{Grid, ObstacleMap, KnownMap};
+//! use sim_core::spatial::{Grid, KnownMap, ObstacleMap};
 //!
 //! // A 64 m × 64 m map with 1 m cells and a wall at x ∈ [30, 31).
 //! let grid = Grid::new(DVec2::ZERO, 1.0, 64, 64)?;
@@ -26,36 +37,17 @@
 //! # Ok::<(), sim_core::Error>(())
 //! ```
 
-pub mod config;
-pub mod error;
-pub mod geometry;
-pub mod grid;
-pub mod invariants;
-pub mod known_map;
-pub mod mapfile;
-pub mod memory;
-pub mod messages;
-pub mod metrics;
-pub mod model;
-pub mod nav;
-pub mod observer;
-pub mod obstacle_map;
-pub mod quadtree;
-pub mod robot_index;
-pub mod round;
-pub mod sim;
-pub mod strategy;
-pub mod tactics;
-pub mod treasure_index;
+pub mod spatial;
+
+pub mod world;
+
+pub mod agent;
+
+pub mod engine;
+
+pub mod io;
+
+mod error;
 
 pub use error::{Error, Result};
 pub use glam;
-pub use grid::Grid;
-pub use known_map::KnownMap;
-pub use mapfile::{HomeBase, MapData, TreasureSpec};
-pub use model::{Action, Outcome, Robot, RobotType, TreasureState};
-pub use observer::{Event, Observer, RoundReport};
-pub use obstacle_map::ObstacleMap;
-pub use robot_index::{RobotId, RobotIndex};
-pub use sim::{Scenario, Simulation};
-pub use treasure_index::{TreasureId, TreasureIndex};

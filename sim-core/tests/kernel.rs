@@ -3,14 +3,15 @@
 
 use std::sync::Arc;
 
+use sim_core::agent::{Ctx, Needs, Params, Strategy, StrategyRegistry};
+use sim_core::engine::{Group, Start};
+use sim_core::engine::{Scenario, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
-use sim_core::invariants::InvariantChecker;
-use sim_core::observer::{Observer, ObserverError, RoundReport};
-use sim_core::sim::{Group, Start};
-use sim_core::strategy::{Ctx, Needs, Params, Strategy, StrategyRegistry};
-use sim_core::{
-    Action, Grid, HomeBase, MapData, ObstacleMap, Outcome, RobotType, Scenario, Simulation, TreasureId, TreasureSpec,
-};
+use sim_core::io::InvariantChecker;
+use sim_core::io::{Observer, ObserverError};
+use sim_core::spatial::{Grid, ObstacleMap, TreasureId};
+use sim_core::world::RoundReport;
+use sim_core::world::{Action, HomeBase, MapData, Outcome, RobotType, TreasureSpec};
 
 /// 48 m × 48 m: outer free space, a room with a door, a few pillars.
 fn rooms_map(treasures: Vec<TreasureSpec>) -> Arc<MapData> {
@@ -30,7 +31,34 @@ fn rooms_map(treasures: Vec<TreasureSpec>) -> Arc<MapData> {
     })
 }
 
-fn scenario(map: Arc<MapData>, seed: u64, rounds: u64, groups: Vec<(u32, RobotType, &str)>) -> Scenario {
+/// A scenario's parts, still open to changes (starts, rounds) before it is validated.
+struct Setup {
+    map: Arc<MapData>,
+    seed: u64,
+    rounds: u64,
+    types: Vec<RobotType>,
+    groups: Vec<Group>,
+}
+
+impl Setup {
+    fn build(self, registry: &StrategyRegistry) -> sim_core::Result<Scenario> {
+        let mut b = ScenarioBuilder::new(self.map)
+            .with_name("test")
+            .with_seed(self.seed)
+            .with_rounds(self.rounds)
+            .with_types(self.types);
+        for g in self.groups {
+            b = b.with_group(g);
+        }
+        b.build(registry)
+    }
+}
+
+fn new_sim(s: Setup, registry: &StrategyRegistry) -> sim_core::Result<Simulation> {
+    Simulation::new(s.build(registry)?)
+}
+
+fn scenario(map: Arc<MapData>, seed: u64, rounds: u64, groups: Vec<(u32, RobotType, &str)>) -> Setup {
     let mut types = Vec::new();
     let groups = groups
         .into_iter()
@@ -47,8 +75,7 @@ fn scenario(map: Arc<MapData>, seed: u64, rounds: u64, groups: Vec<(u32, RobotTy
             }
         })
         .collect();
-    Scenario {
-        name: "test".into(),
+    Setup {
         map,
         seed,
         rounds,
@@ -91,7 +118,7 @@ impl Observer for Trace {
 fn frontier_explores_the_rooms_map() {
     let map = rooms_map(Vec::new());
     let registry = StrategyRegistry::with_builtins();
-    let mut sim = Simulation::new(
+    let mut sim = new_sim(
         scenario(map, 1, 600, vec![(4, RobotType::explorer(), "frontier")]),
         &registry,
     )
@@ -110,7 +137,7 @@ fn rounds_to_explore(robots: u32, fraction: f64) -> u64 {
         2000,
         vec![(robots, RobotType::explorer(), "cooperative")],
     );
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     while sim.round() < 2000 {
         if sim.step().metrics.explored_fraction >= fraction {
             return sim.round();
@@ -154,7 +181,7 @@ fn excavators_and_transporters_deliver_every_treasure() {
             (2, RobotType::transporter(), "transporter"),
         ],
     );
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     let mut checker = InvariantChecker::new();
     checker.on_start(&sim).unwrap();
     while sim.round() < 3000 && sim.report().metrics.treasures_delivered < 3 {
@@ -189,7 +216,7 @@ fn results_do_not_depend_on_the_thread_count() {
                     (2, RobotType::transporter(), "transporter"),
                 ],
             );
-            let mut sim = Simulation::new(s, &StrategyRegistry::with_builtins()).unwrap();
+            let mut sim = new_sim(s, &StrategyRegistry::with_builtins()).unwrap();
             let mut t = Trace::default();
             run_checked(&mut sim, &mut [&mut t]);
             t
@@ -216,11 +243,11 @@ fn results_do_not_depend_on_the_thread_count() {
     );
     let (mut a, mut b) = (Trace::default(), Trace::default());
     run_checked(
-        &mut Simulation::new(s, &StrategyRegistry::with_builtins()).unwrap(),
+        &mut new_sim(s, &StrategyRegistry::with_builtins()).unwrap(),
         &mut [&mut a],
     );
     run_checked(
-        &mut Simulation::new(s2, &StrategyRegistry::with_builtins()).unwrap(),
+        &mut new_sim(s2, &StrategyRegistry::with_builtins()).unwrap(),
         &mut [&mut b],
     );
     assert_ne!(a.0, b.0);
@@ -252,12 +279,12 @@ fn cheat_registry() -> StrategyRegistry {
     });
     r.register("dig", "", |_| {
         Ok(Box::new(Cheat(|_| Action::Excavate {
-            treasure: TreasureId(0),
+            treasure: TreasureId::new(0),
         })))
     });
     r.register("hoard", "", |_| {
         Ok(Box::new(Cheat(|_| Action::Load {
-            treasure: TreasureId(0),
+            treasure: TreasureId::new(0),
         })))
     });
     r.register("unload_anywhere", "", |_| Ok(Box::new(Cheat(|_| Action::Unload))));
@@ -290,7 +317,7 @@ fn cheating_strategies_are_refused() {
             (1, kind, "nan"),
         ],
     );
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     let start: Vec<DVec2> = sim.robots().iter().map(|r| r.position).collect();
     run_checked(&mut sim, &mut []);
     let robots = sim.robots();
@@ -310,7 +337,7 @@ fn cheating_strategies_are_refused() {
     // A wall walker stops at the wall: start it west of the wall at x = 24.
     let mut s = scenario(map, 1, 30, vec![(1, RobotType::explorer(), "through_wall")]);
     s.groups[0].start = Start::At(DVec2::new(20.5, 15.5));
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     run_checked(&mut sim, &mut []);
     let x = sim.robots()[0].position.x;
     assert!(x <= 24.0 - 0.125 + 1e-9 && x > 23.0, "stopped at x = {x}");
@@ -325,7 +352,7 @@ fn hoarders_are_capped_by_capacity_and_digging_feeds_them() {
     let mut registry = cheat_registry();
     registry.register("dig_forever", "", |_| {
         Ok(Box::new(Cheat(|_| Action::Excavate {
-            treasure: TreasureId(0),
+            treasure: TreasureId::new(0),
         })))
     });
     let s = scenario(
@@ -337,14 +364,14 @@ fn hoarders_are_capped_by_capacity_and_digging_feeds_them() {
             (1, RobotType::transporter().with_carry_capacity(3), "hoard"),
         ],
     );
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     run_checked(&mut sim, &mut []);
     let t = sim.treasures()[0];
     assert_eq!(sim.robots()[1].load(), 3, "{t:?}");
     assert_eq!(t.buried, 100 - 2 * 30);
 }
 
-struct Events<'a>(&'a mut Vec<sim_core::Event>);
+struct Events<'a>(&'a mut Vec<sim_core::world::Event>);
 impl Observer for Events<'_> {
     fn on_round(&mut self, _: &Simulation, r: &RoundReport) -> Result<(), ObserverError> {
         self.0.extend(r.events.iter().cloned());
@@ -359,14 +386,14 @@ fn energy_runs_out_and_disables_for_good() {
     let kind = RobotType::explorer().with_energy_capacity(20.0);
     let mut s = scenario(rooms_map(Vec::new()), 5, 200, vec![(3, kind, "random_walk")]);
     s.groups[0].start = Start::At(DVec2::new(30.5, 5.5));
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     let mut events = Vec::new();
     run_checked(&mut sim, &mut [&mut Events(&mut events)]);
     assert!(sim.robots().iter().all(|r| !r.alive && r.energy == 0.0));
     assert_eq!(
         events
             .iter()
-            .filter(|e| matches!(e, sim_core::Event::RobotDisabled { .. }))
+            .filter(|e| matches!(e, sim_core::world::Event::RobotDisabled { .. }))
             .count(),
         3
     );
@@ -378,7 +405,7 @@ fn energy_management_brings_explorers_home_to_recharge() {
     let registry = StrategyRegistry::with_builtins();
     let kind = RobotType::explorer().with_energy_capacity(120.0);
     let s = scenario(rooms_map(Vec::new()), 9, 800, vec![(2, kind, "frontier")]);
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     run_checked(&mut sim, &mut []);
     assert!(
         sim.robots().iter().all(|r| r.alive),
@@ -394,15 +421,15 @@ fn team_groups_form_and_follow_their_leader() {
     let registry = StrategyRegistry::with_builtins();
     let mut s = scenario(rooms_map(Vec::new()), 4, 120, vec![(4, RobotType::explorer(), "team")]);
     s.rounds = 120;
-    let mut sim = Simulation::new(s, &registry).unwrap();
+    let mut sim = new_sim(s, &registry).unwrap();
     let mut events = Vec::new();
     run_checked(&mut sim, &mut [&mut Events(&mut events)]);
     // Robots 1–3 hear robot 0 (lowest id in range) in round 2 and join its group.
     for follower in 1..4 {
         assert!(
-            events.contains(&sim_core::Event::GroupJoined {
-                robot: sim_core::RobotId(follower),
-                leader: sim_core::RobotId(0),
+            events.contains(&sim_core::world::Event::GroupJoined {
+                robot: sim_core::spatial::RobotId::new(follower),
+                leader: sim_core::spatial::RobotId::new(0),
             }),
             "{events:?}"
         );

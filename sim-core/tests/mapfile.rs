@@ -5,10 +5,12 @@ use std::path::Path;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_core::geometry::Aabb;
+use sim_core::Error;
 use sim_core::glam::DVec2;
-use sim_core::mapfile::{MAGIC, VERSION};
-use sim_core::{Error, Grid, HomeBase, MapData, ObstacleMap, TreasureSpec};
+use sim_core::spatial::Aabb;
+use sim_core::spatial::{Grid, ObstacleMap};
+use sim_core::world::{HomeBase, MapData, TreasureSpec};
+use sim_core::world::{MAGIC, VERSION};
 
 fn random_map(seed: u64, w: u32, h: u32) -> MapData {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

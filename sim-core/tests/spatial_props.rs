@@ -8,13 +8,13 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_core::geometry::{Aabb, Capsule, Disc, Overlap, Shape, clip_line};
 use sim_core::glam::DVec2;
-use sim_core::quadtree::build::{BitGrid, Region};
-use sim_core::quadtree::update::PartialCells;
-use sim_core::quadtree::{RegionQuadtree, Square};
-use sim_core::treasure_index::TreasureIndex;
-use sim_core::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex, TreasureId};
+use sim_core::spatial::PartialCells;
+use sim_core::spatial::TreasureIndex;
+use sim_core::spatial::{Aabb, Capsule, Disc, Overlap, Shape, clip_line};
+use sim_core::spatial::{BitGrid, Region};
+use sim_core::spatial::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex, TreasureId};
+use sim_core::spatial::{RegionQuadtree, Square};
 
 fn config(cases: u32) -> Config {
     Config {
@@ -358,7 +358,7 @@ proptest! {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let spread = rng.random_range(1.0..500.0);
         let robots: Vec<(RobotId, DVec2)> = (0..n)
-            .map(|i| (RobotId(i as u32), DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread))))
+            .map(|i| (RobotId::new(i as u32), DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread))))
             .collect();
         let mut index = RobotIndex::new();
         // Rebuilt twice, as every round does, to catch stale state.

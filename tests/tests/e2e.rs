@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use clap::Parser;
+use sim_core::agent::StrategyRegistry;
+use sim_core::engine::Simulation;
 use sim_core::glam::DVec2;
-use sim_core::strategy::StrategyRegistry;
-use sim_core::{Grid, HomeBase, MapData, ObstacleMap, Simulation};
+use sim_core::spatial::{Grid, ObstacleMap};
+use sim_core::world::{HomeBase, MapData};
 use viewer_bridge::cli::{Cli, Command, RunArgs};
 use viewer_bridge::run::execute;
 
@@ -47,7 +49,7 @@ fn the_demo_config_runs_and_writes_its_csv_outputs() {
             r.to_str().unwrap(),
         ],
     )
-    .resolve(&registry)
+    .resolve()
     .unwrap();
     let summary = execute(&run, &registry, &mut []).unwrap();
     assert_eq!(summary.rounds, 60);
@@ -99,7 +101,7 @@ fn same_seed_same_csv_whatever_the_thread_count() {
             &repo().join("configs/demo.xml"),
             &["--rounds", "80", "--threads", &t, "--metrics", out.to_str().unwrap()],
         )
-        .resolve(&registry)
+        .resolve()
         .unwrap();
         execute(&run, &registry, &mut []).unwrap();
         std::fs::read(out).unwrap()
@@ -113,7 +115,7 @@ fn config_error(xml: &str, dir: &Path) -> String {
     std::fs::write(&path, xml).unwrap();
     let registry = StrategyRegistry::with_builtins();
     let result = args(&path, &[])
-        .resolve(&registry)
+        .resolve()
         .and_then(|run| execute(&run, &registry, &mut []));
     format!("{:#}", result.expect_err("config should be refused"))
 }
@@ -249,22 +251,15 @@ fn a_corrupt_map_file_is_a_clear_error() {
 fn rounds_to_explore_rooms(strategy: &str, count: u32, budget: u64) -> Option<u64> {
     let map = Arc::new(MapData::load(&repo().join("maps/rooms.stmap")).unwrap());
     let registry = StrategyRegistry::with_builtins();
-    let scenario = sim_core::Scenario {
-        name: "rooms".into(),
-        map,
-        seed: 1,
-        rounds: budget,
-        types: vec![sim_core::RobotType::explorer()],
-        groups: vec![sim_core::sim::Group {
-            name: "explorers".into(),
-            count,
-            type_index: 0,
-            strategy: strategy.into(),
-            params: sim_core::strategy::Params::default(),
-            start: sim_core::sim::Start::Home,
-        }],
-    };
-    let mut sim = Simulation::new(scenario, &registry).unwrap();
+    let scenario = sim_core::engine::ScenarioBuilder::new(map)
+        .with_name("rooms")
+        .with_seed(1)
+        .with_rounds(budget)
+        .with_types(vec![sim_core::world::RobotType::explorer()])
+        .with_group(sim_core::engine::Group::new(strategy, 0, count).with_name("explorers"))
+        .build(&registry)
+        .unwrap();
+    let mut sim = Simulation::new(scenario).unwrap();
     while sim.round() < budget {
         if sim.step().metrics.explored_fraction >= 0.95 {
             return Some(sim.round());

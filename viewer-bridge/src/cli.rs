@@ -6,8 +6,8 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use sim_core::config::SimConfig;
-use sim_core::strategy::StrategyRegistry;
+use sim_core::agent::StrategyRegistry;
+use sim_core::io::SimConfig;
 
 use crate::rerun_observer::LogOptions;
 use crate::run::{RunConfig, execute};
@@ -134,10 +134,10 @@ pub struct RunArgs {
 
 impl RunArgs {
     /// Resolve into a validated run config (the config file is parsed and checked here).
-    pub fn resolve(self, registry: &StrategyRegistry) -> Result<RunConfig> {
+    pub fn resolve(self) -> Result<RunConfig> {
         let mut config = SimConfig::load(&self.config)?;
         if let Some(map) = self.map {
-            config.map_path = map;
+            config = config.with_map_argument(map);
         }
         if let Some(r) = self.rounds {
             config.rounds = r;
@@ -148,7 +148,6 @@ impl RunArgs {
         if self.threads == Some(0) {
             bail!("--threads must be at least 1");
         }
-        config.check_strategies(registry)?;
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
         let default_rrd = config
@@ -210,7 +209,7 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
         Command::Run(args) => {
             let quiet = args.quiet;
             let config_path = args.config.clone();
-            let run = args.resolve(registry)?;
+            let run = args.resolve()?;
             let summary =
                 execute(&run, registry, &mut []).with_context(|| format!("running {}", config_path.display()))?;
             if !quiet {

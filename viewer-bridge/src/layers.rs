@@ -6,12 +6,13 @@
 //! +y is north. Every 2D entity is therefore logged at `(x, -y)` ([`to_2d`]) so that north is
 //! up on screen; the 3D view (`world3d/…`) uses the simulation's coordinates unchanged.
 
-use sim_core::geometry::Aabb;
 use sim_core::glam::DVec2;
-use sim_core::grid::Grid;
-use sim_core::mapfile::HomeBase;
-use sim_core::quadtree::RegionQuadtree;
-use sim_core::{MapData, ObstacleMap};
+use sim_core::spatial::Aabb;
+use sim_core::spatial::Grid;
+use sim_core::spatial::ObstacleMap;
+use sim_core::spatial::RegionQuadtree;
+use sim_core::world::HomeBase;
+use sim_core::world::MapData;
 
 /// Largest number of blocked leaves logged as exact `Boxes2D`. Above it only the raster is
 /// logged: DESIGN.md measured 1M boxes at ~880 MB of viewer memory and a sluggish viewer,
@@ -369,8 +370,8 @@ pub fn treasure_radius(remaining: u32, cell_m: f64) -> f32 {
 #[cfg(test)]
 mod tests {
 
-    use sim_core::grid::Grid;
-    use sim_core::quadtree::RegionQuadtree;
+    use sim_core::spatial::Grid;
+    use sim_core::spatial::RegionQuadtree;
 
     use super::*;
 

@@ -7,7 +7,7 @@
 //! command line for free:
 //!
 //! ```no_run
-//! use sim_core::strategy::StrategyRegistry;
+//! use sim_core::agent::StrategyRegistry;
 //!
 //! fn main() -> std::process::ExitCode {
 //!     let mut registry = StrategyRegistry::with_builtins();

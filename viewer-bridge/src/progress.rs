@@ -1,8 +1,9 @@
 //! A progress bar observer (drawn only on a terminal).
 
 use indicatif::{ProgressBar, ProgressStyle};
-use sim_core::Simulation;
-use sim_core::observer::{Observer, ObserverError, RoundReport};
+use sim_core::engine::Simulation;
+use sim_core::io::{Observer, ObserverError};
+use sim_core::world::RoundReport;
 
 /// Shows rounds done, rate and the explored fraction.
 pub struct Progress {

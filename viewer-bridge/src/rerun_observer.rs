@@ -19,11 +19,12 @@
 //! The simulation thread copies each round into a frame; a logging thread builds the
 //! archetypes (see [`RerunObserver`]).
 
-use sim_core::Simulation;
-use sim_core::geometry::Aabb;
+use sim_core::engine::Simulation;
 use sim_core::glam::DVec2;
-use sim_core::model::Outcome;
-use sim_core::observer::{Event, Link, Observer, ObserverError, RoundReport};
+use sim_core::io::{Observer, ObserverError};
+use sim_core::spatial::Aabb;
+use sim_core::world::Outcome;
+use sim_core::world::{Event, Link, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
 
@@ -231,7 +232,7 @@ impl RerunObserver {
             .robots()
             .iter()
             .map(|r| RobotRow {
-                id: r.id.0,
+                id: r.id.get(),
                 type_index: r.type_index,
                 class: class_of(sim, r.type_index, r.alive),
                 alive: r.alive,
@@ -295,7 +296,7 @@ impl RerunObserver {
         {
             self.last_known_round = Some(round);
             for robot in sim.robots() {
-                let i = robot.id.0 as usize;
+                let i = robot.id.index();
                 if !self.known_dirty.get(i).copied().unwrap_or(false) {
                     continue;
                 }
@@ -305,7 +306,7 @@ impl RerunObserver {
                     if self.known_logged[i] != boxes {
                         self.known_logged[i].clone_from(&boxes);
                         known.push(KnownRegion {
-                            robot: robot.id.0,
+                            robot: robot.id.get(),
                             class: class_of(sim, robot.type_index, true),
                             boxes,
                         });
@@ -435,7 +436,7 @@ pub fn sample_links(links: &[Link], max: usize) -> Vec<(u32, u32)> {
     let mut pairs: Vec<(u32, u32)> = links
         .iter()
         .step_by(stride)
-        .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
+        .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
         .collect();
     pairs.sort_unstable();
     pairs.dedup();
@@ -769,7 +770,7 @@ impl Observer for RerunObserver {
     fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
         let t0 = std::time::Instant::now();
         for id in &report.known_changed {
-            if let Some(d) = self.known_dirty.get_mut(id.0 as usize) {
+            if let Some(d) = self.known_dirty.get_mut(id.index()) {
                 *d = true;
             }
         }
@@ -841,13 +842,13 @@ const FINISH_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
 #[cfg(test)]
 mod tests {
     use super::*;
-    use sim_core::RobotId;
+    use sim_core::spatial::RobotId;
     use std::collections::BTreeSet;
 
     fn link(from: u32, to: u32) -> Link {
         Link {
-            from: RobotId(from),
-            to: RobotId(to),
+            from: RobotId::new(from),
+            to: RobotId::new(to),
         }
     }
 
@@ -872,7 +873,7 @@ mod tests {
         let links = all_to_all(200);
         let all: BTreeSet<(u32, u32)> = links
             .iter()
-            .map(|l| (l.from.0.min(l.to.0), l.from.0.max(l.to.0)))
+            .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
             .collect();
         assert_eq!(all.len(), 19_900);
         let sample = sample_links(&links, 1_000);

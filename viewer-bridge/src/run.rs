@@ -3,15 +3,15 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
-use sim_core::config::SimConfig;
-use sim_core::metrics::{MetricsCsv, write_robot_stats};
-use sim_core::observer::Observer;
-use sim_core::strategy::StrategyRegistry;
-use sim_core::{MapData, Simulation};
+use sim_core::agent::StrategyRegistry;
+use sim_core::engine::Simulation;
+use sim_core::io::Observer;
+use sim_core::io::SimConfig;
+use sim_core::io::{MetricsCsv, write_robot_stats};
+use sim_core::world::MapData;
 
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
@@ -46,7 +46,7 @@ pub struct Summary {
     /// Robots.
     pub robots: usize,
     /// Final metrics.
-    pub metrics: sim_core::metrics::RoundMetrics,
+    pub metrics: sim_core::world::RoundMetrics,
     /// Wall time of the rounds (set-up excluded).
     pub elapsed: Duration,
     /// Wall time of loading and set-up.
@@ -124,10 +124,8 @@ impl std::fmt::Display for Summary {
 /// Run a resolved config with the built-in observers plus `extra` (viewers).
 pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
     let started = Instant::now();
-    let map: MapData = run.config.load_map()?;
-    let scenario = run.config.clone().into_scenario(Arc::new(map), registry)?;
-    let mut sim =
-        Simulation::new(scenario, registry).with_context(|| format!("setting up {}", run.config.path.display()))?;
+    let scenario = run.config.scenario(registry)?;
+    let mut sim = Simulation::new(scenario).with_context(|| format!("setting up {}", run.config.path.display()))?;
     let setup = started.elapsed();
 
     let mut metrics = match &run.metrics {
@@ -173,7 +171,7 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
     drop(observers);
     // Whatever happened, keep the outputs of the rounds that were played.
     if let Some(m) = metrics.as_mut() {
-        sim_core::observer::Observer::on_finish(m, &sim).ok();
+        sim_core::io::Observer::on_finish(m, &sim).ok();
     }
     if let Some(p) = &run.robot_stats {
         let file = File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?;
@@ -219,7 +217,7 @@ fn run_rounds(
     sim: &mut Simulation,
     pool: &rayon::ThreadPool,
     observers: &mut [&mut dyn Observer],
-) -> Result<(), sim_core::observer::ObserverError> {
+) -> Result<(), sim_core::io::ObserverError> {
     for o in observers.iter_mut() {
         o.on_start(sim)?;
     }

@@ -8,8 +8,8 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use editor::import::{ImportOptions, Unknown};
 use editor::place::{PlaceOptions, Spread};
 use editor::preview::PreviewOptions;
-use sim_core::MapData;
 use sim_core::glam::DVec2;
+use sim_core::world::MapData;
 
 #[derive(Parser)]
 #[command(
@@ -256,7 +256,7 @@ fn save(map: &MapData, path: &Path) -> Result<()> {
     Ok(())
 }
 
-fn with_placement(obstacles: sim_core::ObstacleMap, place: &PlaceArgs) -> Result<MapData> {
+fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) -> Result<MapData> {
     let home = editor::place::auto_home(&obstacles, place.home_radius_m)?;
     let mut map = MapData {
         obstacles,
@@ -348,7 +348,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn generate(args: &GenerateArgs) -> Result<sim_core::ObstacleMap> {
+fn generate(args: &GenerateArgs) -> Result<sim_core::spatial::ObstacleMap> {
     use editor::generate::{GenerateOptions, Kind};
     let kind = match args.kind {
         GeneratorArg::Noise => Kind::Noise,

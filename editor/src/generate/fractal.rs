@@ -11,9 +11,9 @@
 use noise::{Fbm, MultiFractal, NoiseFn, Perlin};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_core::ObstacleMap;
-use sim_core::quadtree::Square;
-use sim_core::quadtree::build::Region;
+use sim_core::spatial::ObstacleMap;
+use sim_core::spatial::Region;
+use sim_core::spatial::Square;
 
 use super::GenerateOptions;
 use crate::Result;

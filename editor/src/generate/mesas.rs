@@ -11,8 +11,8 @@ use std::f64::consts::TAU;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_core::ObstacleMap;
 use sim_core::glam::DVec2;
+use sim_core::spatial::ObstacleMap;
 
 use super::GenerateOptions;
 use crate::progress::Progress;

@@ -9,7 +9,7 @@ pub mod mesas;
 pub mod raster_gens;
 
 use sim_core::glam::DVec2;
-use sim_core::{Grid, ObstacleMap};
+use sim_core::spatial::{Grid, ObstacleMap};
 
 use crate::{EditorError, Result};
 

@@ -3,7 +3,7 @@
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_core::ObstacleMap;
+use sim_core::spatial::ObstacleMap;
 
 use super::{GenerateOptions, cell_hash, unit};
 use crate::raster::{Cells, check_raster_size};

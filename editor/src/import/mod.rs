@@ -9,8 +9,8 @@ pub mod ros;
 
 use std::path::Path;
 
-use sim_core::ObstacleMap;
 use sim_core::glam::DVec2;
+use sim_core::spatial::ObstacleMap;
 
 use crate::{EditorError, Result};
 

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use sim_core::ObstacleMap;
+use sim_core::spatial::ObstacleMap;
 
 use super::{ImportOptions, read};
 use crate::raster::{check_raster_size, grid, map_from_top_rows};

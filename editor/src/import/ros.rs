@@ -12,8 +12,8 @@
 use std::path::Path;
 
 use serde::Deserialize;
-use sim_core::ObstacleMap;
 use sim_core::glam::DVec2;
+use sim_core::spatial::ObstacleMap;
 
 use super::bitmap::load_image;
 use super::{ImportOptions, Unknown, read};

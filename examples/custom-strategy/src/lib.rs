@@ -6,10 +6,9 @@
 //! into a complete `smartteams`-style command line (`cargo run -p custom-strategy -- run
 //! CONFIG.xml`), where configs can use `strategy="treasure_seeker"`.
 
-use sim_core::Action;
+use sim_core::agent::{CollisionAvoidance, Ctx, Needs, Params, Strategy, StrategyRegistry, Tactic};
 use sim_core::glam::DVec2;
-use sim_core::strategy::{Ctx, Needs, Params, Strategy, StrategyRegistry};
-use sim_core::tactics::{CollisionAvoidance, Tactic};
+use sim_core::world::Action;
 
 /// The paper's `MyStrategy`: go to the first treasure in view, else move north.
 #[derive(Default)]
@@ -46,7 +45,7 @@ pub fn register(registry: &mut StrategyRegistry) {
         "example: the paper's MyStrategy, from a user crate",
         |p: &Params| {
             p.only(&["heading_deg"])?;
-            let deg = p.f64_or("heading_deg", 90.0)?;
+            let deg = p.f64_in("heading_deg", 90.0, -360.0..=360.0)?;
             Ok(Box::new(TreasureSeeker {
                 coll: CollisionAvoidance::default(),
                 heading: DVec2::from_angle(deg.to_radians()),
@@ -57,10 +56,9 @@ pub fn register(registry: &mut StrategyRegistry) {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::Arc;
-
-    use sim_core::sim::{Group, Start};
-    use sim_core::{Grid, HomeBase, MapData, ObstacleMap, RobotType, Scenario, Simulation, TreasureSpec};
+    use sim_core::engine::{Group, ScenarioBuilder, Simulation};
+    use sim_core::spatial::{Grid, ObstacleMap};
+    use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
 
     use super::*;
 
@@ -81,22 +79,15 @@ mod tests {
         let mut registry = StrategyRegistry::with_builtins();
         register(&mut registry);
         assert!(registry.names().any(|n| n == "treasure_seeker"));
-        let scenario = Scenario {
-            name: "seek".into(),
-            map: Arc::new(map),
-            seed: 1,
-            rounds: 60,
-            types: vec![RobotType::explorer()],
-            groups: vec![Group {
-                name: "seekers".into(),
-                count: 1,
-                type_index: 0,
-                strategy: "treasure_seeker".into(),
-                params: Params::default(),
-                start: Start::Home,
-            }],
-        };
-        let mut sim = Simulation::new(scenario, &registry).unwrap();
+        let scenario = ScenarioBuilder::new(map)
+            .with_name("seek")
+            .with_seed(1)
+            .with_rounds(60)
+            .with_types(vec![RobotType::explorer()])
+            .with_group(Group::new("treasure_seeker", 0, 1).with_name("seekers"))
+            .build(&registry)
+            .unwrap();
+        let mut sim = Simulation::new(scenario).unwrap();
         sim.run(&mut []).unwrap();
         // North at 1 m a round from y = 4 sees the treasure (view 6 m) by y = 34, then walks
         // to it: it ends within reach.

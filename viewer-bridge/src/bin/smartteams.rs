@@ -1,5 +1,5 @@
 //! `smartteams`: run Smart Teams simulations. All logic lives in the library.
 
 fn main() -> std::process::ExitCode {
-    viewer_bridge::cli::main_with(&sim_core::strategy::StrategyRegistry::with_builtins())
+    viewer_bridge::cli::main_with(&sim_core::agent::StrategyRegistry::with_builtins())
 }

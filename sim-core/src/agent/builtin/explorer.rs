@@ -1,0 +1,131 @@
+//! Frontier exploration and knowledge sharing: the core of `frontier`, `cooperative`, `team`
+//! and the workers.
+
+use glam::DVec2;
+
+use super::{MAX_DISTANCE_M, SHARE_EVERY};
+use crate::Result;
+use crate::agent::{BoundaryFollowing, CollisionAvoidance, Ctx, EnergyManagement, Navigator, Params, Tactic};
+use crate::spatial::KnownMap;
+use crate::world::{Action, Payload, Sighting};
+
+/// How a cooperative robot shares what it knows.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Sharing {
+    pub(super) every_rounds: u64,
+    pub(super) avoid_radius_m: f64,
+}
+
+impl Sharing {
+    pub(super) fn from_params(p: &Params) -> Result<Self> {
+        let every_rounds = p.u64_in("share_every", 10, SHARE_EVERY)?;
+        let avoid_radius_m = p.f64_in("avoid_radius_m", 5.0, 0.0..=MAX_DISTANCE_M)?;
+        Ok(Self {
+            every_rounds,
+            avoid_radius_m,
+        })
+    }
+}
+
+/// Exploration of the nearest frontier, with energy management and collision avoidance.
+#[derive(Default)]
+pub(super) struct Explorer {
+    pub(super) nav: Navigator,
+    coll: CollisionAvoidance,
+    energy: EnergyManagement,
+    target: Option<DVec2>,
+    /// Round of the last failed frontier search (retried every 20 rounds).
+    failed_at: Option<u64>,
+}
+
+impl Explorer {
+    /// Tactics that override everything: energy first, then collisions.
+    pub(super) fn reflexes(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        if let Some(a) = self.energy.suggest(ctx) {
+            ctx.set_goal(Some(ctx.home().center()));
+            return Some(a);
+        }
+        if let Some(a) = self.coll.suggest(ctx) {
+            self.nav.clear();
+            return Some(a);
+        }
+        None
+    }
+
+    /// One step of frontier exploration; `avoid` are goals taken by others.
+    pub(super) fn explore(&mut self, ctx: &mut Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Action {
+        // Keep walking to a frontier target even once it is seen: the way on reveals more in
+        // the same direction, and a new search only every few metres keeps planning cheap.
+        // Re-plan on arrival, when the route is gone, or when the target was revealed from
+        // close by.
+        let p = ctx.position();
+        let revealed_near = self
+            .target
+            .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
+        let need_plan = self.nav.is_idle() || revealed_near;
+        if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
+            if let Some(route) = Navigator::frontier_route(ctx, avoid, avoid_radius_m)
+                .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
+            {
+                self.target = route.waypoints.last().copied();
+                self.nav.follow(route);
+                self.failed_at = None;
+            } else {
+                self.target = None;
+                self.nav.clear();
+                self.failed_at = Some(ctx.round);
+            }
+        }
+        ctx.set_goal(self.target);
+        if let Some(a) = self.nav.step(ctx) {
+            return a;
+        }
+        // Nothing left to explore: go home and wait there.
+        let home = ctx.home().center();
+        if ctx.home().contains(ctx.position()) {
+            Action::Idle
+        } else if self.nav.go_to(ctx, home) {
+            self.nav.step(ctx).unwrap_or(Action::Idle)
+        } else {
+            let dir = BoundaryFollowing::heading(ctx, home - ctx.position()).unwrap_or(DVec2::ZERO);
+            ctx.move_by(dir)
+        }
+    }
+}
+
+/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by
+/// half since it was last shared, and in any case every fifth time (maps of a crowd are
+/// near-identical, and merging them costs receivers time for nothing), and all remembered
+/// sightings. Other rounds: fresh
+/// sightings, if any.
+pub(super) fn share_knowledge(ctx: &mut Ctx, every: u64, shared_area: &mut f64) {
+    if (ctx.round + u64::from(ctx.me.id.get())).is_multiple_of(every) {
+        let area = ctx.known().map_or(0.0, KnownMap::known_area_m2);
+        // Also every fifth time regardless, so robots met late still get the whole map.
+        let refresh = ((ctx.round + u64::from(ctx.me.id.get())) / every).is_multiple_of(5);
+        if area > 1.5 * *shared_area || (refresh && area > 0.0) {
+            *shared_area = area;
+            ctx.broadcast_known_map();
+        }
+        let all: Vec<Sighting> = ctx.data.treasures.iter().map(|(s, _)| *s).collect();
+        if !all.is_empty() {
+            ctx.broadcast(Payload::Sightings(all));
+        }
+    } else {
+        let round = ctx.round;
+        let fresh: Vec<Sighting> = ctx
+            .treasures_in_view()
+            .iter()
+            .map(|t| Sighting {
+                treasure: t.id,
+                position: t.position,
+                buried: t.buried,
+                loose: t.loose,
+                round,
+            })
+            .collect();
+        if !fresh.is_empty() {
+            ctx.broadcast(Payload::Sightings(fresh));
+        }
+    }
+}

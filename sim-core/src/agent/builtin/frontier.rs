@@ -1,0 +1,84 @@
+//! `frontier` and `cooperative`.
+
+use std::collections::BTreeMap;
+
+use glam::DVec2;
+
+use super::explorer::{Explorer, Sharing, share_knowledge};
+use crate::agent::{Ctx, Needs, Strategy};
+use crate::world::{Action, Payload};
+
+/// `frontier` and `cooperative`.
+pub(super) struct Frontier {
+    core: Explorer,
+    sharing: Option<Sharing>,
+    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds).
+    claims: BTreeMap<u32, (DVec2, u64)>,
+    announced: Option<DVec2>,
+    shared_area: f64,
+}
+
+impl Frontier {
+    pub(super) fn new(sharing: Option<Sharing>) -> Self {
+        Self {
+            core: Explorer::default(),
+            sharing,
+            claims: BTreeMap::new(),
+            announced: None,
+            shared_area: 0.0,
+        }
+    }
+}
+
+impl Strategy for Frontier {
+    fn needs(&self) -> Needs {
+        Needs {
+            // Other robots are never looked at: the physical unit prevents collisions and
+            // the collision tactic handles being stuck.
+            robots: false,
+            treasures: self.sharing.is_some(),
+            messages: self.sharing.is_some(),
+            ..Needs::ALL
+        }
+    }
+
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        let mut avoid = Vec::new();
+        let mut radius = 0.0;
+        if let Some(share) = self.sharing {
+            share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
+            radius = share.avoid_radius_m;
+            // Only claims near enough to matter are kept, so crowds stay cheap.
+            let near = (4.0 * radius).max(20.0);
+            let p = ctx.position();
+            for m in ctx.messages() {
+                if let Payload::Position { goal, .. } = *m.payload {
+                    match goal {
+                        Some(g) if g.distance(p) <= near => self.claims.insert(m.from.get(), (g, ctx.round)),
+                        _ => self.claims.remove(&m.from.get()),
+                    };
+                }
+            }
+            let round = ctx.round;
+            if round.is_multiple_of(10) {
+                self.claims
+                    .retain(|_, (g, heard)| round <= *heard + 50 && g.distance(p) <= near);
+            }
+            avoid.extend(self.claims.values().map(|c| c.0));
+        }
+        if let Some(a) = self.core.reflexes(ctx) {
+            return a;
+        }
+        let action = self.core.explore(ctx, &avoid, radius);
+        // Announce a goal only when it changes: claims stay cheap in crowds.
+        if self.sharing.is_some() && ctx.goal() != self.announced {
+            self.announced = ctx.goal();
+            let goal = ctx.goal();
+            ctx.broadcast(Payload::Position {
+                position: ctx.position(),
+                goal,
+            });
+        }
+        action
+    }
+}

@@ -1,0 +1,78 @@
+//! The built-in strategies: `random_walk`, `frontier`, `cooperative`, `team`, `excavator`,
+//! `transporter`. They use only sim-core's public API (`crate::agent`, `crate::world`,
+//! `crate::spatial`), so a strategy in another crate can do all that they do.
+
+mod explorer;
+mod frontier;
+mod random_walk;
+mod team;
+mod worker;
+
+use std::ops::RangeInclusive;
+
+use crate::agent::StrategyRegistry;
+
+/// Longest distance a strategy parameter may name (1,000 km: beyond any map).
+const MAX_DISTANCE_M: f64 = 1e6;
+/// Most rounds a strategy parameter may name (a billion: beyond any run, and far from
+/// overflowing when added to a round number).
+const MAX_ROUNDS: u64 = 1_000_000_000;
+/// Sharing periods, in rounds.
+const SHARE_EVERY: RangeInclusive<u64> = 1..=MAX_ROUNDS;
+
+impl StrategyRegistry {
+    /// A registry with the built-in strategies.
+    pub fn with_builtins() -> Self {
+        let mut r = Self::empty();
+        register_builtins(&mut r);
+        r
+    }
+}
+
+impl Default for StrategyRegistry {
+    /// The built-in strategies.
+    fn default() -> Self {
+        Self::with_builtins()
+    }
+}
+
+/// Register every built-in strategy.
+fn register_builtins(r: &mut StrategyRegistry) {
+    r.register(
+        "random_walk",
+        "walks straight, turning at random and when blocked",
+        |p| Ok(Box::new(random_walk::RandomWalk::from_params(p)?)),
+    );
+    r.register(
+        "frontier",
+        "frontier exploration: walks to the nearest boundary between known free space and the unknown",
+        |p| {
+            p.only(&[])?;
+            Ok(Box::new(frontier::Frontier::new(None)))
+        },
+    );
+    r.register(
+        "cooperative",
+        "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals",
+        |p| {
+            p.only(&["share_every", "avoid_radius_m"])?;
+            let share = explorer::Sharing::from_params(p)?;
+            Ok(Box::new(frontier::Frontier::new(Some(share))))
+        },
+    );
+    r.register(
+        "team",
+        "explorers in groups: the lowest id in radio range leads (frontier exploration), the others follow it",
+        |p| Ok(Box::new(team::TeamExplorer::from_params(p)?)),
+    );
+    r.register(
+        "excavator",
+        "goes to known treasures and digs them out; explores when it knows none",
+        |p| Ok(Box::new(worker::Excavator::from_params(p)?)),
+    );
+    r.register(
+        "transporter",
+        "fetches dug units (waiting at treasures being dug) and delivers them home",
+        |p| Ok(Box::new(worker::Transporter::from_params(p)?)),
+    );
+}

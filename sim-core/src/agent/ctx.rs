@@ -1,0 +1,244 @@
+//! [`Ctx`]: everything a strategy sees and may do in one round.
+
+use std::sync::Arc;
+
+use glam::DVec2;
+use rand_chacha::ChaCha8Rng;
+
+use crate::agent::perception::{DataModule, Perception, SeenRobot, SeenTreasure};
+use crate::spatial::{KnownMap, NavGraph, ObstacleMap, RobotId};
+use crate::world::{Action, HomeBase, Message, Outcome, Payload, Recipient, Robot, RobotType, StrategyEvent};
+
+/// The unchanging world a strategy may consult.
+#[derive(Clone, Copy, Debug)]
+pub struct WorldView<'a> {
+    obstacles: &'a ObstacleMap,
+    nav: &'a NavGraph,
+    home: HomeBase,
+    types: &'a [RobotType],
+}
+
+impl<'a> WorldView<'a> {
+    /// A view of the kernel's obstacles (a strategy reads them only inside its known region,
+    /// through [`Ctx`]), the navigation graph, the home base and the run's robot types.
+    pub fn new(obstacles: &'a ObstacleMap, nav: &'a NavGraph, home: HomeBase, types: &'a [RobotType]) -> Self {
+        Self {
+            obstacles,
+            nav,
+            home,
+            types,
+        }
+    }
+}
+
+/// What a strategy leaves behind in a round besides its action: messages to send, the goal
+/// and path it publishes, and events for the log. The kernel reads and clears it.
+#[derive(Clone, Debug, Default)]
+pub struct StrategyOutput {
+    outbox: Vec<(Recipient, Payload)>,
+    goal: Option<DVec2>,
+    path: Vec<DVec2>,
+    events: Vec<StrategyEvent>,
+}
+
+impl StrategyOutput {
+    /// Messages asked for this round, in order.
+    pub fn outbox(&self) -> &[(Recipient, Payload)] {
+        &self.outbox
+    }
+    /// Take the messages (leaves the outbox empty).
+    pub fn take_outbox(&mut self) -> Vec<(Recipient, Payload)> {
+        std::mem::take(&mut self.outbox)
+    }
+    /// The published goal (kept from round to round until changed).
+    pub fn goal(&self) -> Option<DVec2> {
+        self.goal
+    }
+    /// The published path (kept from round to round until changed).
+    pub fn path(&self) -> &[DVec2] {
+        &self.path
+    }
+    /// Events reported this round.
+    pub fn events(&self) -> &[StrategyEvent] {
+        &self.events
+    }
+    /// Forget this round's messages and events (goal and path stay).
+    pub fn begin_round(&mut self) {
+        self.outbox.clear();
+        self.events.clear();
+    }
+}
+
+/// One robot's mind as the kernel keeps it: this round's perception, the data module and
+/// what the strategy left behind.
+#[derive(Clone, Debug)]
+pub struct Mind {
+    /// This round's perceptions.
+    pub perception: Perception,
+    /// What the robot remembers.
+    pub data: DataModule,
+    /// Messages, goal, path and events from the strategy.
+    pub output: StrategyOutput,
+}
+
+impl Mind {
+    /// An empty mind around a data module.
+    pub fn new(data: DataModule) -> Self {
+        Self {
+            perception: Perception::default(),
+            data,
+            output: StrategyOutput::default(),
+        }
+    }
+}
+
+/// Everything a strategy sees and may do in one round.
+pub struct Ctx<'a> {
+    /// Current round (1-based).
+    pub round: u64,
+    /// This robot's state at the start of the round.
+    pub me: &'a Robot,
+    /// This robot's type.
+    pub kind: &'a RobotType,
+    perception: &'a Perception,
+    /// The data module.
+    pub data: &'a mut DataModule,
+    world: WorldView<'a>,
+    /// Random numbers, seeded from (run seed, robot, round).
+    pub rng: ChaCha8Rng,
+    out: &'a mut StrategyOutput,
+}
+
+impl<'a> Ctx<'a> {
+    /// The context of robot `me` (of type `kind`) in `round`, over `world`, with its `mind`
+    /// and random generator. The kernel builds one per robot and round; tests build their
+    /// own (see [`TestWorld`](crate::agent::TestWorld)).
+    pub fn new(
+        round: u64,
+        me: &'a Robot,
+        kind: &'a RobotType,
+        world: WorldView<'a>,
+        rng: ChaCha8Rng,
+        mind: &'a mut Mind,
+    ) -> Self {
+        let Mind {
+            perception,
+            data,
+            output,
+        } = mind;
+        Self {
+            round,
+            me,
+            kind,
+            perception,
+            data,
+            world,
+            rng,
+            out: output,
+        }
+    }
+
+    /// Robots in view (empty unless the strategy needs robots).
+    pub fn robots_in_view(&self) -> &'a [SeenRobot] {
+        &self.perception.robots
+    }
+    /// Treasures in view (empty unless the strategy needs treasures).
+    pub fn treasures_in_view(&self) -> &'a [SeenTreasure] {
+        &self.perception.treasures
+    }
+    /// Messages delivered this round (empty unless the strategy needs messages).
+    pub fn messages(&self) -> &'a [Message] {
+        &self.perception.inbox
+    }
+    /// Own position.
+    pub fn position(&self) -> DVec2 {
+        self.me.position
+    }
+    /// The home base.
+    pub fn home(&self) -> HomeBase {
+        self.world.home
+    }
+    /// The run's robot types.
+    pub fn types(&self) -> &'a [RobotType] {
+        self.world.types
+    }
+    /// What came of last round's action.
+    pub fn last_outcome(&self) -> Outcome {
+        self.me.last_action.1
+    }
+    /// The known map (if the strategy keeps one).
+    pub fn known(&self) -> Option<&KnownMap> {
+        self.data.known.as_ref()
+    }
+    /// The navigation graph (plan only through nodes your known map touches).
+    pub fn nav(&self) -> &'a NavGraph {
+        self.world.nav
+    }
+
+    /// Whether a disc of this robot's size could move from `a` to `b` — answered from the
+    /// kernel's map, and only if both ends lie in known terrain (robots never learn about
+    /// obstacles they have not seen). `None` when they don't.
+    pub fn can_move(&self, a: DVec2, b: DVec2) -> Option<bool> {
+        let known = self.data.known.as_ref()?;
+        (known.is_known(a) && known.is_known(b))
+            .then(|| self.world.obstacles.is_swept_disc_free(a, b, self.kind.radius_m))
+    }
+
+    /// Whether the point is free, if it is in known terrain.
+    pub fn is_free(&self, p: DVec2) -> Option<bool> {
+        let known = self.data.known.as_ref()?;
+        known
+            .is_known(p)
+            .then(|| self.world.obstacles.is_disc_free(p, self.kind.radius_m))
+    }
+
+    /// Move towards a point (the kernel trims to speed and obstacles).
+    pub fn move_towards(&self, to: DVec2) -> Action {
+        Action::MoveTo { to }
+    }
+    /// Move by an offset (scaled to the robot's speed if longer).
+    pub fn move_by(&self, d: DVec2) -> Action {
+        let len = d.length();
+        let step = if len > self.kind.speed_m_per_round {
+            d * (self.kind.speed_m_per_round / len)
+        } else {
+            d
+        };
+        Action::MoveTo {
+            to: self.me.position + step,
+        }
+    }
+
+    /// Send to every robot in communication range (delivered next round).
+    pub fn broadcast(&mut self, payload: Payload) {
+        self.out.outbox.push((Recipient::Broadcast, payload));
+    }
+    /// Send to one robot, if it is in range.
+    pub fn send(&mut self, to: RobotId, payload: Payload) {
+        self.out.outbox.push((Recipient::Direct(to), payload));
+    }
+    /// Share the known map with everyone in range.
+    pub fn broadcast_known_map(&mut self) {
+        if let Some(k) = &self.data.known {
+            let map = Arc::new(k.clone());
+            self.broadcast(Payload::KnownMap(map));
+        }
+    }
+    /// The goal this robot publishes (kept from round to round until changed).
+    pub fn goal(&self) -> Option<DVec2> {
+        self.out.goal
+    }
+    /// Publish the current goal (for viewers and team mates).
+    pub fn set_goal(&mut self, goal: Option<DVec2>) {
+        self.out.goal = goal;
+    }
+    /// Report an event for the run's event log (group changes, notes).
+    pub fn report(&mut self, event: StrategyEvent) {
+        self.out.events.push(event);
+    }
+    /// Publish the planned path (for viewers).
+    pub fn set_path(&mut self, path: &[DVec2]) {
+        self.out.path.clear();
+        self.out.path.extend_from_slice(path);
+    }
+}

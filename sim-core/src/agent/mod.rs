@@ -1,0 +1,23 @@
+//! Layer 3, the agent API: what a strategy is ([`Strategy`], [`Needs`]), what it sees and
+//! may do in a round ([`Ctx`]), its parameters and the [`StrategyRegistry`], the tactics it
+//! composes, and the built-in strategies (written with this public API only). Imports
+//! only from [`spatial`](crate::spatial) and [`world`](crate::world).
+
+mod builtin;
+mod ctx;
+mod params;
+mod perception;
+mod registry;
+mod strategy;
+mod tactics;
+mod testing;
+
+pub use ctx::{Ctx, Mind, StrategyOutput, WorldView};
+pub use params::Params;
+pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
+pub use registry::{Factory, StrategyRegistry};
+pub use strategy::{Needs, Strategy};
+pub use tactics::{
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, SEARCH_BUDGET, Tactic, Team, blocked,
+};
+pub use testing::TestWorld;

@@ -1,0 +1,86 @@
+//! Strategies (paper §4.3): one robot's decision process, plugged in by name.
+//!
+//! A strategy implements [`Strategy`]: it says which perceptions it [`needs`](Strategy::needs)
+//! (the kernel computes nothing else for it) and, every round, [`decides`](Strategy::decide)
+//! one elementary [`Action`] from a [`Ctx`] that holds its perceptions, its data module, the
+//! map within its known region, its messages and a seeded random generator. Strategies are
+//! created by name from a [`StrategyRegistry`], so an XML config can assign them to robot
+//! groups and a user crate can add its own without touching the simulator.
+//!
+//! The paper's `MyStrategy` in Rust:
+//!
+//! ```
+//! use sim_core::agent::{CollisionAvoidance, Ctx, Strategy, Tactic};
+//! use sim_core::glam::DVec2;
+//! use sim_core::world::Action;
+//!
+//! #[derive(Default)]
+//! struct MyStrategy { coll: CollisionAvoidance }
+//!
+//! impl Strategy for MyStrategy {
+//!     fn decide(&mut self, ctx: &mut Ctx) -> Action {
+//!         if let Some(a) = self.coll.suggest(ctx) { return a; }
+//!         match ctx.treasures_in_view().first() {
+//!             Some(t) => ctx.move_towards(t.position),
+//!             None => ctx.move_by(DVec2::new(0.0, 1.0)),
+//!         }
+//!     }
+//! }
+//! ```
+
+use crate::agent::ctx::Ctx;
+use crate::world::{Action, Retention};
+
+/// The perceptions a strategy asks for. The kernel neither computes nor stores the others.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[allow(clippy::struct_excessive_bools)] // one switch per component of the data module
+pub struct Needs {
+    /// Keep a known map (marked with the view disc every round; merged from messages).
+    pub known_map: bool,
+    /// Read obstacles (within the known region) and plan on the navigation graph.
+    pub obstacles: bool,
+    /// See robots in the view radius.
+    pub robots: bool,
+    /// See treasures in the view radius.
+    pub treasures: bool,
+    /// Receive messages.
+    pub messages: bool,
+}
+
+impl Needs {
+    /// Everything.
+    pub const ALL: Needs = Needs {
+        known_map: true,
+        obstacles: true,
+        robots: true,
+        treasures: true,
+        messages: true,
+    };
+    /// Nothing: a blind robot (no sensing energy either).
+    pub const NONE: Needs = Needs {
+        known_map: false,
+        obstacles: false,
+        robots: false,
+        treasures: false,
+        messages: false,
+    };
+
+    /// Whether any sensing happens (costs `energy_per_sense`).
+    pub fn senses(&self) -> bool {
+        self.known_map || self.obstacles || self.robots || self.treasures
+    }
+}
+
+/// One robot's decision process.
+pub trait Strategy: Send {
+    /// The perceptions this strategy uses (default: all).
+    fn needs(&self) -> Needs {
+        Needs::ALL
+    }
+    /// How long remembered treasures and robots are kept (default: the last 64 of each).
+    fn retention(&self) -> (Retention, Retention) {
+        (Retention::LastN(64), Retention::LastN(64))
+    }
+    /// Choose this round's action (and send messages through `ctx`).
+    fn decide(&mut self, ctx: &mut Ctx) -> Action;
+}

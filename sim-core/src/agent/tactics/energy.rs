@@ -1,0 +1,98 @@
+//! Energy management: keep a known way home, and go back in time.
+
+use super::navigator::Navigator;
+use super::{SEARCH_BUDGET, Tactic};
+use crate::agent::ctx::Ctx;
+use crate::spatial::Route;
+use crate::world::Action;
+
+/// Keeps enough energy to get home along a known path: when what is left falls to the cost
+/// of the way home plus a reserve, it takes over and walks home, then waits there until
+/// recharged.
+#[derive(Clone, Debug)]
+pub struct EnergyManagement {
+    /// Extra energy kept beyond the way home, as a fraction of capacity (default 0.1).
+    pub reserve_fraction: f64,
+    /// Recharge until this fraction of capacity before leaving home again (default 0.95).
+    pub leave_at_fraction: f64,
+    /// Re-measure the way home every this many rounds (default 10).
+    pub replan_every: u64,
+    returning: bool,
+    home_route: Option<(u64, Route)>,
+    nav: Navigator,
+}
+
+impl Default for EnergyManagement {
+    fn default() -> Self {
+        Self {
+            reserve_fraction: 0.1,
+            leave_at_fraction: 0.95,
+            replan_every: 10,
+            returning: false,
+            home_route: None,
+            nav: Navigator::default(),
+        }
+    }
+}
+
+impl EnergyManagement {
+    /// Whether it is taking the robot home.
+    pub fn is_returning(&self) -> bool {
+        self.returning
+    }
+
+    /// Energy needed to walk `length_m` and pay idle and sensing costs on the way.
+    fn cost(ctx: &Ctx, length_m: f64) -> f64 {
+        let k = ctx.kind;
+        let rounds = length_m / k.speed_m_per_round.max(1e-9) + 1.0;
+        length_m * k.energy_per_m + rounds * (k.energy_idle + k.energy_per_sense)
+    }
+}
+
+impl Tactic for EnergyManagement {
+    fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        let home = ctx.home();
+        let p = ctx.position();
+        let cap = ctx.kind.energy_capacity;
+        if home.contains(p) {
+            if ctx.me.energy < self.leave_at_fraction * cap && (self.returning || ctx.me.energy < 0.5 * cap) {
+                self.returning = true;
+                self.nav.clear();
+                return Some(Action::Idle);
+            }
+            self.returning = false;
+            return None;
+        }
+        let stale = self
+            .home_route
+            .as_ref()
+            .is_none_or(|(at, _)| ctx.round >= at + self.replan_every);
+        if stale {
+            let target = home.center();
+            let route = ctx
+                .known()
+                .and_then(|k| ctx.nav().route_within(k, p, target, SEARCH_BUDGET))
+                .unwrap_or_else(|| Route {
+                    nodes: Vec::new(),
+                    waypoints: vec![target],
+                    length_m: 1.5 * p.distance(target),
+                });
+            self.home_route = Some((ctx.round, route));
+        }
+        let (_, route) = self.home_route.as_ref().expect("planned above");
+        // Walking one more round away costs up to two rounds of travel on the way back.
+        let margin = 2.0 * Self::cost(ctx, ctx.kind.speed_m_per_round);
+        if !self.returning && ctx.me.energy <= Self::cost(ctx, route.length_m) + margin + self.reserve_fraction * cap {
+            self.returning = true;
+            self.nav.follow(route.clone());
+        }
+        if self.returning {
+            if self.nav.is_idle() {
+                let route = self.home_route.as_ref().expect("planned").1.clone();
+                self.nav.follow(route);
+            }
+            return Some(self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() }));
+        }
+        None
+    }
+}

@@ -1,0 +1,119 @@
+//! Shortest paths on the navigation graph within known terrain, and frontier search.
+
+use glam::DVec2;
+
+use super::SEARCH_BUDGET;
+use crate::agent::ctx::Ctx;
+use crate::spatial::{Aabb, KnownMap, Route};
+use crate::world::Action;
+
+/// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
+#[derive(Clone, Debug, Default)]
+pub struct Navigator {
+    waypoints: Vec<DVec2>,
+    next: usize,
+}
+
+impl Navigator {
+    /// Follow `route` from now on.
+    pub fn follow(&mut self, route: Route) {
+        self.waypoints = route.waypoints;
+        self.next = 0;
+    }
+
+    /// Drop the current route.
+    pub fn clear(&mut self) {
+        self.waypoints.clear();
+        self.next = 0;
+    }
+
+    /// Whether there is nothing left to follow.
+    pub fn is_idle(&self) -> bool {
+        self.next >= self.waypoints.len()
+    }
+
+    /// The final point of the route.
+    pub fn destination(&self) -> Option<DVec2> {
+        self.waypoints.last().copied()
+    }
+
+    /// The waypoints still ahead.
+    pub fn remaining(&self) -> &[DVec2] {
+        &self.waypoints[self.next.min(self.waypoints.len())..]
+    }
+
+    /// Plan a shortest route to `to` within known terrain and follow it.
+    pub fn go_to(&mut self, ctx: &Ctx, to: DVec2) -> bool {
+        let route = ctx
+            .known()
+            .and_then(|k| ctx.nav().route_within(k, ctx.position(), to, SEARCH_BUDGET));
+        match route {
+            Some(r) => {
+                self.follow(r);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The move towards the next waypoint (skipping those already reached).
+    pub fn step(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        let p = ctx.position();
+        let tol = 0.05;
+        while self.next < self.waypoints.len() && self.waypoints[self.next].distance(p) <= tol {
+            self.next += 1;
+        }
+        let target = *self.waypoints.get(self.next)?;
+        ctx.set_path(self.remaining());
+        Some(Action::MoveTo { to: target })
+    }
+
+    /// Route to the nearest frontier (by path): the closest free leaf the known map touches
+    /// that is either partly unknown (the route ends at its nearest unknown point) or borders
+    /// a free leaf not known at all (the route ends just across their shared edge). Targets
+    /// within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
+    pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Option<Route> {
+        let known = ctx.known()?;
+        let nav = ctx.nav();
+        let p = ctx.position();
+        let step_in = 0.5 * known.grid().cell_m();
+        let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
+        nav.search(
+            p,
+            |n| known.touches_square(nav.square(n)),
+            |n| {
+                if !known.covers_square(nav.square(n)) {
+                    return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
+                }
+                nav.neighbors(n)
+                    .filter(|&m| !known.touches_square(nav.square(m)))
+                    .map(|m| {
+                        let portal = nav.portal(n, m);
+                        let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
+                        portal + inward * step_in
+                    })
+                    .find(|t| clear(*t))
+            },
+            SEARCH_BUDGET,
+        )
+    }
+}
+
+/// The unknown point of `area` nearest to `p`, nudged a little into the unknown cell.
+fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
+    let cell = known.grid().cell_m();
+    let mut best: Option<(f64, DVec2)> = None;
+    let _ = known.tree().visit_leaves_in(area, false, |_, b| {
+        let lo = b.min.max(area.min);
+        let hi = b.max.min(area.max);
+        // Aim a little inside the unknown box so reaching it reveals it.
+        let inset = DVec2::splat((0.5 * cell).min(0.5 * (hi - lo).min_element()));
+        let q = p.clamp(lo + inset, hi - inset);
+        let d = q.distance_squared(p);
+        if best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, q));
+        }
+        std::ops::ControlFlow::Continue(())
+    });
+    best.map(|(_, q)| q)
+}

@@ -1,0 +1,11 @@
+//! Layer 4, the engine: a validated [`Scenario`] and the [`Simulation`] that runs it, round
+//! by round (perceive → decide → resolve, then the caller observes). Imports only from the
+//! layers below.
+
+mod round;
+mod scenario;
+mod simulation;
+
+pub use round::MAX_MAP_MERGES_PER_ROUND;
+pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
+pub use simulation::Simulation;

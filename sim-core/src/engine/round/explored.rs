@@ -1,0 +1,33 @@
+//! The collective explored map, for the metrics: every sensing robot's view marked from
+//! where it perceived.
+
+use crate::engine::simulation::Simulation;
+use crate::spatial::Disc;
+use crate::world::Event;
+
+impl Simulation {
+    /// Mark every sensing robot's view (from where it perceived) in the collective explored
+    /// map, crediting the free area it was first to see; feeds the step-4 metrics.
+    pub(super) fn update_explored(&mut self) {
+        let obstacles = &self.map.obstacles;
+        let cell_area = obstacles.grid().cell_area_m2();
+        let before = self.explored_free_cells;
+        for (robot, agent) in self.robots.iter_mut().zip(&self.agents) {
+            if !agent.needs.senses() || !robot.alive {
+                continue;
+            }
+            let view = Disc {
+                center: robot.position,
+                radius: self.types[robot.type_index].view_radius_m,
+            };
+            let mut fresh = 0;
+            self.explored
+                .mark_reporting(&view, |sq| fresh += obstacles.tree().count_cells_in(sq, false));
+            self.explored_free_cells += fresh;
+            robot.stats.explored_m2 += fresh as f64 * cell_area;
+        }
+        if before < self.total_free_cells && self.explored_free_cells == self.total_free_cells {
+            self.report.events.push(Event::MapExplored);
+        }
+    }
+}

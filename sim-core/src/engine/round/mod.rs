@@ -1,0 +1,51 @@
+//! The round loop, top-down: perceive → decide → resolve → observe.
+//!
+//! 1. **Perceive** (parallel): every live robot sees the state as it was at the start of the
+//!    round and reads the messages delivered to it.
+//! 2. **Decide** (parallel, fused with 1): its strategy picks one action and any messages;
+//!    each robot owns its strategy and data, nothing shared is written.
+//! 3. **Resolve** (sequential, by robot id): the physical unit charges energy and refuses or
+//!    trims what is illegal (speed, energy, obstacles, other robots, abilities, capacity),
+//!    then applies the rest; messages are addressed to whoever was in range at send time.
+//! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
+//!
+//! Randomness comes from generators seeded by (run seed, robot, round), and every shared
+//! update happens in step 3 in id order, so results do not depend on the thread count.
+
+mod decide;
+mod explored;
+mod perceive;
+mod resolve;
+
+pub use perceive::MAX_MAP_MERGES_PER_ROUND;
+
+use crate::engine::simulation::{Simulation, index_cell_m};
+use crate::world::RoundReport;
+
+impl Simulation {
+    /// Play one round and return its report.
+    pub fn step(&mut self) -> &RoundReport {
+        self.round += 1;
+        let round = self.round;
+        self.report = RoundReport {
+            round,
+            ..RoundReport::default()
+        };
+        // 1 + 2: perceive and decide, in parallel.
+        self.deliver_messages();
+        self.perceive_and_decide(round);
+        self.record_discoveries(round);
+        self.update_explored();
+        // 3: resolve, in id order.
+        self.start_positions.clear();
+        self.start_positions.extend(self.robots.iter().map(|r| r.position));
+        let (messages, bytes) = self.resolve(round);
+        self.robot_index.rebuild(
+            self.robots.iter().map(|r| (r.id, r.position)),
+            index_cell_m(&self.types),
+        );
+        // 4: observe (the caller hands the report to the observers).
+        self.report.metrics = self.metrics(round, messages, bytes);
+        &self.report
+    }
+}

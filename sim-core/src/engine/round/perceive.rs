@@ -1,0 +1,156 @@
+//! Step 1: every live robot perceives the start-of-round state, only what its strategy
+//! declared in [`Needs`](crate::agent::Needs), and digests the messages delivered to it.
+
+use crate::agent::{SeenRobot, SeenTreasure};
+use crate::engine::simulation::{Agent, Simulation};
+use crate::spatial::{RobotIndex, TreasureIndex};
+use crate::world::{Event, Payload, Robot, RobotType, Sighting, TreasureState};
+
+impl Simulation {
+    /// Move last round's messages into the receivers' perception.
+    pub(super) fn deliver_messages(&mut self) {
+        for (agent, inbox) in self.agents.iter_mut().zip(self.inboxes.iter_mut()) {
+            agent.mind.perception.inbox.clear();
+            if agent.needs.messages {
+                std::mem::swap(&mut agent.mind.perception.inbox, inbox);
+            }
+            inbox.clear();
+        }
+    }
+
+    /// First sightings of treasures, credited in id order.
+    pub(super) fn record_discoveries(&mut self, round: u64) {
+        for (robot, agent) in self.robots.iter_mut().zip(&self.agents) {
+            for t in &agent.mind.perception.treasures {
+                let state = &mut self.treasures[t.id.index()];
+                if state.found_round.is_none() {
+                    state.found_round = Some(round);
+                    robot.stats.treasures_found += 1;
+                    self.report.events.push(Event::TreasureFound {
+                        treasure: t.id,
+                        by: robot.id,
+                    });
+                }
+            }
+            if agent.known_changed {
+                self.report.known_changed.push(robot.id);
+            }
+            for e in agent.mind.output.events() {
+                self.report.events.push(e.clone().into_event(robot.id));
+            }
+        }
+    }
+}
+
+/// Known maps a robot merges per round at most; later ones that round are dropped.
+pub const MAX_MAP_MERGES_PER_ROUND: usize = 2;
+
+/// The shared, read-only state robots perceive in a round.
+pub(super) struct Snapshot<'a> {
+    pub(super) robots: &'a [Robot],
+    pub(super) treasures: &'a [TreasureState],
+    pub(super) treasure_index: &'a TreasureIndex,
+    pub(super) robot_index: &'a RobotIndex,
+}
+
+/// Step 1 for one robot: only what its strategy needs.
+pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world: &Snapshot, round: u64) {
+    let needs = agent.needs;
+    let p = robot.position;
+    let view = kind.view_radius_m;
+    let data = &mut agent.mind.data;
+    let perception = &mut agent.mind.perception;
+    if let Some(known) = data.known.as_mut() {
+        agent.known_changed |= known.mark_disc(p, view);
+    }
+    perception.robots.clear();
+    if needs.robots {
+        world.robot_index.for_each_within(p, view, |id, q| {
+            if id != robot.id {
+                perception.robots.push(SeenRobot {
+                    id,
+                    position: q,
+                    type_index: world.robots[id.index()].type_index,
+                });
+            }
+        });
+        perception.robots.sort_by_key(|r| r.id);
+        for r in &perception.robots {
+            data.robots.record(r.id, (r.position, round), round);
+        }
+    }
+    perception.treasures.clear();
+    if needs.treasures {
+        world.treasure_index.for_each_in_disc(p, view, |t| {
+            let s = &world.treasures[t.id.index()];
+            if s.buried + s.loose > 0 {
+                perception.treasures.push(SeenTreasure {
+                    id: t.id,
+                    position: t.position,
+                    buried: s.buried,
+                    loose: s.loose,
+                });
+            }
+        });
+        perception.treasures.sort_by_key(|t| t.id);
+        // Remembered treasures that should be in view but are not have been emptied: record
+        // that as a fresh sighting, so older hearsay cannot bring them back.
+        let emptied: Vec<Sighting> = data
+            .treasures
+            .iter()
+            .filter(|(s, _)| s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure))
+            .map(|(s, _)| Sighting {
+                buried: 0,
+                loose: 0,
+                round,
+                ..*s
+            })
+            .collect();
+        for s in emptied {
+            data.treasures.record(s.treasure, s, round);
+        }
+        for t in &perception.treasures {
+            let s = Sighting {
+                treasure: t.id,
+                position: t.position,
+                buried: t.buried,
+                loose: t.loose,
+                round,
+            };
+            data.treasures.record(t.id, s, round);
+        }
+    }
+    if needs.messages {
+        let mut merged = 0;
+        for m in &perception.inbox {
+            match &*m.payload {
+                Payload::KnownMap(other) => {
+                    // Maps only grow: one no larger than the last merged from its sender is
+                    // contained in ours already. Of the rest, a robot digests a bounded number
+                    // a round (first come, first served): in a crowd hundreds arrive at once.
+                    let cells = other.known_cells();
+                    let seen = agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
+                    if let Some(known) = data.known.as_mut()
+                        && !seen
+                        && merged < MAX_MAP_MERGES_PER_ROUND
+                    {
+                        merged += 1;
+                        agent.known_changed |= known.merge(other);
+                        agent.merged_from.insert(m.from, cells);
+                    }
+                }
+                Payload::Sightings(list) => {
+                    for s in list {
+                        let newer = data.treasures.get(s.treasure).is_none_or(|old| old.round < s.round);
+                        if newer {
+                            data.treasures.record(s.treasure, *s, round);
+                        }
+                    }
+                }
+                Payload::Position { .. } | Payload::Custom { .. } => {}
+            }
+        }
+    }
+    data.treasures.evict(round);
+    data.robots.evict(round);
+}

@@ -1,0 +1,257 @@
+//! Step 3: the physical unit, robot by robot in id order. It charges energy and refuses or
+//! trims what is illegal (speed, energy, obstacles, other robots, abilities, capacity), then
+//! applies the rest; messages are addressed to whoever was in range at send time.
+
+use std::sync::Arc;
+
+use glam::DVec2;
+
+use crate::engine::simulation::Simulation;
+use crate::spatial::{RobotId, TreasureId};
+use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
+
+impl Simulation {
+    /// Step 3: the physical unit, robot by robot in id order. Returns messages and bytes sent.
+    pub(super) fn resolve(&mut self, round: u64) -> (u64, u64) {
+        let (mut messages, mut bytes) = (0, 0);
+        for i in 0..self.robots.len() {
+            if !self.robots[i].alive {
+                continue;
+            }
+            let types = Arc::clone(&self.types);
+            let kind = &types[self.robots[i].type_index];
+            let action = self.agents[i].action;
+            // Living and sensing cost energy whatever the action.
+            let sense = if self.agents[i].needs.senses() {
+                kind.energy_per_sense
+            } else {
+                0.0
+            };
+            self.spend(i, kind.energy_idle + sense);
+            let outcome = if self.robots[i].alive {
+                self.apply(i, kind, action)
+            } else {
+                Outcome::Refused
+            };
+            let outbox = self.agents[i].mind.output.take_outbox();
+            for (to, payload) in outbox {
+                if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
+                    break;
+                }
+                self.spend(i, kind.energy_per_message);
+                let size = payload.size_bytes();
+                self.send(i, kind, round, to, payload);
+                messages += 1;
+                bytes += size;
+                self.robots[i].stats.messages_sent += 1;
+                self.robots[i].stats.message_bytes += size;
+            }
+            let r = &mut self.robots[i];
+            if r.alive && self.map.home.contains(r.position) {
+                r.energy = (r.energy + kind.recharge_per_round).min(kind.energy_capacity);
+            }
+            r.last_action = (action, outcome);
+            let output = &self.agents[i].mind.output;
+            r.goal = output.goal();
+            r.path.clear();
+            r.path.extend_from_slice(output.path());
+        }
+        (messages, bytes)
+    }
+
+    /// Charge energy; a robot that runs dry is disabled for good.
+    fn spend(&mut self, i: usize, amount: f64) {
+        let r = &mut self.robots[i];
+        let paid = amount.min(r.energy);
+        r.energy -= paid;
+        r.stats.energy_used += paid;
+        if r.energy <= 1e-12 {
+            r.energy = 0.0;
+            r.alive = false;
+            self.report.events.push(Event::RobotDisabled { robot: r.id });
+        }
+    }
+
+    /// Check and carry out one action.
+    fn apply(&mut self, i: usize, kind: &RobotType, action: Action) -> Outcome {
+        match action {
+            Action::Idle => Outcome::Done,
+            Action::MoveTo { to } => self.apply_move(i, kind, to),
+            Action::Excavate { treasure } => {
+                let Some(t) = self.reachable_treasure(i, kind, treasure) else {
+                    return Outcome::Refused;
+                };
+                if !kind.can_excavate || t.buried == 0 || self.robots[i].energy < kind.energy_per_excavation {
+                    return Outcome::Refused;
+                }
+                self.spend(i, kind.energy_per_excavation);
+                let t = &mut self.treasures[treasure.index()];
+                let dug = kind.excavation_per_round.min(t.buried);
+                t.buried -= dug;
+                t.loose += dug;
+                self.robots[i].stats.units_dug += u64::from(dug);
+                if t.buried == 0 {
+                    self.report.events.push(Event::TreasureExcavated {
+                        treasure,
+                        by: self.robots[i].id,
+                    });
+                }
+                if dug < kind.excavation_per_round {
+                    Outcome::Trimmed
+                } else {
+                    Outcome::Done
+                }
+            }
+            Action::Load { treasure } => {
+                let Some(t) = self.reachable_treasure(i, kind, treasure) else {
+                    return Outcome::Refused;
+                };
+                let room = kind.carry_capacity.saturating_sub(self.robots[i].load());
+                let amount = room.min(t.loose);
+                if amount == 0 {
+                    return Outcome::Refused;
+                }
+                self.treasures[treasure.index()].loose -= amount;
+                let cargo = &mut self.robots[i].cargo;
+                match cargo.iter_mut().find(|c| c.0 == treasure) {
+                    Some(c) => c.1 += amount,
+                    None => cargo.push((treasure, amount)),
+                }
+                if amount < t.loose && amount < room {
+                    Outcome::Trimmed
+                } else {
+                    Outcome::Done
+                }
+            }
+            Action::Unload => {
+                let r = &mut self.robots[i];
+                if r.cargo.is_empty() || !self.map.home.contains(r.position) {
+                    return Outcome::Refused;
+                }
+                for (treasure, amount) in std::mem::take(&mut r.cargo) {
+                    let t = &mut self.treasures[treasure.index()];
+                    t.delivered += amount;
+                    r.stats.units_delivered += u64::from(amount);
+                    if t.delivered == t.initial {
+                        self.report.events.push(Event::TreasureDelivered { treasure, by: r.id });
+                    }
+                }
+                Outcome::Done
+            }
+        }
+    }
+
+    /// The treasure, if it exists and lies within the robot's reach.
+    fn reachable_treasure(&self, i: usize, kind: &RobotType, id: TreasureId) -> Option<TreasureState> {
+        let t = *self.treasures.get(id.index())?;
+        (t.position.distance(self.robots[i].position) <= kind.radius_m + REACH_M).then_some(t)
+    }
+
+    /// A move, trimmed to speed, energy, obstacles and other robots, in that order.
+    fn apply_move(&mut self, i: usize, kind: &RobotType, to: DVec2) -> Outcome {
+        let from = self.robots[i].position;
+        let mut d = to - from;
+        let wanted = d.length();
+        if !wanted.is_finite() {
+            return Outcome::Refused;
+        }
+        if wanted == 0.0 {
+            return Outcome::Done;
+        }
+        let mut len = wanted.min(kind.speed_m_per_round);
+        if kind.energy_per_m > 0.0 {
+            len = len.min(self.robots[i].energy / kind.energy_per_m);
+        }
+        d *= len / wanted;
+        let obstacles = &self.map.obstacles;
+        if !obstacles.is_swept_disc_free(from, from + d, kind.radius_m) {
+            // Largest free fraction of the segment, by bisection.
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..24 {
+                let mid = 0.5 * (lo + hi);
+                if obstacles.is_swept_disc_free(from, from + d * mid, kind.radius_m) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            d *= lo;
+        }
+        // Other robots: halve the move until the end position overlaps nobody.
+        let mut step = d;
+        let mut tries = 0;
+        while step.length() > 1e-9 && self.overlaps_someone(i, from + step, kind.radius_m) {
+            step *= 0.5;
+            tries += 1;
+            if tries > 8 {
+                step = DVec2::ZERO;
+            }
+        }
+        let moved = step.length();
+        if moved <= 1e-12 {
+            return Outcome::Refused;
+        }
+        let r = &mut self.robots[i];
+        r.position = from + step;
+        r.stats.distance_m += moved;
+        self.spend(i, moved * kind.energy_per_m);
+        if (moved - wanted).abs() > 1e-9 {
+            Outcome::Trimmed
+        } else {
+            Outcome::Done
+        }
+    }
+
+    /// Whether a disc at `p` would overlap another robot where it stands now.
+    fn overlaps_someone(&self, i: usize, p: DVec2, radius: f64) -> bool {
+        // The index holds start-of-round positions; robots move at most max_speed a round.
+        let reach = radius + self.max_radius_m + self.max_speed_m;
+        let mut hit = false;
+        self.robot_index.for_each_within(p, reach, |id, _| {
+            let j = id.index();
+            if j != i && !hit {
+                let other = &self.robots[j];
+                let rr = radius + self.types[other.type_index].radius_m;
+                hit = other.position.distance_squared(p) < rr * rr;
+            }
+        });
+        hit
+    }
+
+    /// Address a message to the robots in range at send time (start-of-round positions).
+    fn send(&mut self, i: usize, kind: &RobotType, round: u64, to: Recipient, payload: Payload) {
+        let from = self.robots[i].id;
+        let at = self.start_positions[i];
+        let message = Message {
+            from,
+            sent_round: round,
+            to,
+            payload: Arc::new(payload),
+        };
+        let mut receivers: Vec<RobotId> = Vec::new();
+        match to {
+            Recipient::Broadcast => {
+                self.robot_index.for_each_within(at, kind.comm_radius_m, |id, _| {
+                    if id != from {
+                        receivers.push(id);
+                    }
+                });
+                receivers.sort_unstable();
+            }
+            Recipient::Direct(target) => {
+                if let Some(&p) = self.start_positions.get(target.index())
+                    && target != from
+                    && p.distance(at) <= kind.comm_radius_m
+                {
+                    receivers.push(target);
+                }
+            }
+        }
+        for to in receivers {
+            if self.robots[to.index()].alive {
+                self.inboxes[to.index()].push(message.clone());
+                self.report.links.push(Link { from, to });
+            }
+        }
+    }
+}

@@ -1,0 +1,395 @@
+//! A scenario: everything a run needs, validated once. [`ScenarioBuilder`] takes the map,
+//! robot types and groups (from code or from the XML config) and
+//! [`build`](ScenarioBuilder::build) checks all of it in one place: types, strategies and
+//! their parameters (each robot's strategy is created here, once), starts, and room at the
+//! start for every robot. A [`Scenario`] that exists is one a [`Simulation`] can run.
+//!
+//! [`Simulation`]: crate::engine::Simulation
+
+use std::collections::{HashMap, HashSet};
+use std::sync::Arc;
+
+use glam::DVec2;
+
+use crate::agent::{Params, Strategy, StrategyRegistry};
+use crate::spatial::ObstacleMap;
+use crate::world::{MapData, RobotType};
+use crate::{Error, Result};
+
+/// Where a group starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Start {
+    /// Around the home base centre.
+    Home,
+    /// Around a point.
+    At(DVec2),
+}
+
+/// A group of robots with one type and one strategy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    /// Name (for outputs).
+    pub name: String,
+    /// Number of robots.
+    pub count: u32,
+    /// Index into the scenario's types.
+    pub type_index: usize,
+    /// Strategy name in the registry.
+    pub strategy: String,
+    /// Strategy parameters.
+    pub params: Params,
+    /// Start position.
+    pub start: Start,
+}
+
+impl Group {
+    /// `count` robots of type `type_index` running `strategy` with no parameters, starting
+    /// at home; the name defaults to the strategy's.
+    pub fn new(strategy: impl Into<String>, type_index: usize, count: u32) -> Self {
+        let strategy = strategy.into();
+        Self {
+            name: strategy.clone(),
+            count,
+            type_index,
+            strategy,
+            params: Params::default(),
+            start: Start::Home,
+        }
+    }
+    /// Set the name (default: the strategy's name).
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+    /// Set the strategy parameters (default: none).
+    pub fn with_params(mut self, params: Params) -> Self {
+        self.params = params;
+        self
+    }
+    /// Set the start (default: [`Start::Home`]).
+    pub fn with_start(mut self, start: Start) -> Self {
+        self.start = start;
+        self
+    }
+}
+
+/// Collects a scenario's parts; [`build`](Self::build) validates them.
+#[derive(Clone, Debug)]
+pub struct ScenarioBuilder {
+    name: String,
+    map: Arc<MapData>,
+    seed: u64,
+    rounds: u64,
+    types: Vec<RobotType>,
+    groups: Vec<Group>,
+}
+
+impl ScenarioBuilder {
+    /// A scenario on `map` named "simulation", seed 0, 1,000 rounds, the three built-in
+    /// robot types (explorer, excavator, transporter) and no groups yet.
+    pub fn new(map: impl Into<Arc<MapData>>) -> Self {
+        Self {
+            name: "simulation".into(),
+            map: map.into(),
+            seed: 0,
+            rounds: 1000,
+            types: vec![RobotType::explorer(), RobotType::excavator(), RobotType::transporter()],
+            groups: Vec::new(),
+        }
+    }
+    /// Set the run name (default "simulation").
+    pub fn with_name(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
+    }
+    /// Set the seed (default 0).
+    pub fn with_seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+    /// Set the number of rounds (default 1,000).
+    pub fn with_rounds(mut self, rounds: u64) -> Self {
+        self.rounds = rounds;
+        self
+    }
+    /// Replace the robot types (default: explorer, excavator, transporter).
+    pub fn with_types(mut self, types: Vec<RobotType>) -> Self {
+        self.types = types;
+        self
+    }
+    /// Add a group (robots get ids in the order groups are added).
+    pub fn with_group(mut self, group: Group) -> Self {
+        self.groups.push(group);
+        self
+    }
+
+    /// Check everything and create every robot's strategy, once. An error that one group
+    /// causes is [`Error::Group`] with the group's index, so a config can point at it.
+    pub fn build(self, registry: &StrategyRegistry) -> Result<Scenario> {
+        let Self {
+            name,
+            map,
+            seed,
+            rounds,
+            types,
+            groups,
+        } = self;
+        for t in &types {
+            t.validate()?;
+        }
+        let group_error = |index: usize, message: String| Error::Group {
+            index,
+            name: groups[index].name.clone(),
+            message,
+        };
+        let obstacles = &map.obstacles;
+        let max_radius_m = types.iter().map(|t| t.radius_m).fold(0.0, f64::max);
+        // Room first, before anything is built for each robot: a crowd that cannot fit is
+        // refused at once, whatever its size.
+        let mut demand: Vec<(DVec2, u64, usize)> = Vec::new();
+        for (gi, g) in groups.iter().enumerate() {
+            let kind = types
+                .get(g.type_index)
+                .ok_or_else(|| group_error(gi, format!("refers to robot type #{} of {}", g.type_index, types.len())))?;
+            let at = match g.start {
+                Start::Home => map.home.center(),
+                Start::At(p) => {
+                    if !obstacles.is_disc_free(p, kind.radius_m) {
+                        return Err(group_error(
+                            gi,
+                            format!("starts at ({}, {}), which is inside an obstacle or outside the map", p.x, p.y),
+                        ));
+                    }
+                    p
+                }
+            };
+            match demand.iter_mut().find(|d| d.0 == at) {
+                Some(d) => d.1 += u64::from(g.count),
+                None => demand.push((at, u64::from(g.count), gi)),
+            }
+        }
+        let total: u64 = demand.iter().map(|d| d.1).sum();
+        if total > u64::from(u32::MAX) {
+            return Err(Error::InvalidParameter(format!(
+                "{total} robots in all: at most {} robots can be simulated",
+                u32::MAX
+            )));
+        }
+        let placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
+        for &(at, wanted, gi) in &demand {
+            let room = placer.capacity_bound(max_radius_m);
+            if wanted > room {
+                return Err(group_error(
+                    gi,
+                    format!(
+                        "{wanted} robots start around ({}, {}), but at most {room} robots of radius {max_radius_m} m fit there on this map",
+                        at.x, at.y
+                    ),
+                ));
+            }
+        }
+        let mut placer = placer;
+        let mut strategies = Vec::with_capacity(total as usize);
+        let mut starts = Vec::with_capacity(total as usize);
+        for (gi, g) in groups.iter().enumerate() {
+            let kind = &types[g.type_index];
+            let at = match g.start {
+                Start::Home => map.home.center(),
+                Start::At(p) => p,
+            };
+            for k in 0..g.count {
+                strategies.push(
+                    registry
+                        .create(&g.strategy, &g.params)
+                        .map_err(|e| group_error(gi, e.to_string()))?,
+                );
+                let position = placer.next_near(at, kind.radius_m).ok_or_else(|| {
+                    group_error(
+                        gi,
+                        format!(
+                            "only {k} of its {} robots fit near ({}, {}): no free room for more",
+                            g.count, at.x, at.y
+                        ),
+                    )
+                })?;
+                starts.push(position);
+            }
+        }
+        Ok(Scenario {
+            name,
+            map,
+            seed,
+            rounds,
+            types,
+            groups,
+            strategies,
+            starts,
+            max_radius_m,
+        })
+    }
+}
+
+/// A validated scenario: made by [`ScenarioBuilder::build`], run by
+/// [`Simulation::new`](crate::engine::Simulation::new).
+pub struct Scenario {
+    name: String,
+    map: Arc<MapData>,
+    seed: u64,
+    rounds: u64,
+    types: Vec<RobotType>,
+    groups: Vec<Group>,
+    /// One per robot, in id order.
+    strategies: Vec<Box<dyn Strategy>>,
+    /// Start position of each robot, in id order.
+    starts: Vec<DVec2>,
+    max_radius_m: f64,
+}
+
+/// The parts of a scenario, for the simulation to take over.
+pub(crate) struct ScenarioParts {
+    pub(crate) name: String,
+    pub(crate) map: Arc<MapData>,
+    pub(crate) seed: u64,
+    pub(crate) rounds: u64,
+    pub(crate) types: Vec<RobotType>,
+    pub(crate) groups: Vec<Group>,
+    pub(crate) strategies: Vec<Box<dyn Strategy>>,
+    pub(crate) starts: Vec<DVec2>,
+    pub(crate) max_radius_m: f64,
+}
+
+impl Scenario {
+    /// Run name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// The map.
+    pub fn map(&self) -> &Arc<MapData> {
+        &self.map
+    }
+    /// Run seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Rounds to run.
+    pub fn rounds(&self) -> u64 {
+        self.rounds
+    }
+    /// Robot types.
+    pub fn types(&self) -> &[RobotType] {
+        &self.types
+    }
+    /// Robot groups, in id order.
+    pub fn groups(&self) -> &[Group] {
+        &self.groups
+    }
+    /// Number of robots.
+    pub fn robot_count(&self) -> usize {
+        self.starts.len()
+    }
+    /// Start position of every robot, in id order.
+    pub fn starts(&self) -> &[DVec2] {
+        &self.starts
+    }
+
+    pub(crate) fn into_parts(self) -> ScenarioParts {
+        ScenarioParts {
+            name: self.name,
+            map: self.map,
+            seed: self.seed,
+            rounds: self.rounds,
+            types: self.types,
+            groups: self.groups,
+            strategies: self.strategies,
+            starts: self.starts,
+            max_radius_m: self.max_radius_m,
+        }
+    }
+}
+
+impl std::fmt::Debug for Scenario {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Scenario")
+            .field("name", &self.name)
+            .field("seed", &self.seed)
+            .field("rounds", &self.rounds)
+            .field("types", &self.types)
+            .field("groups", &self.groups)
+            .field("robots", &self.starts.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Spacing of the start lattice for robots of radius `r`.
+fn lattice_spacing(r: f64) -> f64 {
+    2.0 * r + 0.05
+}
+
+/// Hands out start positions on a global lattice (so robots never overlap), nearest first.
+struct Placer<'a> {
+    obstacles: &'a ObstacleMap,
+    spacing: f64,
+    used: HashSet<(i64, i64)>,
+    /// First ring around each centre that may still have room.
+    progress: HashMap<(i64, i64), i64>,
+}
+
+impl<'a> Placer<'a> {
+    fn new(obstacles: &'a ObstacleMap, spacing: f64) -> Self {
+        Self {
+            obstacles,
+            spacing,
+            used: HashSet::new(),
+            progress: HashMap::new(),
+        }
+    }
+
+    /// The last ring searched around a centre.
+    fn max_ring(&self) -> i64 {
+        let e = self.obstacles.grid().extent();
+        // Crowds larger than a few hundred metres across are a config mistake, not a plan.
+        (((e.max - e.min).max_element() / self.spacing).ceil() as i64 + 2).min(2000)
+    }
+
+    /// An upper bound on the robots of radius `radius_m` that [`next_near`](Self::next_near)
+    /// can place around one centre: no more than the lattice points it searches, and no more than
+    /// disjoint discs fit in the map's free area.
+    fn capacity_bound(&self, radius_m: f64) -> u64 {
+        let side = (2 * self.max_ring() + 1) as u64;
+        let by_area = (self.obstacles.free_area_m2() / (std::f64::consts::PI * radius_m * radius_m)).floor();
+        let by_area = if by_area.is_finite() { by_area as u64 } else { u64::MAX };
+        (side * side).min(by_area)
+    }
+
+    fn next_near(&mut self, at: DVec2, radius: f64) -> Option<DVec2> {
+        let s = self.spacing;
+        let c = ((at.x / s).round() as i64, (at.y / s).round() as i64);
+        let max_ring = self.max_ring();
+        let first = self.progress.get(&c).copied().unwrap_or(0);
+        for ring in first..=max_ring {
+            self.progress.insert(c, ring);
+            let mut cells: Vec<(i64, i64)> = Vec::new();
+            for dx in -ring..=ring {
+                for dy in -ring..=ring {
+                    if dx.abs().max(dy.abs()) == ring {
+                        cells.push((c.0 + dx, c.1 + dy));
+                    }
+                }
+            }
+            let pos = |q: (i64, i64)| DVec2::new(q.0 as f64 * s, q.1 as f64 * s);
+            cells.sort_by(|a, b| {
+                pos(*a)
+                    .distance_squared(at)
+                    .total_cmp(&pos(*b).distance_squared(at))
+                    .then(a.cmp(b))
+            });
+            for q in cells {
+                if !self.used.contains(&q) && self.obstacles.is_disc_free(pos(q), radius) {
+                    self.used.insert(q);
+                    return Some(pos(q));
+                }
+            }
+        }
+        None
+    }
+}

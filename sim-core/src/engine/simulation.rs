@@ -1,0 +1,288 @@
+//! A simulation run: its world, robots and agents, set up from a validated [`Scenario`].
+//! The round loop itself is in `round/`; observers drive it through
+//! `Simulation::run`, defined in the io layer.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec2;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::Result;
+use crate::agent::{DataModule, Mind, Needs, Strategy};
+use crate::engine::scenario::{Group, Scenario, ScenarioParts};
+use crate::spatial::{KnownMap, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex};
+use crate::world::{
+    Action, MapData, Message, Outcome, Robot, RobotStats, RobotType, RoundMetrics, RoundReport, TreasureState,
+};
+
+/// A robot's brain: its strategy and mind, owned by the robot alone.
+pub(super) struct Agent {
+    pub(super) strategy: Box<dyn Strategy>,
+    pub(super) needs: Needs,
+    pub(super) mind: Mind,
+    pub(super) action: Action,
+    pub(super) known_changed: bool,
+    /// Known cells of the last map merged from each sender: a map that has not grown since
+    /// is already contained in ours (maps only grow), so merging it again is skipped.
+    pub(super) merged_from: HashMap<RobotId, u64>,
+}
+
+/// A running simulation. Its state changes only through its own methods (set-up here, the
+/// round steps in `round/`).
+pub struct Simulation {
+    pub(super) name: String,
+    pub(super) seed: u64,
+    pub(super) rounds: u64,
+    pub(super) round: u64,
+    pub(super) map: Arc<MapData>,
+    pub(super) nav: NavGraph,
+    /// Shared so the resolve loop can hold a type while it mutates the simulation.
+    pub(super) types: Arc<[RobotType]>,
+    pub(super) groups: Vec<Group>,
+    pub(super) robots: Vec<Robot>,
+    pub(super) agents: Vec<Agent>,
+    pub(super) treasures: Vec<TreasureState>,
+    pub(super) treasure_index: TreasureIndex,
+    pub(super) robot_index: RobotIndex,
+    /// Messages to deliver at the start of the next round, per robot.
+    pub(super) inboxes: Vec<Vec<Message>>,
+    /// The union of everything every robot has seen.
+    pub(super) explored: KnownMap,
+    pub(super) explored_free_cells: u64,
+    pub(super) total_free_cells: u64,
+    pub(super) report: RoundReport,
+    pub(super) max_radius_m: f64,
+    pub(super) max_speed_m: f64,
+    /// Positions at the start of the current round (send-time positions for messages).
+    pub(super) start_positions: Vec<DVec2>,
+}
+
+impl Simulation {
+    /// Set up a run of a validated scenario: place the robots where the scenario put them,
+    /// hand each its strategy, build the indexes and the navigation graph.
+    pub fn new(scenario: Scenario) -> Result<Self> {
+        let ScenarioParts {
+            name,
+            map,
+            seed,
+            rounds,
+            types,
+            groups,
+            strategies,
+            starts,
+            max_radius_m,
+        } = scenario.into_parts();
+        let obstacles = &map.obstacles;
+        let grid = *obstacles.grid();
+        let nav = NavGraph::build(obstacles);
+        let mut treasure_index = TreasureIndex::new(grid.extent())?;
+        let mut treasures = Vec::with_capacity(map.treasures.len());
+        for t in &map.treasures {
+            let id = treasure_index.insert(t.position, t.quantity)?;
+            treasures.push(TreasureState {
+                id,
+                position: t.position,
+                initial: t.quantity,
+                buried: t.quantity,
+                loose: 0,
+                delivered: 0,
+                found_round: None,
+            });
+        }
+        let max_speed_m = types.iter().map(|t| t.speed_m_per_round).fold(0.0, f64::max);
+        let mut robots = Vec::with_capacity(starts.len());
+        let mut agents = Vec::with_capacity(starts.len());
+        let mut strategies = strategies.into_iter();
+        let mut starts = starts.into_iter();
+        for (gi, g) in groups.iter().enumerate() {
+            let kind = &types[g.type_index];
+            for _ in 0..g.count {
+                let (Some(strategy), Some(position)) = (strategies.next(), starts.next()) else {
+                    unreachable!("a scenario has a strategy and a start for every robot");
+                };
+                let id = RobotId::new(robots.len() as u32);
+                let needs = strategy.needs();
+                let (tr, rr) = strategy.retention();
+                robots.push(Robot {
+                    id,
+                    type_index: g.type_index,
+                    group: gi,
+                    position,
+                    energy: kind.energy_capacity,
+                    cargo: Vec::new(),
+                    alive: true,
+                    last_action: (Action::Idle, Outcome::Done),
+                    goal: None,
+                    path: Vec::new(),
+                    stats: RobotStats::default(),
+                });
+                agents.push(Agent {
+                    strategy,
+                    needs,
+                    mind: Mind::new(DataModule::new(needs.known_map.then(|| KnownMap::new(grid)), tr, rr)),
+                    action: Action::Idle,
+                    known_changed: false,
+                    merged_from: HashMap::new(),
+                });
+            }
+        }
+        let mut robot_index = RobotIndex::new();
+        robot_index.rebuild(robots.iter().map(|r| (r.id, r.position)), index_cell_m(&types));
+        let total_free_cells = obstacles.tree().count_cells(false);
+        let n = robots.len();
+        let mut sim = Self {
+            name,
+            seed,
+            rounds,
+            round: 0,
+            nav,
+            types: types.into(),
+            groups,
+            robots,
+            agents,
+            treasures,
+            treasure_index,
+            robot_index,
+            inboxes: vec![Vec::new(); n],
+            explored: KnownMap::new(grid),
+            explored_free_cells: 0,
+            total_free_cells,
+            report: RoundReport::default(),
+            max_radius_m,
+            max_speed_m,
+            start_positions: Vec::new(),
+            map,
+        };
+        sim.report.metrics = sim.metrics(0, 0, 0);
+        Ok(sim)
+    }
+
+    /// Run name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Run seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+    /// Rounds this run lasts.
+    pub fn total_rounds(&self) -> u64 {
+        self.rounds
+    }
+    /// Rounds played so far.
+    pub fn round(&self) -> u64 {
+        self.round
+    }
+    /// The map.
+    pub fn map(&self) -> &MapData {
+        &self.map
+    }
+    /// The obstacles.
+    pub fn obstacles(&self) -> &ObstacleMap {
+        &self.map.obstacles
+    }
+    /// The navigation graph.
+    pub fn nav(&self) -> &NavGraph {
+        &self.nav
+    }
+    /// Robot types.
+    pub fn types(&self) -> &[RobotType] {
+        &self.types
+    }
+    /// Robot groups.
+    pub fn groups(&self) -> &[Group] {
+        &self.groups
+    }
+    /// Robots, by id.
+    pub fn robots(&self) -> &[Robot] {
+        &self.robots
+    }
+    /// Treasures, by id.
+    pub fn treasures(&self) -> &[TreasureState] {
+        &self.treasures
+    }
+    /// A treasure.
+    pub fn treasure(&self, id: TreasureId) -> Option<&TreasureState> {
+        self.treasures.get(id.index())
+    }
+    /// A robot's known map, if its strategy keeps one.
+    pub fn known_map(&self, id: RobotId) -> Option<&KnownMap> {
+        self.agents.get(id.index())?.mind.data.known.as_ref()
+    }
+    /// A robot's strategy needs.
+    pub fn needs(&self, id: RobotId) -> Option<Needs> {
+        self.agents.get(id.index()).map(|a| a.needs)
+    }
+    /// The union of all robots' views so far.
+    pub fn explored(&self) -> &KnownMap {
+        &self.explored
+    }
+    /// The last round's report.
+    pub fn report(&self) -> &RoundReport {
+        &self.report
+    }
+    /// Messages waiting for delivery at the start of the next round, per robot.
+    pub fn pending_messages(&self) -> &[Vec<Message>] {
+        &self.inboxes
+    }
+
+    /// Total memory held by the robots' data modules (known maps and memories), bytes.
+    pub fn robot_memory_bytes(&self) -> usize {
+        self.agents
+            .iter()
+            .map(|a| a.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes))
+            .sum()
+    }
+
+    /// Metrics for the current state.
+    pub(super) fn metrics(&self, round: u64, messages: u64, message_bytes: u64) -> RoundMetrics {
+        let alive: Vec<&Robot> = self.robots.iter().filter(|r| r.alive).collect();
+        let mean_energy = if alive.is_empty() {
+            0.0
+        } else {
+            alive.iter().map(|r| r.energy).sum::<f64>() / alive.len() as f64
+        };
+        RoundMetrics {
+            round,
+            explored_fraction: if self.total_free_cells == 0 {
+                1.0
+            } else {
+                self.explored_free_cells as f64 / self.total_free_cells as f64
+            },
+            treasures_found: self.treasures.iter().filter(|t| t.found_round.is_some()).count() as u32,
+            treasures_excavated: self.treasures.iter().filter(|t| t.buried == 0).count() as u32,
+            treasures_delivered: self.treasures.iter().filter(|t| t.delivered == t.initial).count() as u32,
+            robots_alive: alive.len() as u32,
+            mean_energy,
+            messages,
+            distance_m: self.robots.iter().map(|r| r.stats.distance_m).sum(),
+            units_dug: self.robots.iter().map(|r| r.stats.units_dug).sum(),
+            units_delivered: self.robots.iter().map(|r| r.stats.units_delivered).sum(),
+            message_bytes,
+        }
+    }
+
+    /// The random generator of a robot in a round: a function of (seed, robot, round) only.
+    pub(super) fn rng_for(seed: u64, robot: RobotId, round: u64) -> ChaCha8Rng {
+        let mut x = seed ^ 0x9E37_79B9_7F4A_7C15;
+        for v in [u64::from(robot.get()), round] {
+            // splitmix64 steps
+            x = x.wrapping_add(v).wrapping_add(0x9E37_79B9_7F4A_7C15);
+            x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            x ^= x >> 31;
+        }
+        ChaCha8Rng::seed_from_u64(x)
+    }
+}
+
+/// Cell size for the robot index: the typical query radius.
+pub(super) fn index_cell_m(types: &[RobotType]) -> f64 {
+    types
+        .iter()
+        .map(|t| t.view_radius_m.max(t.comm_radius_m))
+        .fold(1.0, f64::max)
+        .min(64.0)
+}

@@ -1,0 +1,13 @@
+//! Layer 5, input and output: the [`Observer`] trait through which viewers watch a run (and
+//! [`Simulation::run`](crate::engine::Simulation::run), which drives it), the CSV writers,
+//! the XML config and the invariant checker. The top layer: it may import from all below.
+
+mod config;
+mod csv;
+mod invariants;
+mod observer;
+
+pub use config::{GroupConfig, Outputs, SimConfig};
+pub use csv::{MetricsCsv, ROBOT_STATS_COLUMNS, write_robot_stats};
+pub use invariants::InvariantChecker;
+pub use observer::{Observer, ObserverError};

@@ -1,0 +1,158 @@
+//! A robot's knowledge of the terrain: a region quadtree where `1` = explored (paper §4.2).
+//!
+//! Only *which* cells are known is stored; what is in them is read from the kernel's
+//! [`ObstacleMap`] on demand, never copied.
+
+use glam::DVec2;
+
+use crate::spatial::geometry::{Aabb, Clipped, Disc, Shape};
+use crate::spatial::grid::Grid;
+use crate::spatial::obstacle_map::ObstacleMap;
+use crate::spatial::quadtree::PartialCells;
+use crate::spatial::quadtree::RegionQuadtree;
+
+/// The explored part of the map, as seen by one robot (or a team).
+#[derive(Clone, Debug)]
+pub struct KnownMap {
+    tree: RegionQuadtree,
+    /// Cells known, kept up to date by every mutation (maps only grow).
+    known_cells: u64,
+}
+
+impl KnownMap {
+    /// Nothing known yet.
+    pub fn new(grid: Grid) -> Self {
+        Self {
+            tree: RegionQuadtree::uniform(grid, false),
+            known_cells: 0,
+        }
+    }
+
+    /// Wrap a tree whose `FULL` leaves are known space.
+    pub fn from_tree(tree: RegionQuadtree) -> Self {
+        let known_cells = tree.count_cells(true);
+        Self { tree, known_cells }
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        self.tree.grid()
+    }
+
+    /// The underlying quadtree.
+    pub fn tree(&self) -> &RegionQuadtree {
+        &self.tree
+    }
+
+    /// Mark as known every map cell lying wholly inside the disc (a conservative raster: a
+    /// robot never claims to know a cell it has only partly seen). Returns whether anything
+    /// new became known.
+    pub fn mark_disc(&mut self, center: DVec2, radius_m: f64) -> bool {
+        self.mark(&Disc {
+            center,
+            radius: radius_m,
+        })
+    }
+
+    /// Mark as known every map cell lying wholly inside `shape`.
+    pub fn mark<S: Shape>(&mut self, shape: &S) -> bool {
+        let before = self.known_cells;
+        self.mark_reporting(shape, |_| {});
+        self.known_cells > before
+    }
+
+    /// [`mark`](Self::mark), calling `newly_known` with the squares that became known.
+    pub fn mark_reporting<S: Shape>(
+        &mut self,
+        shape: &S,
+        mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
+    ) {
+        let clipped = Clipped {
+            shape,
+            clip: self.grid().extent(),
+        };
+        let mut added = 0;
+        self.tree.fill_reporting(&clipped, true, PartialCells::Exclude, |sq| {
+            added += sq.cells();
+            newly_known(sq);
+        });
+        self.known_cells += added;
+    }
+
+    /// Whether the cell holding `p` is known (false outside the map).
+    pub fn is_known(&self, p: DVec2) -> bool {
+        self.tree.value_at(p) == Some(true)
+    }
+
+    /// Whether every cell overlapping the box's interior is known.
+    pub fn is_box_known(&self, area: &Aabb) -> bool {
+        self.tree.all_in(area, true)
+    }
+
+    /// Whether some cell of a grid square is known (one descent; see
+    /// [`RegionQuadtree::square_value`]).
+    #[inline]
+    pub fn touches_square(&self, sq: crate::spatial::quadtree::Square) -> bool {
+        self.tree.square_value(sq) != Some(false)
+    }
+
+    /// Whether every cell of a grid square is known.
+    #[inline]
+    pub fn covers_square(&self, sq: crate::spatial::quadtree::Square) -> bool {
+        self.tree.square_value(sq) == Some(true)
+    }
+
+    /// Whether some cell overlapping the shape is known.
+    pub fn touches_known<S: Shape>(&self, shape: &S) -> bool {
+        self.tree.any_leaf_in(shape, true)
+    }
+
+    /// Add everything `other` knows (both over the same map). Returns whether anything new
+    /// became known.
+    pub fn merge(&mut self, other: &KnownMap) -> bool {
+        let changed = self.tree.union_with(&other.tree);
+        if changed {
+            self.known_cells = self.tree.count_cells(true);
+        }
+        changed
+    }
+
+    /// Number of known cells (kept up to date, no traversal).
+    pub fn known_cells(&self) -> u64 {
+        self.known_cells
+    }
+
+    /// Known area in m².
+    pub fn known_area_m2(&self) -> f64 {
+        self.known_cells as f64 * self.grid().cell_area_m2()
+    }
+
+    /// Known free area in m² (explored space a robot could stand on).
+    pub fn known_free_area_m2(&self, obstacles: &ObstacleMap) -> f64 {
+        self.tree.count_cells_where(true, obstacles.tree(), false) as f64 * self.grid().cell_area_m2()
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.tree.memory_bytes()
+    }
+
+    /// Number of quadtree leaves.
+    pub fn leaf_count(&self) -> usize {
+        self.tree.leaf_count()
+    }
+
+    /// Check the tree's invariants.
+    pub fn validate(&self) -> crate::Result<()> {
+        self.problems().map_err(crate::Error::Malformed)
+    }
+
+    fn problems(&self) -> Result<(), String> {
+        self.tree.problems()?;
+        let counted = self.tree.count_cells(true);
+        if counted != self.known_cells {
+            return Err(format!("cached known cells {} ≠ {counted} counted", self.known_cells));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,26 @@
+//! Layer 1, spatial structures: geometry, the grid, the region quadtree behind obstacle and
+//! known maps, the treasure PR-quadtree, the robot hash grid, the navigation graph, and the
+//! ids that key them. Imports nothing from the layers above.
+
+mod geometry;
+mod grid;
+mod ids;
+mod known_map;
+mod nav;
+mod obstacle_map;
+mod quadtree;
+mod robot_index;
+mod treasure_index;
+
+pub use geometry::{
+    Aabb, Capsule, Clipped, Disc, Overlap, Shape, clip_line, clip_segment, point_segment_distance_squared,
+    segment_box_distance_squared, segment_enters_box_interior,
+};
+pub use grid::{Grid, MAX_DEPTH};
+pub use ids::{RobotId, TreasureId};
+pub use known_map::KnownMap;
+pub use nav::{NavGraph, NavNodeId, Route};
+pub use obstacle_map::ObstacleMap;
+pub use quadtree::{BitGrid, Components, PartialCells, Region, RegionQuadtree, Square};
+pub use robot_index::RobotIndex;
+pub use treasure_index::{BUCKET, Treasure, TreasureIndex};

@@ -1,0 +1,203 @@
+//! The kernel's obstacle map: a region quadtree of blocked cells (paper §4.1).
+//!
+//! Everything outside the map's extent is blocked: padding cells of the covering square are
+//! stored as blocked leaves (they merge into a few big squares), and the freeness tests also
+//! refuse shapes that leave the extent on its lower and left sides, where the tree ends.
+
+use std::ops::ControlFlow;
+
+use glam::DVec2;
+
+use crate::Result;
+use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line};
+use crate::spatial::grid::Grid;
+use crate::spatial::quadtree::RegionQuadtree;
+use crate::spatial::quadtree::Square;
+use crate::spatial::quadtree::{BitGrid, Region};
+
+/// The static obstacles of a map.
+#[derive(Clone, Debug)]
+pub struct ObstacleMap {
+    tree: RegionQuadtree,
+}
+
+impl ObstacleMap {
+    /// A map without obstacles.
+    pub fn empty(grid: Grid) -> Self {
+        Self::from_regions(grid, |_| Region::Empty)
+    }
+
+    /// Build from "is cell `(x, y)` blocked" (cell (0, 0) at the lower-left corner).
+    pub fn from_fn(grid: Grid, blocked: impl FnMut(u32, u32) -> bool) -> Self {
+        Self {
+            tree: RegionQuadtree::from_fn(grid, true, blocked),
+        }
+    }
+
+    /// Build from a raster of blocked cells the size of the map (row 0 at the bottom).
+    pub fn from_bitgrid(grid: Grid, blocked: &BitGrid) -> Result<Self> {
+        Ok(Self {
+            tree: RegionQuadtree::from_bitgrid(grid, blocked, true)?,
+        })
+    }
+
+    /// Build top-down from a classifier of squares (see [`RegionQuadtree::from_regions`]):
+    /// `Full` = blocked.
+    pub fn from_regions(grid: Grid, classify: impl FnMut(Square) -> Region) -> Self {
+        Self {
+            tree: RegionQuadtree::from_regions(grid, true, classify),
+        }
+    }
+
+    /// Wrap a tree whose `FULL` leaves are obstacles. Its padding must be blocked.
+    pub fn from_tree(tree: RegionQuadtree) -> crate::Result<Self> {
+        let map = Self { tree };
+        map.validate()?;
+        Ok(map)
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        self.tree.grid()
+    }
+
+    /// The underlying quadtree (`FULL` = blocked).
+    pub fn tree(&self) -> &RegionQuadtree {
+        &self.tree
+    }
+
+    /// Visit every blocked leaf overlapping `shape`; the visitor may stop early.
+    #[inline]
+    pub fn visit_blocked<S: Shape>(
+        &self,
+        shape: &S,
+        visit: impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        self.tree.visit_leaves_in(shape, true, visit)
+    }
+
+    /// Call `visit` with the world box of every blocked leaf overlapping the open disc.
+    #[inline]
+    pub fn for_each_blocked_in_disc(&self, center: DVec2, radius_m: f64, mut visit: impl FnMut(Aabb)) {
+        let _ = self.visit_blocked(
+            &Disc {
+                center,
+                radius: radius_m,
+            },
+            |_, b| {
+                visit(b);
+                ControlFlow::Continue(())
+            },
+        );
+    }
+
+    /// Call `visit` with the world box of every blocked leaf overlapping the box's interior.
+    pub fn for_each_blocked_in_box(&self, area: Aabb, mut visit: impl FnMut(Aabb)) {
+        let _ = self.visit_blocked(&area, |_, b| {
+            visit(b);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// Whether world point `p` lies in a free cell of the map.
+    pub fn is_point_free(&self, p: DVec2) -> bool {
+        self.grid().extent().contains_box(&Aabb { min: p, max: p }) && self.tree.value_at(p) == Some(false)
+    }
+
+    /// Whether a disc (a robot) overlaps no obstacle and stays inside the map.
+    pub fn is_disc_free(&self, center: DVec2, radius_m: f64) -> bool {
+        self.shape_free(&Disc {
+            center,
+            radius: radius_m,
+        })
+    }
+
+    /// Whether the segment `a → b` stays inside the map and never enters an obstacle's
+    /// interior (running along a wall is allowed).
+    pub fn is_segment_free(&self, a: DVec2, b: DVec2) -> bool {
+        self.shape_free(&Capsule { a, b, radius: 0.0 })
+    }
+
+    /// Whether a disc of `radius_m` can move in a straight line from `a` to `b` without
+    /// overlapping an obstacle or leaving the map (the test behind every robot move).
+    pub fn is_swept_disc_free(&self, a: DVec2, b: DVec2, radius_m: f64) -> bool {
+        self.shape_free(&Capsule { a, b, radius: radius_m })
+    }
+
+    fn shape_free<S: Shape>(&self, shape: &S) -> bool {
+        self.grid().extent().contains_box(&shape.bounds()) && !self.tree.any_leaf_in(shape, true)
+    }
+
+    /// Distance along the ray `origin + t·dir` (`dir` need not be normalised; distances are
+    /// in metres along it) to the first obstacle or the map's edge, if within `max_dist_m`.
+    pub fn first_hit(&self, origin: DVec2, dir: DVec2, max_dist_m: f64) -> Option<f64> {
+        let len = dir.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        let dir = dir / len;
+        let edge = match clip_line(origin, dir, 0.0, f64::INFINITY, &self.grid().extent()) {
+            Some((t0, t1)) if t0 <= 0.0 => t1,
+            _ => 0.0, // starts outside the map: already blocked
+        };
+        let hit = self
+            .tree
+            .first_hit(origin, dir, max_dist_m, true)
+            .map_or(edge, |t| t.min(edge));
+        (hit <= max_dist_m).then_some(hit)
+    }
+
+    /// Total blocked area inside the map, m².
+    pub fn blocked_area_m2(&self) -> f64 {
+        let g = self.grid();
+        let map_cells = u64::from(g.width_cells()) * u64::from(g.height_cells());
+        (map_cells - self.tree.count_cells(false)) as f64 * g.cell_area_m2()
+    }
+
+    /// Total free area, m².
+    pub fn free_area_m2(&self) -> f64 {
+        self.tree.count_cells(false) as f64 * self.grid().cell_area_m2()
+    }
+
+    /// Number of quadtree leaves (padding included).
+    pub fn leaf_count(&self) -> usize {
+        self.tree.leaf_count()
+    }
+
+    /// Number of blocked leaves (padding included).
+    pub fn blocked_leaf_count(&self) -> usize {
+        self.tree.count_leaves(true)
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        self.tree.memory_bytes()
+    }
+
+    /// Tree invariants plus: every padding cell is blocked.
+    pub fn validate(&self) -> crate::Result<()> {
+        self.problems().map_err(crate::Error::Malformed)
+    }
+
+    fn problems(&self) -> Result<(), String> {
+        self.tree.problems()?;
+        let g = *self.grid();
+        let (w, h) = (u64::from(g.width_cells()), u64::from(g.height_cells()));
+        let mut bad = None;
+        self.tree.for_each_leaf(|sq, blocked| {
+            let side = u64::from(sq.side_cells());
+            if !blocked && (u64::from(sq.x) + side > w || u64::from(sq.y) + side > h) {
+                bad.get_or_insert(sq);
+            }
+        });
+        match bad {
+            Some(sq) => Err(format!(
+                "free leaf at cell ({}, {}), {} cells wide, reaches outside the map (padding must be blocked)",
+                sq.x,
+                sq.y,
+                sq.side_cells()
+            )),
+            None => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! Robot positions in a spatial hash grid, rebuilt every round (paper §4.1 kept a map of
+//! positions and scanned it; this answers "robots within r of p" in time proportional to the
+//! robots nearby).
+//!
+//! Cells of `cell_m` metres are hashed into about two buckets per robot; a rebuild is one
+//! counting sort (O(n), no per-round allocation once warm), and a query looks at the buckets
+//! of the cells its disc covers. Memory is O(robots), whatever the map size.
+
+use glam::DVec2;
+
+use crate::spatial::ids::RobotId;
+
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    position: DVec2,
+    id: RobotId,
+    cell: (i32, i32),
+}
+
+/// Robots by position.
+#[derive(Clone, Debug)]
+pub struct RobotIndex {
+    cell_m: f64,
+    mask: u64,
+    /// `starts[b]..starts[b + 1]` are bucket b's entries.
+    starts: Vec<u32>,
+    entries: Vec<Entry>,
+    scratch: Vec<(u32, Entry)>,
+    cursor: Vec<u32>,
+}
+
+impl Default for RobotIndex {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RobotIndex {
+    /// An empty index.
+    pub fn new() -> Self {
+        Self {
+            cell_m: 1.0,
+            mask: 0,
+            starts: vec![0, 0],
+            entries: Vec::new(),
+            scratch: Vec::new(),
+            cursor: Vec::new(),
+        }
+    }
+
+    #[inline]
+    fn cell_of(&self, p: DVec2) -> (i32, i32) {
+        // `as` saturates, so far-away or non-finite positions land in edge cells, never UB.
+        ((p.x / self.cell_m).floor() as i32, (p.y / self.cell_m).floor() as i32)
+    }
+
+    #[inline]
+    fn bucket(&self, cell: (i32, i32)) -> usize {
+        let h = u64::from(cell.0 as u32).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ u64::from(cell.1 as u32).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+        ((h ^ (h >> 29)) & self.mask) as usize
+    }
+
+    /// Replace the contents with `robots`, using cells of `cell_m` metres (pick about the
+    /// typical query radius). Positions must be finite.
+    pub fn rebuild(&mut self, robots: impl IntoIterator<Item = (RobotId, DVec2)>, cell_m: f64) {
+        assert!(
+            cell_m.is_finite() && cell_m > 0.0,
+            "robot index cell size must be positive, got {cell_m}"
+        );
+        self.cell_m = cell_m;
+        self.scratch.clear();
+        self.scratch.extend(robots.into_iter().map(|(id, position)| {
+            (
+                0,
+                Entry {
+                    position,
+                    id,
+                    cell: (0, 0),
+                },
+            )
+        }));
+        let buckets = (2 * self.scratch.len()).next_power_of_two().max(16);
+        self.mask = buckets as u64 - 1;
+        self.starts.clear();
+        self.starts.resize(buckets + 1, 0);
+        for i in 0..self.scratch.len() {
+            let cell = self.cell_of(self.scratch[i].1.position);
+            let b = self.bucket(cell);
+            self.scratch[i].0 = b as u32;
+            self.scratch[i].1.cell = cell;
+            self.starts[b + 1] += 1;
+        }
+        for b in 0..buckets {
+            self.starts[b + 1] += self.starts[b];
+        }
+        let placeholder = Entry {
+            position: DVec2::ZERO,
+            id: RobotId::new(0),
+            cell: (0, 0),
+        };
+        self.entries.clear();
+        self.entries.resize(self.scratch.len(), placeholder);
+        // Stable placement (input order within a bucket) keeps query order deterministic.
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.starts);
+        for &(b, e) in &self.scratch {
+            self.entries[self.cursor[b as usize] as usize] = e;
+            self.cursor[b as usize] += 1;
+        }
+    }
+
+    /// Number of robots indexed.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether no robot is indexed.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Visit every robot within `radius_m` of `p` (closed disc), with its position.
+    pub fn for_each_within(&self, p: DVec2, radius_m: f64, mut visit: impl FnMut(RobotId, DVec2)) {
+        let r2 = radius_m * radius_m;
+        let (x0, y0) = self.cell_of(p - DVec2::splat(radius_m));
+        let (x1, y1) = self.cell_of(p + DVec2::splat(radius_m));
+        let cells = (i64::from(x1) - i64::from(x0) + 1) * (i64::from(y1) - i64::from(y0) + 1);
+        if cells > self.entries.len() as i64 {
+            // A disc wider than the swarm's spread: a scan is cheaper than the cells.
+            for e in &self.entries {
+                if e.position.distance_squared(p) <= r2 {
+                    visit(e.id, e.position);
+                }
+            }
+            return;
+        }
+        for cy in y0..=y1 {
+            for cx in x0..=x1 {
+                let b = self.bucket((cx, cy));
+                for e in &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize] {
+                    // Other cells may share the bucket; each is visited from its own cell.
+                    if e.cell == (cx, cy) && e.position.distance_squared(p) <= r2 {
+                        visit(e.id, e.position);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Bytes held.
+    pub fn memory_bytes(&self) -> usize {
+        std::mem::size_of::<Self>()
+            + self.starts.capacity() * 4
+            + self.entries.capacity() * std::mem::size_of::<Entry>()
+            + self.scratch.capacity() * std::mem::size_of::<(u32, Entry)>()
+            + self.cursor.capacity() * 4
+    }
+}

@@ -1,0 +1,98 @@
+//! Per-round metrics, declared once: the table below makes the [`RoundMetrics`] fields, the
+//! CSV columns ([`METRICS_COLUMNS`], [`RoundMetrics::csv_record`]) and the chart series
+//! ([`RoundMetrics::series`]) that viewers draw, so they can never drift apart.
+
+/// Declares the metrics: `field: type, CSV format, chart path` with the field's docs.
+macro_rules! metrics_table {
+    ($($(#[$doc:meta])* $field:ident: $ty:ty, $fmt:literal, $chart:literal;)*) => {
+        /// The state of a run after a round.
+        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        pub struct RoundMetrics {
+            $($(#[$doc])* pub $field: $ty,)*
+        }
+
+        /// Columns of the per-round metrics CSV, in order.
+        pub const METRICS_COLUMNS: [&str; METRICS_COUNT] = [$(stringify!($field)),*];
+
+        /// Chart path (below `metrics/`) of every column but `round`, which is the timeline.
+        const CHARTS: [&str; METRICS_COUNT] = [$($chart),*];
+
+        impl RoundMetrics {
+            /// The values in [`METRICS_COLUMNS`] order, formatted for CSV.
+            pub fn csv_record(&self) -> [String; METRICS_COUNT] {
+                [$(format!($fmt, self.$field)),*]
+            }
+
+            /// Every value in [`METRICS_COLUMNS`] order as `f64` (counts are exact below 2⁵³).
+            #[allow(clippy::unnecessary_cast)] // the table mixes f64 and integer columns
+            pub fn values(&self) -> [f64; METRICS_COUNT] {
+                [$(self.$field as f64),*]
+            }
+        }
+    };
+}
+
+/// Number of metric columns (the round included).
+pub const METRICS_COUNT: usize = 12;
+
+metrics_table! {
+    /// Round number (1-based).
+    round: u64, "{}", "";
+    /// Free area inside the union of all known regions ÷ total free area.
+    explored_fraction: f64, "{:.6}", "exploration/explored_fraction";
+    /// Treasures seen by some robot so far.
+    treasures_found: u32, "{}", "treasures/found";
+    /// Treasures with nothing left buried.
+    treasures_excavated: u32, "{}", "treasures/excavated";
+    /// Treasures with every unit delivered.
+    treasures_delivered: u32, "{}", "treasures/delivered";
+    /// Robots with energy left.
+    robots_alive: u32, "{}", "robots/alive";
+    /// Mean energy of the live robots (0 when none).
+    mean_energy: f64, "{:.3}", "energy/mean_energy";
+    /// Messages sent this round.
+    messages: u64, "{}", "messages/messages";
+    /// Metres travelled by all robots since the start.
+    distance_m: f64, "{:.3}", "totals/distance_m";
+    /// Units dug since the start.
+    units_dug: u64, "{}", "totals/units_dug";
+    /// Units delivered since the start.
+    units_delivered: u64, "{}", "totals/units_delivered";
+    /// Payload bytes sent this round.
+    message_bytes: u64, "{}", "messages/message_bytes";
+}
+
+impl RoundMetrics {
+    /// `(column, chart path below "metrics/", value)` of every metric but the round.
+    pub fn series(&self) -> impl Iterator<Item = (&'static str, &'static str, f64)> {
+        let values = self.values();
+        (1..METRICS_COUNT).map(move |i| (METRICS_COLUMNS[i], CHARTS[i], values[i]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn columns_records_and_series_line_up() {
+        let m = RoundMetrics {
+            round: 7,
+            explored_fraction: 0.25,
+            treasures_found: 3,
+            mean_energy: 12.5,
+            message_bytes: 99,
+            ..RoundMetrics::default()
+        };
+        let record = m.csv_record();
+        assert_eq!(METRICS_COLUMNS[0], "round");
+        assert_eq!(record[0], "7");
+        assert_eq!(record[1], "0.250000");
+        assert_eq!(record[2], "3");
+        assert_eq!(record[6], "12.500");
+        let series: Vec<_> = m.series().collect();
+        assert_eq!(series.len(), METRICS_COUNT - 1);
+        assert_eq!(series[0], ("explored_fraction", "exploration/explored_fraction", 0.25));
+        assert_eq!(series[10], ("message_bytes", "messages/message_bytes", 99.0));
+    }
+}

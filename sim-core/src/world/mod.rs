@@ -1,0 +1,17 @@
+//! Layer 2, the world model: robot types, robots, treasures and actions, messages, memory
+//! lists, the map file, and what a round reports (events, links, metrics). Imports only
+//! from [`spatial`](crate::spatial).
+
+mod mapfile;
+mod memory;
+mod messages;
+mod metrics;
+mod model;
+mod report;
+
+pub use mapfile::{HomeBase, MAGIC, MapData, TreasureSpec, VERSION, write_atomically};
+pub use memory::{MemoryList, Retention};
+pub use messages::{Message, Payload, Recipient, Sighting};
+pub use metrics::{METRICS_COLUMNS, METRICS_COUNT, RoundMetrics};
+pub use model::{Action, Outcome, REACH_M, Robot, RobotStats, RobotType, TreasureState};
+pub use report::{Event, Link, RoundReport, StrategyEvent};
