@@ -61,9 +61,15 @@ impl Default for PlaceOptions {
     }
 }
 
+/// A free leaf as a place for the home base: (the full disc fits, distance² of the disc's
+/// centre from the map's centre, the leaf's lower-left and upper-right corners).
+type Candidate = (bool, f64, DVec2, DVec2);
+
 /// A home base near the centre of the largest free region: a disc of `radius_m` that lies in
 /// free space if any free leaf is big enough for it, else a smaller disc in a free cell.
+/// Every disc returned has been checked with [`ObstacleMap::is_disc_free`].
 pub fn auto_home(obstacles: &ObstacleMap, radius_m: f64) -> Result<HomeBase> {
+    check_radius(radius_m)?;
     let comps = Components::new(obstacles.tree());
     let g = obstacles.grid();
     let Some(big) = comps.largest() else {
@@ -72,27 +78,73 @@ pub fn auto_home(obstacles: &ObstacleMap, radius_m: f64) -> Result<HomeBase> {
         ));
     };
     let target = g.extent().center();
-    let mut best: Option<(bool, f64, DVec2, f64)> = None; // (fits, distance², centre, radius)
-    for (sq, label) in comps.leaves() {
-        if label != big {
-            continue;
-        }
-        let b = g.square(sq.x, sq.y, sq.level);
-        let half = (b.max.x - b.min.x) / 2.0;
-        let fits = half >= radius_m;
-        let (r, inset) = if fits { (radius_m, radius_m) } else { (half, half) };
-        let c = target.clamp(b.min + inset, b.max - inset);
-        let d = c.distance_squared(target);
-        let better = match best {
-            None => true,
-            Some((bf, bd, _, _)) => (fits && !bf) || (fits == bf && d < bd),
-        };
-        if better {
-            best = Some((fits, d, c, r));
-        }
+    // A leaf's rank: a leaf the full disc fits in first, then by the distance of the disc's
+    // centre from the map's centre.
+    let candidates = || {
+        comps.leaves().filter(|&(_, label)| label == big).map(|(sq, _)| {
+            let b = g.square(sq.x, sq.y, sq.level);
+            let (fits, center, _) = disc_in_box(b.min, b.max, target, radius_m);
+            (fits, center.distance_squared(target), b.min, b.max)
+        })
+    };
+    let rank = |a: &Candidate, b: &Candidate| b.0.cmp(&a.0).then(a.1.total_cmp(&b.1));
+    // The best leaf (the first of equals); its disc is free unless rounding says otherwise.
+    let best = candidates().reduce(|a, b| if rank(&b, &a).is_lt() { b } else { a });
+    let free = |(_, _, min, max): Candidate| free_disc_in_box(obstacles, min, max, target, radius_m);
+    let found = best.and_then(free).or_else(|| {
+        // Rare: try every leaf, best first (the sort is stable: first of equals first).
+        let mut all: Vec<_> = candidates().collect();
+        all.sort_by(rank);
+        all.into_iter().find_map(free)
+    });
+    match found {
+        Some((center, radius_m)) => Ok(HomeBase::Disc { center, radius_m }),
+        None => Err(EditorError::Placement(
+            "no free disc fits in the largest free region (are the map's cells too small for its coordinates?)".into(),
+        )),
     }
-    let (_, _, center, r) = best.expect("the largest component has a leaf");
-    Ok(HomeBase::Disc { center, radius_m: r })
+}
+
+/// The disc of radius `radius_m` (or, if the box is too small for it, of the largest radius
+/// the box holds) inside the box `min..max` whose centre is nearest to `target`:
+/// `(fits, centre, radius)`. Never inverts a range: a box narrower than the disc along an axis
+/// (the two sides of a square leaf can differ by float rounding) gets the box's middle there.
+fn disc_in_box(min: DVec2, max: DVec2, target: DVec2, radius_m: f64) -> (bool, DVec2, f64) {
+    let room = ((max - min) * 0.5).min_element();
+    let fits = room >= radius_m;
+    let r = if fits { radius_m } else { room };
+    let (lo, hi) = (min + r, max - r);
+    let along = |t: f64, lo: f64, hi: f64, a: f64, b: f64| {
+        if lo <= hi { t.clamp(lo, hi) } else { a + (b - a) * 0.5 }
+    };
+    let center = DVec2::new(
+        along(target.x, lo.x, hi.x, min.x, max.x),
+        along(target.y, lo.y, hi.y, min.y, max.y),
+    );
+    (fits, center, r)
+}
+
+/// [`disc_in_box`] for a free leaf, checked against the map: a disc that touches the leaf's
+/// edges can overlap a blocked neighbour (or leave the map) by a rounding error; then the
+/// leaf's middle, then slightly smaller discs there are tried. `None` if nothing is free.
+fn free_disc_in_box(
+    obstacles: &ObstacleMap,
+    min: DVec2,
+    max: DVec2,
+    target: DVec2,
+    radius_m: f64,
+) -> Option<(DVec2, f64)> {
+    let (_, center, r) = disc_in_box(min, max, target, radius_m);
+    let middle = min + (max - min) * 0.5;
+    [
+        (center, r),
+        (middle, r),
+        (middle, r * (1.0 - 1e-9)),
+        (middle, r * (1.0 - 1e-6)),
+        (middle, r * (1.0 - 1e-3)),
+    ]
+    .into_iter()
+    .find(|&(c, r)| r > 0.0 && obstacles.is_disc_free(c, r))
 }
 
 fn check_radius(r: f64) -> Result<()> {

@@ -22,9 +22,32 @@ pub fn check_raster_size(width: u32, height: u32, what: &str) -> Result<()> {
     Ok(())
 }
 
-/// A grid of `width × height` cells whose lower-left corner is `origin`.
+/// Smallest cell side accepted, relative to the largest coordinate of the map: below it the
+/// corners of neighbouring cells are no longer (reliably) different numbers.
+pub const MIN_RELATIVE_CELL: f64 = 1e-9;
+
+/// A grid of `width × height` cells whose lower-left corner is `origin`. Besides
+/// [`Grid::new`]'s checks, refuses grids whose coordinates or areas cannot be computed with:
+/// a corner or the map's area that overflows, a cell area that underflows, or cells too small
+/// for the magnitude of their coordinates (e.g. 5 cm cells at x = 10²⁰ m).
 pub fn grid(origin: DVec2, cell_m: f64, width: u32, height: u32) -> Result<Grid> {
-    Ok(Grid::new(origin, cell_m, width, height)?)
+    let g = Grid::new(origin, cell_m, width, height)?;
+    let far = g.corner(g.side_cells(), g.side_cells());
+    let largest = origin.abs().max(far.abs()).max_element();
+    let usable = far.is_finite()
+        && (g.width_m() * g.height_m()).is_finite()
+        && (cell_m * cell_m).is_normal()
+        && cell_m >= largest * MIN_RELATIVE_CELL;
+    if usable {
+        Ok(g)
+    } else {
+        Err(EditorError::InvalidParameter(format!(
+            "{width} × {height} cells of {cell_m} m with the lower-left corner at ({}, {}) cannot be computed with \
+             (coordinates or areas overflow, or the cells are too small for coordinates of that size); \
+             choose another resolution or origin",
+            origin.x, origin.y
+        )))
+    }
 }
 
 /// Build an obstacle map from a raster whose row 0 is the **top** row (image order):

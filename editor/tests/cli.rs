@@ -1,6 +1,9 @@
 //! The `smartteams-editor` binary end to end: exit codes, JSON stats, error messages.
 
+use std::path::{Path, PathBuf};
 use std::process::Command;
+
+use sim_core::{HomeBase, MapData};
 
 fn editor() -> Command {
     Command::new(env!("CARGO_BIN_EXE_smartteams-editor"))
@@ -112,4 +115,144 @@ fn bad_input_is_an_error_naming_the_file_not_a_panic() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("junk.stmap") && !err.contains("panicked"), "{err}");
+}
+
+/// Writes a ROS map (`map.yaml` + `img.pgm`, 5 cm pixels, origin 0, 0) of `w × h` pixels,
+/// `blocked(col, y)` with y counted from the bottom. Returns the YAML's path.
+fn write_ros_5cm(dir: &Path, w: u32, h: u32, blocked: impl Fn(u32, u32) -> bool) -> PathBuf {
+    let mut pgm = format!("P5\n{w} {h}\n255\n").into_bytes();
+    for row in 0..h {
+        for col in 0..w {
+            pgm.push(if blocked(col, h - 1 - row) { 0 } else { 254 });
+        }
+    }
+    std::fs::write(dir.join("img.pgm"), pgm).unwrap();
+    let yaml = dir.join("map.yaml");
+    std::fs::write(
+        &yaml,
+        "image: img.pgm\nresolution: 0.050000\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    yaml
+}
+
+fn run_ok(cmd: &mut Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{:?}: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Issue 10: `import` of a ROS map at 5 cm per pixel panicked in the automatic home placement
+/// (`clamp: expected min <= max`). A square quadtree leaf's world box is not exactly square in
+/// floating point (its x and y sides come from different corners), and the leaf's half width
+/// along x was used as the inset along y too: for some 5 cm leaves `min.y + half > max.y -
+/// half` by an ulp. Here every free leaf is a single 5 cm cell (a blocked pixel in every 2 × 2
+/// block; the free cells are all connected) and the cell nearest the centre, (10, 6), is one
+/// with the inverted range; the cell below it is blocked, so a disc shifted down by that ulp
+/// (what the clamp gave where glam's assertions are off) overlaps it.
+#[test]
+fn issue10_ros_import_at_5cm_does_not_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (21u32, 13u32);
+    let blocked = |x: u32, y: u32| x.is_multiple_of(2) && !y.is_multiple_of(2);
+    let yaml = write_ros_5cm(dir.path(), w, h, blocked);
+    let map_path = dir.path().join("out.stmap");
+    let out = editor()
+        .arg("import")
+        .arg(&yaml)
+        .arg("-o")
+        .arg(&map_path)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && !err.contains("panicked"),
+        "{:?}: {err}",
+        out.status
+    );
+
+    let out = run_ok(editor().arg("validate").arg(&map_path));
+    assert!(String::from_utf8_lossy(&out.stdout).ends_with(": ok\n"));
+    let out = run_ok(editor().args(["stats", "--json"]).arg(&map_path));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (v["width_cells"].as_u64(), v["height_cells"].as_u64()),
+        (Some(21), Some(13))
+    );
+    assert_eq!(v["cell_m"].as_f64(), Some(0.05));
+    let blocked_cells = (0..w * h).filter(|&i| blocked(i % w, i / w)).count();
+    assert_eq!(blocked_cells, 11 * 6);
+    let area = v["blocked_area_m2"].as_f64().unwrap();
+    assert!((area - 66.0 * 0.05 * 0.05).abs() < 1e-12, "{area}");
+    let png = dir.path().join("out.png");
+    run_ok(editor().arg("preview").arg(&map_path).arg("-o").arg(&png));
+    assert_eq!(image::image_dimensions(&png).unwrap(), (21, 13));
+
+    // The home base the CLI chose is a disc that is free of obstacles and inside the map.
+    let map = MapData::load(&map_path).unwrap();
+    let HomeBase::Disc { center, radius_m } = map.home else {
+        panic!("auto home is a disc, got {:?}", map.home);
+    };
+    assert!(radius_m > 0.0 && radius_m <= 2.0, "{radius_m}");
+    assert!(
+        map.obstacles.is_disc_free(center, radius_m),
+        "home {center} r {radius_m}"
+    );
+    // (serde_json's default float parsing may be an ulp off: compare with a tolerance.)
+    let json_home = [
+        v["home_center"][0].as_f64().unwrap(),
+        v["home_center"][1].as_f64().unwrap(),
+    ];
+    assert!((json_home[0] - center.x).abs() < 1e-12 && (json_home[1] - center.y).abs() < 1e-12);
+    // Its centre lies in a free cell (checked on the pixels written above).
+    let (x, y) = ((center.x / 0.05).floor() as u32, (center.y / 0.05).floor() as u32);
+    assert!(x < w && y < h && !blocked(x, y), "home centre in cell ({x}, {y})");
+    assert_eq!((x, y), (10, 6), "the leaf with the inverted range is the one chosen");
+}
+
+/// Importers refuse grids whose coordinates cannot be computed with (cells too small for the
+/// size of their coordinates, areas that under- or overflow) with an error naming the file,
+/// instead of panicking in the home placement or writing a map with NaN areas.
+#[test]
+fn import_refuses_grids_it_cannot_compute_with() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("tiny.map");
+    std::fs::write(&file, "type octile\nheight 3\nwidth 4\nmap\n....\n.@..\n....\n").unwrap();
+    let out_map = dir.path().join("out.stmap");
+    for args in [
+        &["--resolution-m", "1e-300"][..],
+        &["--resolution-m", "1e306"],
+        &["--origin", "1e20,1e20"],
+        &["--origin", "1e308,0"],
+    ] {
+        let out = editor()
+            .arg("import")
+            .arg(&file)
+            .args(args)
+            .arg("-o")
+            .arg(&out_map)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("tiny.map") && err.contains("cannot be computed with"),
+            "{args:?}: {err}"
+        );
+        assert!(!out_map.exists(), "{args:?}: nothing is written on failure");
+    }
+    // The same file at sensible settings imports.
+    run_ok(
+        editor()
+            .arg("import")
+            .arg(&file)
+            .args(["--resolution-m", "0.05", "--origin=-1e4,1e4", "-o"])
+            .arg(&out_map),
+    );
 }

@@ -101,7 +101,8 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = read(path)?;
     let m = parse(&text).map_err(|p| EditorError::bad_input(path, format!("malformed MovingAI map: {p}")))?;
     check_raster_size(m.width, m.height, "this map")?;
-    let g = grid(opts.origin, opts.resolution_m.unwrap_or(1.0), m.width, m.height)?;
+    let g = grid(opts.origin, opts.resolution_m.unwrap_or(1.0), m.width, m.height)
+        .map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     map_from_top_rows(g, |col, row| !passable(m.rows[row as usize][col as usize]))
 }
 

@@ -166,7 +166,8 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let img = load_image(&image_path)?.into_rgba8();
     let (w, h) = img.dimensions();
     check_raster_size(w, h, "this image")?;
-    let g = grid(ros.origin, opts.resolution_m.unwrap_or(ros.resolution), w, h)?;
+    let g = grid(ros.origin, opts.resolution_m.unwrap_or(ros.resolution), w, h)
+        .map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     map_from_top_rows(g, |col, row| {
         let [r, gr, b, a] = img.get_pixel(col, row).0;
         let v = (f64::from(r) + f64::from(gr) + f64::from(b)) / 3.0;
