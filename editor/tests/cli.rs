@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use sim_core::{HomeBase, MapData};
+use sim_core::world::{HomeBase, MapData};
 
 fn editor() -> Command {
     Command::new(env!("CARGO_BIN_EXE_smartteams-editor"))

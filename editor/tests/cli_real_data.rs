@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use glam::DVec2;
-use sim_core::{HomeBase, MapData};
+use sim_core::world::{HomeBase, MapData};
 
 /// A real map as this test reads it.
 struct Raw {

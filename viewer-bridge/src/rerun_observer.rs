@@ -13,7 +13,7 @@
 //! | `world/explored` | collective explored region (raster) | every `explored_every` logged rounds |
 //! | `world/known/<id>` | one robot's known region, coarse | every `known_every` rounds, if its coarse region changed |
 //! | `world3d/…` | ground, obstacle boxes with heights, robots on the plane | static / logged rounds |
-//! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`METRIC_ENTITIES`]) | every round |
+//! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`metric_entities`]) | every round |
 //! | `events` | `TextLog` of the round's events | every round with events |
 //!
 //! The simulation thread copies each round into a frame; a logging thread builds the
@@ -23,28 +23,23 @@ use sim_core::engine::Simulation;
 use sim_core::glam::DVec2;
 use sim_core::io::{Observer, ObserverError};
 use sim_core::spatial::Aabb;
-use sim_core::world::Outcome;
-use sim_core::world::{Event, Link, RoundReport};
+use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, RoundMetrics, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
 
 /// The sequence timeline every per-round entity is logged on.
 pub const TIMELINE: &str = "round";
 
-/// Metrics CSV column → entity path, for every column but `round` (the timeline itself).
-pub const METRIC_ENTITIES: [(&str, &str); 11] = [
-    ("explored_fraction", "metrics/exploration/explored_fraction"),
-    ("treasures_found", "metrics/treasures/found"),
-    ("treasures_excavated", "metrics/treasures/excavated"),
-    ("treasures_delivered", "metrics/treasures/delivered"),
-    ("robots_alive", "metrics/robots/alive"),
-    ("mean_energy", "metrics/energy/mean_energy"),
-    ("messages", "metrics/messages/messages"),
-    ("distance_m", "metrics/totals/distance_m"),
-    ("units_dug", "metrics/totals/units_dug"),
-    ("units_delivered", "metrics/totals/units_delivered"),
-    ("message_bytes", "metrics/messages/message_bytes"),
-];
+/// Metrics CSV column → entity path (`metrics/<chart>`), for every column but `round` (the
+/// timeline itself): read from sim-core's one metrics table, so charts and CSV agree.
+pub fn metric_entities() -> impl Iterator<Item = (&'static str, String)> {
+    RoundMetrics::default()
+        .series()
+        .map(|(column, chart, _)| (column, format!("metrics/{chart}")))
+}
+
+/// Number of charted metrics.
+const CHARTED: usize = METRICS_COUNT - 1;
 
 /// Most communication links drawn in one round by default: a dense swarm delivers O(n²)
 /// messages a round, and beyond a few thousand lines the view is a solid blot while the
@@ -379,8 +374,8 @@ impl RerunObserver {
 /// One round as the logging thread needs it: owned copies, no references into the simulation.
 struct Frame {
     round: u64,
-    /// Metric values in [`METRIC_ENTITIES`] order (none for round 0).
-    metrics: Option<[f64; 11]>,
+    /// Metric values in [`metric_entities`] order (none for round 0).
+    metrics: Option<[f64; CHARTED]>,
     /// The round's events: (is a warning, text).
     events: Vec<(bool, String)>,
     /// The world, on logged rounds.
@@ -685,27 +680,18 @@ fn log_links(rec: &rerun::RecordingStream, links: &[[[f32; 2]; 2]]) -> rerun::Re
     )
 }
 
-/// A round's metric values in [`METRIC_ENTITIES`] order.
-fn metric_values(report: &RoundReport) -> [f64; 11] {
-    let m = &report.metrics;
-    [
-        m.explored_fraction,
-        f64::from(m.treasures_found),
-        f64::from(m.treasures_excavated),
-        f64::from(m.treasures_delivered),
-        f64::from(m.robots_alive),
-        m.mean_energy,
-        m.messages as f64,
-        m.distance_m,
-        m.units_dug as f64,
-        m.units_delivered as f64,
-        m.message_bytes as f64,
-    ]
+/// A round's metric values in [`metric_entities`] order.
+fn metric_values(report: &RoundReport) -> [f64; CHARTED] {
+    let mut values = [0.0; CHARTED];
+    for (slot, (_, _, v)) in values.iter_mut().zip(report.metrics.series()) {
+        *slot = v;
+    }
+    values
 }
 
-fn log_metrics(rec: &rerun::RecordingStream, values: &[f64; 11]) -> rerun::RecordingStreamResult<()> {
-    for ((_, path), v) in METRIC_ENTITIES.iter().zip(values) {
-        rec.log(*path, &rerun::Scalars::single(*v))?;
+fn log_metrics(rec: &rerun::RecordingStream, values: &[f64; CHARTED]) -> rerun::RecordingStreamResult<()> {
+    for ((_, path), v) in metric_entities().zip(values) {
+        rec.log(path, &rerun::Scalars::single(*v))?;
     }
     Ok(())
 }
@@ -723,7 +709,7 @@ fn log_events(rec: &rerun::RecordingStream, events: &[(bool, String)]) -> rerun:
 }
 
 fn log_series_styles(rec: &rerun::RecordingStream) -> rerun::RecordingStreamResult<()> {
-    for (column, path) in METRIC_ENTITIES {
+    for (column, path) in metric_entities() {
         rec.log_static(path, &rerun::SeriesLines::new().with_names([column]))?;
     }
     Ok(())

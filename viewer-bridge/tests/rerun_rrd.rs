@@ -237,7 +237,7 @@ fn check_robot_detail(s: &Value, rounds: u64, robot_stats: &Path) {
 /// Metrics: one row per round, equal to the CSV of the same run.
 fn check_metrics(s: &Value, rounds: u64, metrics: &Path) {
     let csv = read_metrics(metrics);
-    for (column, entity) in viewer_bridge::rerun_observer::METRIC_ENTITIES {
+    for (column, entity) in viewer_bridge::rerun_observer::metric_entities() {
         let values = s["scalars"][format!("/{entity}")]
             .as_object()
             .unwrap_or_else(|| panic!("no scalars for {entity}"));

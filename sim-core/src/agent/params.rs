@@ -93,6 +93,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::float_cmp)] // the values are exact decimal literals parsed back
     fn ranges_are_checked_and_absent_values_default() {
         let p = Params::from_pairs([("a", "2.5"), ("n", "7"), ("big", "18446744073709551615")]);
         assert_eq!(p.f64_in("a", 0.0, 0.0..=3.0).unwrap(), 2.5);

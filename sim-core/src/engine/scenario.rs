@@ -157,7 +157,10 @@ impl ScenarioBuilder {
                     if !obstacles.is_disc_free(p, kind.radius_m) {
                         return Err(group_error(
                             gi,
-                            format!("starts at ({}, {}), which is inside an obstacle or outside the map", p.x, p.y),
+                            format!(
+                                "starts at ({}, {}), which is inside an obstacle or outside the map",
+                                p.x, p.y
+                            ),
                         ));
                     }
                     p
@@ -168,27 +171,8 @@ impl ScenarioBuilder {
                 None => demand.push((at, u64::from(g.count), gi)),
             }
         }
-        let total: u64 = demand.iter().map(|d| d.1).sum();
-        if total > u64::from(u32::MAX) {
-            return Err(Error::InvalidParameter(format!(
-                "{total} robots in all: at most {} robots can be simulated",
-                u32::MAX
-            )));
-        }
-        let placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
-        for &(at, wanted, gi) in &demand {
-            let room = placer.capacity_bound(max_radius_m);
-            if wanted > room {
-                return Err(group_error(
-                    gi,
-                    format!(
-                        "{wanted} robots start around ({}, {}), but at most {room} robots of radius {max_radius_m} m fit there on this map",
-                        at.x, at.y
-                    ),
-                ));
-            }
-        }
-        let mut placer = placer;
+        let total = check_room(&demand, obstacles, max_radius_m, &group_error)?;
+        let mut placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
         let mut strategies = Vec::with_capacity(total as usize);
         let mut starts = Vec::with_capacity(total as usize);
         for (gi, g) in groups.iter().enumerate() {
@@ -318,6 +302,38 @@ impl std::fmt::Debug for Scenario {
             .field("robots", &self.starts.len())
             .finish_non_exhaustive()
     }
+}
+
+/// Refuse at once what cannot fit: more robots than can be simulated, or more around one
+/// start than its lattice has room for (`demand`: start, robots, first group starting
+/// there). Returns the total number of robots.
+fn check_room(
+    demand: &[(DVec2, u64, usize)],
+    obstacles: &ObstacleMap,
+    max_radius_m: f64,
+    group_error: &dyn Fn(usize, String) -> Error,
+) -> Result<u64> {
+    let total: u64 = demand.iter().map(|d| d.1).sum();
+    if total > u64::from(u32::MAX) {
+        return Err(Error::InvalidParameter(format!(
+            "{total} robots in all: at most {} robots can be simulated",
+            u32::MAX
+        )));
+    }
+    let placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
+    for &(at, wanted, gi) in demand {
+        let room = placer.capacity_bound(max_radius_m);
+        if wanted > room {
+            return Err(group_error(
+                gi,
+                format!(
+                    "{wanted} robots start around ({}, {}), but at most {room} robots of radius {max_radius_m} m fit there on this map",
+                    at.x, at.y
+                ),
+            ));
+        }
+    }
+    Ok(total)
 }
 
 /// Spacing of the start lattice for robots of radius `r`.

@@ -24,7 +24,7 @@ macro_rules! metrics_table {
             }
 
             /// Every value in [`METRICS_COLUMNS`] order as `f64` (counts are exact below 2⁵³).
-            #[allow(clippy::unnecessary_cast)] // the table mixes f64 and integer columns
+            #[allow(clippy::unnecessary_cast, clippy::cast_lossless)] // the table mixes f64 and integer columns
             pub fn values(&self) -> [f64; METRICS_COUNT] {
                 [$(self.$field as f64),*]
             }
@@ -64,7 +64,7 @@ metrics_table! {
 
 impl RoundMetrics {
     /// `(column, chart path below "metrics/", value)` of every metric but the round.
-    pub fn series(&self) -> impl Iterator<Item = (&'static str, &'static str, f64)> {
+    pub fn series(&self) -> impl Iterator<Item = (&'static str, &'static str, f64)> + use<> {
         let values = self.values();
         (1..METRICS_COUNT).map(move |i| (METRICS_COLUMNS[i], CHARTS[i], values[i]))
     }
@@ -75,6 +75,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::float_cmp)] // the values are exact decimal literals parsed back
     fn columns_records_and_series_line_up() {
         let m = RoundMetrics {
             round: 7,

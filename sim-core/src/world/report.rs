@@ -83,20 +83,20 @@ impl StrategyEvent {
 impl std::fmt::Display for Event {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Event::RobotDisabled { robot } => write!(f, "robot {} is out of energy and disabled", robot),
-            Event::TreasureFound { treasure, by } => write!(f, "treasure {} found by robot {}", treasure, by),
+            Event::RobotDisabled { robot } => write!(f, "robot {robot} is out of energy and disabled"),
+            Event::TreasureFound { treasure, by } => write!(f, "treasure {treasure} found by robot {by}"),
             Event::TreasureExcavated { treasure, by } => {
-                write!(f, "treasure {} fully excavated by robot {}", treasure, by)
+                write!(f, "treasure {treasure} fully excavated by robot {by}")
             }
             Event::TreasureDelivered { treasure, by } => {
-                write!(f, "treasure {} fully delivered by robot {}", treasure, by)
+                write!(f, "treasure {treasure} fully delivered by robot {by}")
             }
             Event::MapExplored => write!(f, "the whole free area is explored"),
             Event::GroupJoined { robot, leader } => {
-                write!(f, "robot {} joined the group of robot {}", robot, leader)
+                write!(f, "robot {robot} joined the group of robot {leader}")
             }
-            Event::GroupLeft { robot, leader } => write!(f, "robot {} left the group of robot {}", robot, leader),
-            Event::Note { robot, text } => write!(f, "robot {}: {text}", robot),
+            Event::GroupLeft { robot, leader } => write!(f, "robot {robot} left the group of robot {leader}"),
+            Event::Note { robot, text } => write!(f, "robot {robot}: {text}"),
         }
     }
 }

@@ -21,7 +21,7 @@ impl RegionQuadtree {
     /// tree over `grid`. Never trusts the input: a wrong count, a split single cell or a
     /// non-canonical group is an error `(node index, problem)`.
     pub(crate) fn decode_preorder(grid: Grid, packed: &[u8], nodes: u64) -> Result<Self, (u64, String)> {
-        if nodes == 0 || (nodes - 1) % 4 != 0 || (packed.len() as u64) < nodes.div_ceil(4) {
+        if nodes == 0 || !(nodes - 1).is_multiple_of(4) || (packed.len() as u64) < nodes.div_ceil(4) {
             return Err((
                 0,
                 format!("node count {nodes} does not fit {} bytes as 4k+1 nodes", packed.len()),
