@@ -147,6 +147,8 @@ impl ScenarioBuilder {
         // Room first, before anything is built for each robot: a crowd that cannot fit is
         // refused at once, whatever its size.
         let mut demand: Vec<(DVec2, u64, usize)> = Vec::new();
+        // Each group's start point, checked once here and used again for placement.
+        let mut centres = Vec::with_capacity(groups.len());
         for (gi, g) in groups.iter().enumerate() {
             let kind = types
                 .get(g.type_index)
@@ -166,6 +168,7 @@ impl ScenarioBuilder {
                     p
                 }
             };
+            centres.push(at);
             match demand.iter_mut().find(|d| d.0 == at) {
                 Some(d) => d.1 += u64::from(g.count),
                 None => demand.push((at, u64::from(g.count), gi)),
@@ -175,12 +178,8 @@ impl ScenarioBuilder {
         let mut placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
         let mut strategies = Vec::with_capacity(total as usize);
         let mut starts = Vec::with_capacity(total as usize);
-        for (gi, g) in groups.iter().enumerate() {
+        for (gi, (g, &at)) in groups.iter().zip(&centres).enumerate() {
             let kind = &types[g.type_index];
-            let at = match g.start {
-                Start::Home => map.home.center(),
-                Start::At(p) => p,
-            };
             for k in 0..g.count {
                 strategies.push(
                     registry
