@@ -23,11 +23,9 @@ use crate::{Error, Result};
 /// use sim_core::agent::TestWorld;
 /// use sim_core::glam::DVec2;
 ///
-/// let mut w = TestWorld::from_ascii("
-///     #####
-///     #R..#
-///     #..H#
-///     #####", 1.0)?.knowing_all();
+/// // One string per row, top row first (rows starting with `#` cannot open a doc-test line).
+/// let art = ["#####", "#R..#", "#..H#", "#####"].join("\n");
+/// let mut w = TestWorld::from_ascii(&art, 1.0)?.knowing_all();
 /// assert_eq!(w.robot.position, DVec2::new(1.5, 2.5));
 /// let ctx = w.ctx();
 /// assert_eq!(ctx.can_move(DVec2::new(1.5, 2.5), DVec2::new(3.5, 2.5)), Some(true));
@@ -59,7 +57,9 @@ impl TestWorld {
         let rows: Vec<&str> = art.lines().map(str::trim).filter(|l| !l.is_empty()).collect();
         let width = rows.first().map_or(0, |r| r.chars().count());
         if rows.iter().any(|r| r.chars().count() != width) {
-            return Err(Error::InvalidParameter("ASCII map rows differ in width".into()));
+            return Err(Error::InvalidParameter(format!(
+                "ASCII map rows differ in width (the first row has {width} characters)"
+            )));
         }
         let height = rows.len();
         let grid = Grid::new(DVec2::ZERO, cell_m, width as u32, height as u32)?;
