@@ -299,12 +299,11 @@ fn load_beyond_capacity_is_trimmed_to_capacity() {
     assert_eq!(sim.treasures()[0].loose, 2);
 }
 
-/// A load limited by capacity is a load carried out in part: [`Outcome::Trimmed`] says so
-/// ("a load limited"). The kernel reports `Done` instead: its test
-/// `amount < t.loose && amount < room` can never hold, as `amount = room.min(t.loose)`.
+/// A load limited by capacity is a load carried out in part: [`Outcome::Trimmed`] says so.
+/// (It reported `Done`: the kernel tested `amount < t.loose && amount < room`, which can
+/// never hold, as `amount = room.min(t.loose)`.)
 #[test]
-#[ignore = "bug in resolve.rs: a load limited by capacity reports Done, not Trimmed"]
-fn load_limited_by_capacity_reports_trimmed() {
+fn issue10_load_limited_by_capacity_reports_trimmed() {
     let mut sim = simulation(
         map(vec![TreasureSpec {
             position: DVec2::new(3.3, 5.1),

@@ -9,7 +9,7 @@ use sim_core::agent::StrategyRegistry;
 use sim_core::engine::Simulation;
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap};
-use sim_core::world::{HomeBase, MapData};
+use sim_core::world::{HomeBase, MapData, RobotType};
 use viewer_bridge::cli::{Cli, Command, RunArgs};
 use viewer_bridge::run::execute;
 
@@ -51,6 +51,15 @@ fn the_demo_config_runs_and_writes_its_csv_outputs() {
     )
     .resolve()
     .unwrap();
+    // The declared type is the explorer preset with the two attributes overridden.
+    let scout = RobotType::explorer().with_view_radius_m(6.0).with_comm_radius_m(25.0);
+    assert_eq!(
+        run.config.types.last(),
+        Some(&RobotType {
+            name: "scout".into(),
+            ..scout
+        })
+    );
     let summary = execute(&run, &registry, &mut []).unwrap();
     assert_eq!(summary.rounds, 60);
     let metrics = std::fs::read_to_string(dir.join("m.csv")).unwrap();
@@ -185,6 +194,20 @@ fn config_errors_name_file_line_column_and_what_was_expected() {
     );
     assert!(
         e.contains("bad.xml:3:1") && e.contains("radius_m must be a finite number > 0, got -1"),
+        "{e}"
+    );
+
+    // An attribute that no robot type has, listing those it has.
+    let e = config_error(
+        &format!(
+            "<simulation>\n<map file=\"small.stmap\"/>\n<robot-type name=\"bad\" base=\"explorer\" colour=\"red\"/>\n{group}\n</simulation>"
+        ),
+        &dir,
+    );
+    assert!(
+        e.contains("bad.xml:3:1")
+            && e.contains("robot type 'bad': unknown robot-type attribute 'colour'")
+            && e.contains("view_radius_m"),
         "{e}"
     );
 

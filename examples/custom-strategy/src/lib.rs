@@ -2,11 +2,16 @@
 //! collect what it sees. It heads for the nearest treasure in view, otherwise sweeps north,
 //! and lets the collision tactic take over when it is stuck.
 //!
-//! `register` adds it to a registry under the name `treasure_seeker`; `src/main.rs` turns that
+//! It also re-implements the built-in `random_walk` as [`MyRandomWalk`] (`my_random_walk`)
+//! with nothing but the public API, and a test shows that it gives the built-in's results
+//! to the byte: a built-in strategy has no privileges a user crate lacks.
+//!
+//! `register` adds both to a registry; `src/main.rs` turns that
 //! into a complete `smartteams`-style command line (`cargo run -p custom-strategy -- run
 //! CONFIG.xml`), where configs can use `strategy="treasure_seeker"`.
 
-use sim_core::agent::{CollisionAvoidance, Ctx, Needs, Params, Strategy, StrategyRegistry, Tactic};
+use rand::Rng;
+use sim_core::agent::{CollisionAvoidance, Ctx, Needs, Params, Strategy, StrategyRegistry, Tactic, blocked};
 use sim_core::glam::DVec2;
 use sim_core::world::Action;
 
@@ -38,8 +43,53 @@ impl Strategy for TreasureSeeker {
     }
 }
 
-/// Register `treasure_seeker` (parameter `heading_deg`, default 90 = north).
+/// The built-in `random_walk`, written outside sim-core: walk straight, turn to a random
+/// heading with `turn_probability` per round or when a move was held back, and let the
+/// collision tactic take over when stuck.
+pub struct MyRandomWalk {
+    turn_probability: f64,
+    heading: Option<DVec2>,
+    coll: CollisionAvoidance,
+}
+
+impl Strategy for MyRandomWalk {
+    fn needs(&self) -> Needs {
+        Needs {
+            known_map: true,
+            robots: true,
+            ..Needs::NONE
+        }
+    }
+
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        if let Some(a) = self.coll.suggest(ctx) {
+            return a;
+        }
+        // The same draws in the same order as the built-in, so that the results match.
+        let turn = self.heading.is_none() || blocked(ctx) || ctx.rng.random_bool(self.turn_probability);
+        if turn {
+            self.heading = Some(DVec2::from_angle(ctx.rng.random_range(0.0..std::f64::consts::TAU)));
+        }
+        let heading = self.heading.unwrap_or(DVec2::X);
+        ctx.move_by(heading * ctx.kind.speed_m_per_round)
+    }
+}
+
+/// Register `treasure_seeker` (parameter `heading_deg`, default 90 = north) and
+/// `my_random_walk` (parameter `turn_probability`, default 0.05, in 0..=1).
 pub fn register(registry: &mut StrategyRegistry) {
+    registry.register(
+        "my_random_walk",
+        "example: the built-in random_walk, re-implemented in a user crate",
+        |p: &Params| {
+            p.only(&["turn_probability"])?;
+            Ok(Box::new(MyRandomWalk {
+                turn_probability: p.f64_in("turn_probability", 0.05, 0.0..=1.0)?,
+                heading: None,
+                coll: CollisionAvoidance::default(),
+            }))
+        },
+    );
     registry.register(
         "treasure_seeker",
         "example: the paper's MyStrategy, from a user crate",
@@ -56,7 +106,11 @@ pub fn register(registry: &mut StrategyRegistry) {
 
 #[cfg(test)]
 mod tests {
+    use std::path::Path;
+    use std::sync::Arc;
+
     use sim_core::engine::{Group, ScenarioBuilder, Simulation};
+    use sim_core::io::{MetricsCsv, write_robot_stats};
     use sim_core::spatial::{Grid, ObstacleMap};
     use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
 
@@ -97,5 +151,51 @@ mod tests {
             "{:?}",
             sim.robots()[0].position
         );
+    }
+
+    /// Metrics CSV and robot-stats CSV of 24 walkers of `strategy` crossing the demo map.
+    fn walk_on_the_demo_map(strategy: &str) -> (String, String) {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../maps/demo.stmap");
+        let map = Arc::new(MapData::load(&path).unwrap());
+        let mut registry = StrategyRegistry::with_builtins();
+        register(&mut registry);
+        let scenario = ScenarioBuilder::new(map)
+            .with_name("walk")
+            .with_seed(7)
+            .with_rounds(300)
+            .with_types(vec![RobotType::explorer()])
+            .with_group(
+                Group::new(strategy, 0, 24).with_name("walkers").with_params(
+                    [("turn_probability".to_owned(), "0.1".to_owned())]
+                        .into_iter()
+                        .collect(),
+                ),
+            )
+            .build(&registry)
+            .unwrap();
+        let mut sim = Simulation::new(scenario).unwrap();
+        let mut metrics = MetricsCsv::new(Vec::new()).unwrap();
+        sim.run(&mut [&mut metrics]).unwrap();
+        let mut stats = Vec::new();
+        write_robot_stats(&sim, &mut stats).unwrap();
+        let metrics = String::from_utf8(metrics.into_inner().unwrap()).unwrap();
+        let stats = String::from_utf8(stats).unwrap().replace(strategy, "STRATEGY");
+        (metrics, stats)
+    }
+
+    #[test]
+    fn issue10_random_walk_written_outside_sim_core_gives_the_builtins_results() {
+        let builtin = walk_on_the_demo_map("random_walk");
+        let mine = walk_on_the_demo_map("my_random_walk");
+        // The walkers really walked (and bumped into things), so the match is not trivial.
+        let last = builtin.0.lines().last().unwrap().to_owned();
+        assert!(
+            builtin.1.lines().skip(1).all(|l| !l.contains(",0.000,")),
+            "{}",
+            builtin.1
+        );
+        assert_eq!(builtin.0.lines().count(), 301, "{last}");
+        assert_eq!(builtin.0, mine.0, "metrics differ");
+        assert_eq!(builtin.1, mine.1, "robot stats differ");
     }
 }

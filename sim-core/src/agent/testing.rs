@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::agent::ctx::{Ctx, Mind, WorldView};
 use crate::agent::perception::DataModule;
 use crate::spatial::{Aabb, Grid, KnownMap, NavGraph, ObstacleMap, RobotId};
-use crate::world::{Action, HomeBase, Outcome, Retention, Robot, RobotStats, RobotType};
+use crate::world::{Action, HomeBase, Outcome, Retention, Robot, RobotType};
 use crate::{Error, Result};
 
 /// A tiny world for unit tests: a map from ASCII art, one robot and its mind.
@@ -81,19 +81,7 @@ impl TestWorld {
         let obstacles = ObstacleMap::from_fn(grid, |x, y| cell(x as usize, y as usize) == '#');
         let nav = NavGraph::build(&obstacles);
         let kind = RobotType::explorer();
-        let robot = Robot {
-            id: RobotId::new(0),
-            type_index: 0,
-            group: 0,
-            position: robot_at,
-            energy: kind.energy_capacity,
-            cargo: Vec::new(),
-            alive: true,
-            last_action: (Action::Idle, Outcome::Done),
-            goal: None,
-            path: Vec::new(),
-            stats: RobotStats::default(),
-        };
+        let robot = Robot::new(RobotId::new(0), 0, 0, robot_at, &kind);
         Ok(Self {
             obstacles,
             nav,

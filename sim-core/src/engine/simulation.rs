@@ -13,9 +13,7 @@ use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{KnownMap, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex};
-use crate::world::{
-    Action, MapData, Message, Outcome, Robot, RobotStats, RobotType, RoundMetrics, RoundReport, TreasureState,
-};
+use crate::world::{Action, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
 /// A robot's brain: its strategy and mind, owned by the robot alone.
 pub(super) struct Agent {
@@ -105,19 +103,7 @@ impl Simulation {
                 let id = RobotId::new(robots.len() as u32);
                 let needs = strategy.needs();
                 let (tr, rr) = strategy.retention();
-                robots.push(Robot {
-                    id,
-                    type_index: g.type_index,
-                    group: gi,
-                    position,
-                    energy: kind.energy_capacity,
-                    cargo: Vec::new(),
-                    alive: true,
-                    last_action: (Action::Idle, Outcome::Done),
-                    goal: None,
-                    path: Vec::new(),
-                    stats: RobotStats::default(),
-                });
+                robots.push(Robot::new(id, g.type_index, gi, position, kind));
                 agents.push(Agent {
                     strategy,
                     needs,

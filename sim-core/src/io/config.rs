@@ -13,10 +13,8 @@
 //! ```
 //!
 //! Robot types: `explorer`, `excavator` and `transporter` are built in; a `<robot-type>`
-//! starts from `base` (default: the defaults of [`RobotType::new`]) and overrides any of
-//! `radius_m, speed_m_per_round, view_radius_m, comm_radius_m, energy_capacity,
-//! energy_per_m, energy_per_sense, energy_per_excavation, energy_per_message, energy_idle,
-//! recharge_per_round, excavation_per_round, carry_capacity`.
+//! starts from `base` (default: the defaults of [`RobotType::new`]) and overrides any field
+//! of [`RobotType`] by an attribute of the same name ([`ROBOT_TYPE_ATTRIBUTES`](crate::world::ROBOT_TYPE_ATTRIBUTES)).
 //!
 //! Every error names the file, and where it can, the line and column.
 
@@ -42,8 +40,10 @@ struct XmlSimulation {
     #[serde(rename = "@rounds")]
     rounds: Option<String>,
     map: XmlMap,
+    /// Read from pass 1's events instead (attributes named by the [`RobotType`] table);
+    /// serde only checks where they stand.
     #[serde(rename = "robot-type", default)]
-    robot_types: Vec<XmlRobotType>,
+    _robot_types: Vec<serde::de::IgnoredAny>,
     #[serde(rename = "group", default)]
     groups: Vec<XmlGroup>,
     outputs: Option<XmlOutputs>,
@@ -54,41 +54,6 @@ struct XmlSimulation {
 struct XmlMap {
     #[serde(rename = "@file")]
     file: String,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct XmlRobotType {
-    #[serde(rename = "@name")]
-    name: String,
-    #[serde(rename = "@base")]
-    base: Option<String>,
-    #[serde(rename = "@radius_m")]
-    radius_m: Option<String>,
-    #[serde(rename = "@speed_m_per_round")]
-    speed_m_per_round: Option<String>,
-    #[serde(rename = "@view_radius_m")]
-    view_radius_m: Option<String>,
-    #[serde(rename = "@comm_radius_m")]
-    comm_radius_m: Option<String>,
-    #[serde(rename = "@energy_capacity")]
-    energy_capacity: Option<String>,
-    #[serde(rename = "@energy_per_m")]
-    energy_per_m: Option<String>,
-    #[serde(rename = "@energy_per_sense")]
-    energy_per_sense: Option<String>,
-    #[serde(rename = "@energy_per_excavation")]
-    energy_per_excavation: Option<String>,
-    #[serde(rename = "@energy_per_message")]
-    energy_per_message: Option<String>,
-    #[serde(rename = "@energy_idle")]
-    energy_idle: Option<String>,
-    #[serde(rename = "@recharge_per_round")]
-    recharge_per_round: Option<String>,
-    #[serde(rename = "@excavation_per_round")]
-    excavation_per_round: Option<String>,
-    #[serde(rename = "@carry_capacity")]
-    carry_capacity: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -188,6 +153,68 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
     (line, col)
 }
 
+/// What pass 1 (quick-xml's event reader) finds: well-formedness, where each element
+/// starts, and the attributes of each `<robot-type>` (read here so that their names come
+/// from the [`RobotType`] table, not from a second list).
+struct Scan {
+    elements: Vec<ScannedElement>,
+    robot_types: Vec<Vec<(String, String)>>,
+}
+
+struct ScannedElement {
+    name: String,
+    offset: usize,
+}
+
+impl Scan {
+    /// Errors are (byte offset, message).
+    fn new(text: &str) -> std::result::Result<Self, (usize, String)> {
+        let mut reader = quick_xml::Reader::from_str(text);
+        let mut scan = Scan {
+            elements: Vec::new(),
+            robot_types: Vec::new(),
+        };
+        loop {
+            let before = usize::try_from(reader.buffer_position()).unwrap_or(usize::MAX);
+            let malformed = |e: &dyn std::fmt::Display, at: u64| {
+                (usize::try_from(at).unwrap_or(usize::MAX), format!("malformed XML: {e}"))
+            };
+            match reader.read_event() {
+                Ok(XmlEvent::Eof) => break,
+                Ok(XmlEvent::Start(e) | XmlEvent::Empty(e)) => {
+                    let name = e.name().as_ref().to_owned();
+                    if name == "robot-type" {
+                        let mut attributes = Vec::new();
+                        for a in e.attributes() {
+                            let a = a.map_err(|err| malformed(&err, before as u64))?;
+                            let value = a
+                                .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                                .map_err(|err| malformed(&err, before as u64))?;
+                            attributes.push((a.key.as_ref().to_owned(), value.into_owned()));
+                        }
+                        scan.robot_types.push(attributes);
+                    }
+                    scan.elements.push(ScannedElement { name, offset: before });
+                }
+                Ok(_) => {}
+                Err(e) => return Err(malformed(&e, reader.error_position())),
+            }
+        }
+        Ok(scan)
+    }
+
+    /// Line and column of the `nth` element called `name` ((1, 1) if there is none).
+    fn position(&self, text: &str, name: &str, nth: usize) -> (usize, usize) {
+        self.elements
+            .iter()
+            .filter(|e| e.name == name)
+            .nth(nth)
+            .map_or((1, 1), |e| {
+                line_col(text, e.offset + text[e.offset..].find('<').unwrap_or(0))
+            })
+    }
+}
+
 impl SimConfig {
     fn error(&self, at: (usize, usize), message: impl Into<String>) -> Error {
         Error::Config {
@@ -208,9 +235,8 @@ impl SimConfig {
     }
 
     /// Parse config text read from `path` (relative paths inside resolve against its folder).
-    #[allow(clippy::too_many_lines)] // one pass over the elements, in document order
     pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let err = |offset: usize, message: String| {
+        let at_offset = |offset: usize, message: String| {
             let (line, column) = line_col(text, offset);
             Error::Config {
                 path: path.to_path_buf(),
@@ -219,34 +245,9 @@ impl SimConfig {
                 message,
             }
         };
-        // Pass 1: well-formedness, and where each element starts.
-        let mut reader = quick_xml::Reader::from_str(text);
-        let mut starts: Vec<(String, usize)> = Vec::new();
-        loop {
-            let before = reader.buffer_position() as usize;
-            match reader.read_event() {
-                Ok(XmlEvent::Eof) => break,
-                Ok(XmlEvent::Start(e) | XmlEvent::Empty(e)) => {
-                    starts.push((e.name().as_ref().to_owned(), before));
-                }
-                Ok(_) => {}
-                Err(e) => {
-                    let at = reader.error_position() as usize;
-                    return Err(err(at, format!("malformed XML: {e}")));
-                }
-            }
-        }
-        let position_of = |name: &str, nth: usize| {
-            starts
-                .iter()
-                .filter(|(n, _)| n == name)
-                .nth(nth)
-                .map_or((1, 1), |&(_, at)| {
-                    line_col(text, at + text[at..].find('<').unwrap_or(0))
-                })
-        };
-        if starts.first().is_none_or(|(n, _)| n != "simulation") {
-            return Err(err(0, "the root element must be <simulation>".into()));
+        let scan = Scan::new(text).map_err(|(offset, message)| at_offset(offset, message))?;
+        if scan.elements.first().is_none_or(|e| e.name != "simulation") {
+            return Err(at_offset(0, "the root element must be <simulation>".into()));
         }
         // Pass 2: structure, by serde.
         let xml: XmlSimulation = quick_xml::de::from_str(text).map_err(|e| Error::Config {
@@ -260,35 +261,6 @@ impl SimConfig {
             let p = PathBuf::from(p);
             if p.is_absolute() { p } else { base_dir.join(p) }
         };
-        let sim_at = position_of("simulation", 0);
-        let number = |v: &Option<String>, what: &str, at: (usize, usize)| -> Result<Option<f64>> {
-            v.as_deref()
-                .map(|s| {
-                    s.trim()
-                        .parse::<f64>()
-                        .ok()
-                        .filter(|x| x.is_finite())
-                        .ok_or_else(|| Error::Config {
-                            path: path.to_path_buf(),
-                            line: at.0,
-                            column: at.1,
-                            message: format!("{what} must be a number, got '{s}'"),
-                        })
-                })
-                .transpose()
-        };
-        let whole = |v: &Option<String>, what: &str, at: (usize, usize)| -> Result<Option<u64>> {
-            v.as_deref()
-                .map(|s| {
-                    s.trim().parse::<u64>().map_err(|_| Error::Config {
-                        path: path.to_path_buf(),
-                        line: at.0,
-                        column: at.1,
-                        message: format!("{what} must be a whole number ≥ 0, got '{s}'"),
-                    })
-                })
-                .transpose()
-        };
         let name = xml
             .name
             .clone()
@@ -298,93 +270,27 @@ impl SimConfig {
             path: path.to_path_buf(),
             name,
             map_path: resolve(&xml.map.file),
-            seed: whole(&xml.seed, "seed", sim_at)?.unwrap_or(0),
-            rounds: whole(&xml.rounds, "rounds", sim_at)?.unwrap_or(1000),
+            seed: 0,
+            rounds: 1000,
             types: vec![RobotType::explorer(), RobotType::excavator(), RobotType::transporter()],
             groups: Vec::new(),
             outputs: Outputs::default(),
-            map_at: position_of("map", 0),
+            map_at: scan.position(text, "map", 0),
             map_from_argument: false,
         };
-        for (i, t) in xml.robot_types.iter().enumerate() {
-            let at = position_of("robot-type", i);
-            let mut kind = match t.base.as_deref() {
-                None => RobotType::new(&t.name),
-                Some(b) => RobotType::builtin(b)
-                    .or_else(|| config.types.iter().find(|k| k.name == b).cloned())
-                    .ok_or_else(|| {
-                        config.error(at, format!("unknown base type '{b}' (known: {})", config.type_names()))
-                    })?,
-            };
-            kind.name.clone_from(&t.name);
-            let fields: [(&Option<String>, &str, &mut f64); 11] = [
-                (&t.radius_m, "radius_m", &mut kind.radius_m),
-                (&t.speed_m_per_round, "speed_m_per_round", &mut kind.speed_m_per_round),
-                (&t.view_radius_m, "view_radius_m", &mut kind.view_radius_m),
-                (&t.comm_radius_m, "comm_radius_m", &mut kind.comm_radius_m),
-                (&t.energy_capacity, "energy_capacity", &mut kind.energy_capacity),
-                (&t.energy_per_m, "energy_per_m", &mut kind.energy_per_m),
-                (&t.energy_per_sense, "energy_per_sense", &mut kind.energy_per_sense),
-                (
-                    &t.energy_per_excavation,
-                    "energy_per_excavation",
-                    &mut kind.energy_per_excavation,
-                ),
-                (
-                    &t.energy_per_message,
-                    "energy_per_message",
-                    &mut kind.energy_per_message,
-                ),
-                (&t.energy_idle, "energy_idle", &mut kind.energy_idle),
-                (
-                    &t.recharge_per_round,
-                    "recharge_per_round",
-                    &mut kind.recharge_per_round,
-                ),
-            ];
-            for (v, what, slot) in fields {
-                if let Some(x) = number(v, what, at)? {
-                    *slot = x;
-                }
-            }
-            if let Some(x) = whole(&t.excavation_per_round, "excavation_per_round", at)? {
-                kind = kind
-                    .with_excavation(u32::try_from(x).map_err(|_| config.error(at, "excavation_per_round too large"))?);
-            }
-            if let Some(x) = whole(&t.carry_capacity, "carry_capacity", at)? {
-                kind.carry_capacity = u32::try_from(x).map_err(|_| config.error(at, "carry_capacity too large"))?;
-            }
-            kind.validate().map_err(|e| config.error(at, e.to_string()))?;
+        let sim_at = scan.position(text, "simulation", 0);
+        config.seed = config.whole(xml.seed.as_deref(), "seed", sim_at)?.unwrap_or(0);
+        config.rounds = config.whole(xml.rounds.as_deref(), "rounds", sim_at)?.unwrap_or(1000);
+        for (i, attributes) in scan.robot_types.iter().enumerate() {
+            let kind = config.robot_type(attributes, scan.position(text, "robot-type", i))?;
             match config.types.iter_mut().find(|k| k.name == kind.name) {
                 Some(slot) => *slot = kind,
                 None => config.types.push(kind),
             }
         }
         for (i, g) in xml.groups.iter().enumerate() {
-            let at = position_of("group", i);
-            let count = whole(&Some(g.count.clone()), "count", at)?.unwrap_or(0);
-            let count = u32::try_from(count).map_err(|_| config.error(at, format!("count {count} is too large")))?;
-            let start = match g.start.as_deref().map(str::trim) {
-                None | Some("home") => Start::Home,
-                Some(s) => {
-                    let parts: Vec<_> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
-                    match parts.as_slice() {
-                        [Ok(x), Ok(y)] if x.is_finite() && y.is_finite() => Start::At(DVec2::new(*x, *y)),
-                        _ => {
-                            return Err(config.error(at, format!("start must be 'home' or 'X,Y' in metres, got '{s}'")));
-                        }
-                    }
-                }
-            };
-            config.groups.push(GroupConfig {
-                name: g.name.clone().unwrap_or_else(|| format!("group{i}")),
-                count,
-                type_name: g.kind.clone(),
-                strategy: g.strategy.clone(),
-                params: g.params.iter().map(|p| (p.name.clone(), p.value.clone())).collect(),
-                start,
-                at,
-            });
+            let group = config.group(i, g, scan.position(text, "group", i))?;
+            config.groups.push(group);
         }
         if let Some(o) = &xml.outputs {
             config.outputs = Outputs {
@@ -397,6 +303,69 @@ impl SimConfig {
             return Err(config.error(sim_at, "no <group> of robots"));
         }
         Ok(config)
+    }
+
+    /// A whole number attribute, if present.
+    fn whole(&self, text: Option<&str>, what: &str, at: (usize, usize)) -> Result<Option<u64>> {
+        text.map(|s| {
+            s.trim()
+                .parse::<u64>()
+                .map_err(|_| self.error(at, format!("{what} must be a whole number ≥ 0, got '{s}'")))
+        })
+        .transpose()
+    }
+
+    /// One `<robot-type>`: its base (a built-in or a type declared above), then each
+    /// attribute by name, then the ranges.
+    fn robot_type(&self, attributes: &[(String, String)], at: (usize, usize)) -> Result<RobotType> {
+        let get = |key: &str| attributes.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str());
+        let name = get("name").ok_or_else(|| self.error(at, "<robot-type> needs a name attribute"))?;
+        let mut kind = match get("base") {
+            None => RobotType::new(name),
+            Some(b) => RobotType::builtin(b)
+                .or_else(|| self.types.iter().find(|k| k.name == b).cloned())
+                .ok_or_else(|| self.error(at, format!("unknown base type '{b}' (known: {})", self.type_names())))?,
+        };
+        name.clone_into(&mut kind.name);
+        let problem = |e: Error| {
+            let message = match e {
+                Error::InvalidParameter(m) => m,
+                other => other.to_string(),
+            };
+            self.error(at, format!("robot type '{name}': {message}"))
+        };
+        for (key, value) in attributes.iter().filter(|(k, _)| k != "name" && k != "base") {
+            kind.set_attribute(key, value).map_err(problem)?;
+        }
+        kind.validate().map_err(|e| self.error(at, e.to_string()))?;
+        Ok(kind)
+    }
+
+    /// One `<group>`.
+    fn group(&self, index: usize, g: &XmlGroup, at: (usize, usize)) -> Result<GroupConfig> {
+        let count = self.whole(Some(&g.count), "count", at)?.unwrap_or(0);
+        let count = u32::try_from(count).map_err(|_| self.error(at, format!("count {count} is too large")))?;
+        let start = match g.start.as_deref().map(str::trim) {
+            None | Some("home") => Start::Home,
+            Some(s) => {
+                let parts: Vec<_> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
+                match parts.as_slice() {
+                    [Ok(x), Ok(y)] if x.is_finite() && y.is_finite() => Start::At(DVec2::new(*x, *y)),
+                    _ => {
+                        return Err(self.error(at, format!("start must be 'home' or 'X,Y' in metres, got '{s}'")));
+                    }
+                }
+            }
+        };
+        Ok(GroupConfig {
+            name: g.name.clone().unwrap_or_else(|| format!("group{index}")),
+            count,
+            type_name: g.kind.clone(),
+            strategy: g.strategy.clone(),
+            params: g.params.iter().map(|p| (p.name.clone(), p.value.clone())).collect(),
+            start,
+            at,
+        })
     }
 
     fn type_names(&self) -> String {

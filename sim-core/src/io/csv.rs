@@ -18,6 +18,11 @@ impl<W: Write> MetricsCsv<W> {
         out.write_record(METRICS_COLUMNS)?;
         Ok(Self { out })
     }
+
+    /// Flush and hand back the writer (for example the bytes written to a `Vec<u8>`).
+    pub fn into_inner(self) -> std::io::Result<W> {
+        self.out.into_inner().map_err(csv::IntoInnerError::into_error)
+    }
 }
 
 impl<W: Write> Observer for MetricsCsv<W> {

@@ -45,7 +45,7 @@ impl InvariantChecker {
             if r.load() > kind.carry_capacity {
                 return Err(format!("{who} carries {} > capacity {}", r.load(), kind.carry_capacity));
             }
-            if !kind.can_excavate && r.stats.units_dug > 0 {
+            if !kind.can_excavate() && r.stats.units_dug > 0 {
                 return Err(format!("{who} ({}) dug without the ability", kind.name));
             }
             if let Some(&(before, was_alive, dug)) = self.previous.get(r.id.index()) {

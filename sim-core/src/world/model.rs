@@ -6,66 +6,155 @@ use glam::DVec2;
 use crate::spatial::RobotId;
 use crate::spatial::TreasureId;
 
-/// A robot type: its body and abilities. Built-in presets: [`RobotType::explorer`],
-/// [`RobotType::excavator`], [`RobotType::transporter`]; others are built with the `with_`
-/// setters or declared in the XML config.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RobotType {
-    /// Name used in configs and outputs.
-    pub name: String,
+/// Declares [`RobotType`] once: the struct's fields, their defaults, the range each must lie
+/// in, and the XML attribute names (the field names) all come from this one table, so the
+/// config parser, [`RobotType::new`], [`RobotType::validate`] and
+/// [`ROBOT_TYPE_ATTRIBUTES`] cannot drift apart.
+macro_rules! robot_type_table {
+    ($($(#[doc = $doc:literal])* $field:ident: $ty:ident = $default:expr, $range:ident;)*) => {
+        /// A robot type: its body and abilities. Built-in presets: [`RobotType::explorer`],
+        /// [`RobotType::excavator`], [`RobotType::transporter`]; others are built with the
+        /// `with_` setters or declared in the XML config (one attribute per field).
+        #[derive(Clone, Debug, PartialEq)]
+        pub struct RobotType {
+            /// Name used in configs and outputs.
+            pub name: String,
+            $($(#[doc = $doc])* pub $field: $ty,)*
+        }
+
+        /// The XML attributes of `<robot-type>` besides `name` and `base`: one per field of
+        /// [`RobotType`], in declaration order.
+        pub const ROBOT_TYPE_ATTRIBUTES: &[&str] = &[$(stringify!($field)),*];
+
+        impl RobotType {
+            /// A type with the defaults listed on the fields, no excavation and no cargo.
+            pub fn new(name: impl Into<String>) -> Self {
+                Self { name: name.into(), $($field: $default,)* }
+            }
+
+            /// Check that every field lies in its range.
+            pub fn validate(&self) -> crate::Result<()> {
+                $(FieldRange::$range.check(&self.name, stringify!($field), self.$field)?;)*
+                Ok(())
+            }
+
+            /// Set the field named `attribute` from its text (as written in the XML config).
+            /// Errors say what was expected; an unknown name lists the known ones.
+            pub fn set_attribute(&mut self, attribute: &str, text: &str) -> crate::Result<()> {
+                match attribute {
+                    $(stringify!($field) => self.$field = FieldValue::parse_field(attribute, text)?,)*
+                    _ => {
+                        return Err(crate::Error::InvalidParameter(format!(
+                            "unknown robot-type attribute '{attribute}' (known: name, base, {})",
+                            ROBOT_TYPE_ATTRIBUTES.join(", ")
+                        )));
+                    }
+                }
+                Ok(())
+            }
+        }
+    };
+}
+
+robot_type_table! {
     /// Body radius (default 0.125 m: the paper's 25 cm robots).
-    pub radius_m: f64,
+    radius_m: f64 = 0.125, Positive;
     /// Longest move per round (default 1 m).
-    pub speed_m_per_round: f64,
+    speed_m_per_round: f64 = 1.0, NonNegative;
     /// Radius of the 360° view (default 5 m).
-    pub view_radius_m: f64,
+    view_radius_m: f64 = 5.0, NonNegative;
     /// Radius within which messages are delivered (default 20 m).
-    pub comm_radius_m: f64,
+    comm_radius_m: f64 = 20.0, NonNegative;
     /// Energy when full (default 5,000).
-    pub energy_capacity: f64,
+    energy_capacity: f64 = 5_000.0, Positive;
     /// Energy per metre moved (default 1).
-    pub energy_per_m: f64,
+    energy_per_m: f64 = 1.0, NonNegative;
     /// Energy per round of sensing (default 0.1; charged when the strategy perceives).
-    pub energy_per_sense: f64,
+    energy_per_sense: f64 = 0.1, NonNegative;
     /// Energy per round of digging (default 2).
-    pub energy_per_excavation: f64,
+    energy_per_excavation: f64 = 2.0, NonNegative;
     /// Energy per message sent (default 0.2).
-    pub energy_per_message: f64,
+    energy_per_message: f64 = 0.2, NonNegative;
     /// Energy every round, whatever the robot does (default 0.05).
-    pub energy_idle: f64,
+    energy_idle: f64 = 0.05, NonNegative;
     /// Energy regained per round inside the home base (default 200).
-    pub recharge_per_round: f64,
-    /// Whether it can dig (default false).
-    pub can_excavate: bool,
-    /// Units dug per round of excavation (default 0).
-    pub excavation_per_round: u32,
+    recharge_per_round: f64 = 200.0, NonNegative;
+    /// Units dug per round of excavation (default 0: cannot dig).
+    excavation_per_round: u32 = 0, NonNegative;
     /// Units it can carry (default 0).
-    pub carry_capacity: u32,
+    carry_capacity: u32 = 0, NonNegative;
+}
+
+/// The range a numeric field of [`RobotType`] must lie in (always finite too).
+#[derive(Clone, Copy)]
+enum FieldRange {
+    /// Greater than zero.
+    Positive,
+    /// Zero or more.
+    NonNegative,
+}
+
+impl FieldRange {
+    fn check(self, type_name: &str, field: &str, value: impl FieldValue) -> crate::Result<()> {
+        let v = value.as_f64();
+        let ok = v.is_finite()
+            && match self {
+                Self::Positive => v > 0.0,
+                Self::NonNegative => v >= 0.0,
+            };
+        if ok {
+            return Ok(());
+        }
+        let need = match self {
+            Self::Positive => "a finite number > 0",
+            Self::NonNegative => "a finite number ≥ 0",
+        };
+        Err(crate::Error::InvalidParameter(format!(
+            "robot type '{type_name}': {field} must be {need}, got {v}"
+        )))
+    }
+}
+
+/// The value types a [`RobotType`] field may have.
+trait FieldValue: Sized + Copy {
+    fn as_f64(self) -> f64;
+    fn parse_field(field: &str, text: &str) -> crate::Result<Self>;
+}
+
+impl FieldValue for f64 {
+    fn as_f64(self) -> f64 {
+        self
+    }
+    fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
+        text.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| crate::Error::InvalidParameter(format!("{field} must be a number, got '{text}'")))
+    }
+}
+
+impl FieldValue for u32 {
+    fn as_f64(self) -> f64 {
+        f64::from(self)
+    }
+    fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
+        text.trim().parse::<u32>().map_err(|_| {
+            crate::Error::InvalidParameter(format!(
+                "{field} must be a whole number from 0 to {}, got '{text}'",
+                u32::MAX
+            ))
+        })
+    }
 }
 
 /// How close (centre to treasure, beyond the body radius) a robot must be to dig or load.
 pub const REACH_M: f64 = 0.5;
 
 impl RobotType {
-    /// A type with the defaults listed on the fields, no excavation and no cargo.
-    pub fn new(name: impl Into<String>) -> Self {
-        Self {
-            name: name.into(),
-            radius_m: 0.125,
-            speed_m_per_round: 1.0,
-            view_radius_m: 5.0,
-            comm_radius_m: 20.0,
-            energy_capacity: 5_000.0,
-            energy_per_m: 1.0,
-            energy_per_sense: 0.1,
-            energy_per_excavation: 2.0,
-            energy_per_message: 0.2,
-            energy_idle: 0.05,
-            recharge_per_round: 200.0,
-            can_excavate: false,
-            excavation_per_round: 0,
-            carry_capacity: 0,
-        }
+    /// Whether it can dig (`excavation_per_round > 0`).
+    pub fn can_excavate(&self) -> bool {
+        self.excavation_per_round > 0
     }
 
     /// Explorer: fast, wide view, no tools.
@@ -128,7 +217,6 @@ impl RobotType {
     }
     /// Enable digging at `units_per_round`.
     pub fn with_excavation(mut self, units_per_round: u32) -> Self {
-        self.can_excavate = units_per_round > 0;
         self.excavation_per_round = units_per_round;
         self
     }
@@ -136,37 +224,6 @@ impl RobotType {
     pub fn with_carry_capacity(mut self, units: u32) -> Self {
         self.carry_capacity = units;
         self
-    }
-
-    /// Check that the numbers make sense.
-    pub fn validate(&self) -> crate::Result<()> {
-        let checks = [
-            ("radius_m", self.radius_m, false),
-            ("speed_m_per_round", self.speed_m_per_round, true),
-            ("view_radius_m", self.view_radius_m, true),
-            ("comm_radius_m", self.comm_radius_m, true),
-            ("energy_capacity", self.energy_capacity, false),
-            ("energy_per_m", self.energy_per_m, true),
-            ("energy_per_sense", self.energy_per_sense, true),
-            ("energy_per_excavation", self.energy_per_excavation, true),
-            ("energy_per_message", self.energy_per_message, true),
-            ("energy_idle", self.energy_idle, true),
-            ("recharge_per_round", self.recharge_per_round, true),
-        ];
-        for (name, v, zero_ok) in checks {
-            if !v.is_finite() || v < 0.0 || (v == 0.0 && !zero_ok) {
-                let need = if zero_ok {
-                    "a finite number ≥ 0"
-                } else {
-                    "a finite number > 0"
-                };
-                return Err(crate::Error::InvalidParameter(format!(
-                    "robot type '{}': {name} must be {need}, got {v}",
-                    self.name
-                )));
-            }
-        }
-        Ok(())
     }
 }
 
@@ -268,6 +325,23 @@ pub struct Robot {
 }
 
 impl Robot {
+    /// A robot as it starts: alive, full of energy, carrying nothing, idle so far.
+    pub fn new(id: RobotId, type_index: usize, group: usize, position: DVec2, kind: &RobotType) -> Self {
+        Self {
+            id,
+            type_index,
+            group,
+            position,
+            energy: kind.energy_capacity,
+            cargo: Vec::new(),
+            alive: true,
+            last_action: (Action::Idle, Outcome::Done),
+            goal: None,
+            path: Vec::new(),
+            stats: RobotStats::default(),
+        }
+    }
+
     /// Units carried in all.
     pub fn load(&self) -> u32 {
         self.cargo.iter().map(|c| c.1).sum()
@@ -291,4 +365,38 @@ pub struct TreasureState {
     pub delivered: u32,
     /// Round it was first seen, if ever.
     pub found_round: Option<u64>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_attribute_in_the_table_sets_its_field_and_is_range_checked() {
+        for &attribute in ROBOT_TYPE_ATTRIBUTES {
+            let mut t = RobotType::new("t");
+            t.set_attribute(attribute, " 7 ").unwrap();
+            assert_ne!(t, RobotType::new("t"), "{attribute} changed nothing");
+            t.validate().unwrap();
+            assert!(t.set_attribute(attribute, "seven").is_err(), "{attribute}");
+            if t.set_attribute(attribute, "-1").is_ok() {
+                assert!(t.validate().is_err(), "{attribute} = -1 passed validate");
+            }
+        }
+        let mut t = RobotType::new("t");
+        let e = t.set_attribute("colour", "red").unwrap_err().to_string();
+        assert!(
+            e.contains("unknown robot-type attribute 'colour'") && e.contains("carry_capacity"),
+            "{e}"
+        );
+        t.set_attribute("excavation_per_round", "3").unwrap();
+        assert!(t.can_excavate());
+        t.set_attribute("radius_m", "0").unwrap();
+        assert!(
+            t.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("radius_m must be a finite number > 0, got 0")
+        );
+    }
 }

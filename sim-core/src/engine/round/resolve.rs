@@ -81,7 +81,7 @@ impl Simulation {
                 let Some(t) = self.reachable_treasure(i, kind, treasure) else {
                     return Outcome::Refused;
                 };
-                if !kind.can_excavate || t.buried == 0 || self.robots[i].energy < kind.energy_per_excavation {
+                if !kind.can_excavate() || t.buried == 0 || self.robots[i].energy < kind.energy_per_excavation {
                     return Outcome::Refused;
                 }
                 self.spend(i, kind.energy_per_excavation);
@@ -117,7 +117,9 @@ impl Simulation {
                     Some(c) => c.1 += amount,
                     None => cargo.push((treasure, amount)),
                 }
-                if amount < t.loose && amount < room {
+                // `t` is the treasure as it was: units left lying because the cargo is full
+                // mean the load was cut short.
+                if amount < t.loose {
                     Outcome::Trimmed
                 } else {
                     Outcome::Done
