@@ -54,9 +54,10 @@ pub struct MyRandomWalk {
 
 impl Strategy for MyRandomWalk {
     fn needs(&self) -> Needs {
+        // The known map answers `can_move` for the collision tactic; other robots are
+        // never looked at (the physical unit keeps bodies apart), so they are not perceived.
         Needs {
             known_map: true,
-            robots: true,
             ..Needs::NONE
         }
     }

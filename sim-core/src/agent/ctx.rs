@@ -6,22 +6,23 @@ use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 
 use crate::agent::perception::{DataModule, Perception, SeenRobot, SeenTreasure};
-use crate::spatial::{KnownMap, NavGraph, ObstacleMap, RobotId};
+use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId};
 use crate::world::{Action, HomeBase, Message, Outcome, Payload, Recipient, Robot, RobotType, StrategyEvent};
 
 /// The unchanging world a strategy may consult.
 #[derive(Clone, Copy, Debug)]
 pub struct WorldView<'a> {
     obstacles: &'a ObstacleMap,
-    nav: &'a NavGraph,
+    nav: &'a LazyNavGraph,
     home: HomeBase,
     types: &'a [RobotType],
 }
 
 impl<'a> WorldView<'a> {
     /// A view of the kernel's obstacles (a strategy reads them only inside its known region,
-    /// through [`Ctx`]), the navigation graph, the home base and the run's robot types.
-    pub fn new(obstacles: &'a ObstacleMap, nav: &'a NavGraph, home: HomeBase, types: &'a [RobotType]) -> Self {
+    /// through [`Ctx`]), the navigation graph of those obstacles (built when first asked
+    /// for), the home base and the run's robot types.
+    pub fn new(obstacles: &'a ObstacleMap, nav: &'a LazyNavGraph, home: HomeBase, types: &'a [RobotType]) -> Self {
         Self {
             obstacles,
             nav,
@@ -170,9 +171,10 @@ impl<'a> Ctx<'a> {
     pub fn known(&self) -> Option<&KnownMap> {
         self.data.known.as_ref()
     }
-    /// The navigation graph (plan only through nodes your known map touches).
+    /// The navigation graph (plan only through nodes your known map touches). The first
+    /// call in a run builds it.
     pub fn nav(&self) -> &'a NavGraph {
-        self.world.nav
+        self.world.nav.get_or_build(self.world.obstacles)
     }
 
     /// Whether a disc of this robot's size could move from `a` to `b` — answered from the

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::agent::ctx::{Ctx, Mind, WorldView};
 use crate::agent::perception::DataModule;
-use crate::spatial::{Aabb, Grid, KnownMap, NavGraph, ObstacleMap, RobotId};
+use crate::spatial::{Aabb, Grid, KnownMap, LazyNavGraph, ObstacleMap, RobotId};
 use crate::world::{Action, HomeBase, Outcome, Retention, Robot, RobotType};
 use crate::{Error, Result};
 
@@ -35,7 +35,7 @@ use crate::{Error, Result};
 pub struct TestWorld {
     /// The obstacles.
     pub obstacles: ObstacleMap,
-    nav: NavGraph,
+    nav: LazyNavGraph,
     /// The home base.
     pub home: HomeBase,
     /// Robot types; the robot has type 0 (default: [`RobotType::explorer`]).
@@ -79,12 +79,11 @@ impl TestWorld {
         }
         let robot_at = robot_at.ok_or_else(|| Error::InvalidParameter("no 'R' in the ASCII map".into()))?;
         let obstacles = ObstacleMap::from_fn(grid, |x, y| cell(x as usize, y as usize) == '#');
-        let nav = NavGraph::build(&obstacles);
         let kind = RobotType::explorer();
         let robot = Robot::new(RobotId::new(0), 0, 0, robot_at, &kind);
         Ok(Self {
             obstacles,
-            nav,
+            nav: LazyNavGraph::new(),
             home: HomeBase::Disc {
                 center: home_at.unwrap_or(robot_at),
                 radius_m: 0.5 * cell_m,

@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
-use crate::spatial::{KnownMap, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex};
+use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex};
 use crate::world::{Action, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
 /// A robot's brain: its strategy and mind, owned by the robot alone.
@@ -35,7 +35,7 @@ pub struct Simulation {
     pub(super) rounds: u64,
     pub(super) round: u64,
     pub(super) map: Arc<MapData>,
-    pub(super) nav: NavGraph,
+    pub(super) nav: LazyNavGraph,
     /// Shared so the resolve loop can hold a type while it mutates the simulation.
     pub(super) types: Arc<[RobotType]>,
     pub(super) groups: Vec<Group>,
@@ -43,7 +43,12 @@ pub struct Simulation {
     pub(super) agents: Vec<Agent>,
     pub(super) treasures: Vec<TreasureState>,
     pub(super) treasure_index: TreasureIndex,
+    /// Start-of-round positions in cells of the widest view or radio range (perception,
+    /// messages).
     pub(super) robot_index: RobotIndex,
+    /// The same positions in cells of the widest body-contact reach (collisions): in a
+    /// crowd, a 20 m cell holds hundreds of robots that a 0.75 m contact test need not see.
+    pub(super) body_index: RobotIndex,
     /// Messages to deliver at the start of the next round, per robot.
     pub(super) inboxes: Vec<Vec<Message>>,
     /// The union of everything every robot has seen.
@@ -74,7 +79,6 @@ impl Simulation {
         } = scenario.into_parts();
         let obstacles = &map.obstacles;
         let grid = *obstacles.grid();
-        let nav = NavGraph::build(obstacles);
         let mut treasure_index = TreasureIndex::new(grid.extent())?;
         let mut treasures = Vec::with_capacity(map.treasures.len());
         for t in &map.treasures {
@@ -114,8 +118,6 @@ impl Simulation {
                 });
             }
         }
-        let mut robot_index = RobotIndex::new();
-        robot_index.rebuild(robots.iter().map(|r| (r.id, r.position)), index_cell_m(&types));
         let total_free_cells = obstacles.tree().count_cells(false);
         let n = robots.len();
         let mut sim = Self {
@@ -123,14 +125,15 @@ impl Simulation {
             seed,
             rounds,
             round: 0,
-            nav,
+            nav: LazyNavGraph::new(),
             types: types.into(),
             groups,
             robots,
             agents,
             treasures,
             treasure_index,
-            robot_index,
+            robot_index: RobotIndex::new(),
+            body_index: RobotIndex::new(),
             inboxes: vec![Vec::new(); n],
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
@@ -141,6 +144,7 @@ impl Simulation {
             start_positions: Vec::new(),
             map,
         };
+        sim.rebuild_robot_indexes();
         sim.report.metrics = sim.metrics(0, 0, 0);
         Ok(sim)
     }
@@ -169,9 +173,13 @@ impl Simulation {
     pub fn obstacles(&self) -> &ObstacleMap {
         &self.map.obstacles
     }
-    /// The navigation graph.
+    /// The navigation graph if a strategy (or [`nav`](Self::nav)) has needed it so far.
+    pub fn nav_if_built(&self) -> Option<&NavGraph> {
+        self.nav.get()
+    }
+    /// The navigation graph (built now if nobody needed it yet).
     pub fn nav(&self) -> &NavGraph {
-        &self.nav
+        self.nav.get_or_build(&self.map.obstacles)
     }
     /// Robot types.
     pub fn types(&self) -> &[RobotType] {
@@ -261,6 +269,17 @@ impl Simulation {
             x ^= x >> 31;
         }
         ChaCha8Rng::seed_from_u64(x)
+    }
+}
+
+impl Simulation {
+    /// Index the robots' current positions (both indexes).
+    pub(super) fn rebuild_robot_indexes(&mut self) {
+        let positions = || self.robots.iter().map(|r| (r.id, r.position));
+        self.robot_index.rebuild(positions(), index_cell_m(&self.types));
+        // Contact reach: own radius + the largest other radius + the largest move.
+        let reach = 2.0 * self.max_radius_m + self.max_speed_m;
+        self.body_index.rebuild(positions(), reach.clamp(0.25, 64.0));
     }
 }
 

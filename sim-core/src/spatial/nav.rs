@@ -20,6 +20,29 @@ use crate::spatial::quadtree::Square;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct NavNodeId(pub u32);
 
+/// A [`NavGraph`] built on first use: most strategies never plan a route, and building the
+/// graph of a million-leaf map takes seconds (issue 11). Thread-safe; every caller gets the
+/// same graph whichever asks first, so results do not depend on the order.
+#[derive(Debug, Default)]
+pub struct LazyNavGraph(std::sync::OnceLock<NavGraph>);
+
+impl LazyNavGraph {
+    /// Not built yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The graph of `obstacles`, built now if nobody asked before. Always pass the same map.
+    pub fn get_or_build(&self, obstacles: &ObstacleMap) -> &NavGraph {
+        self.0.get_or_init(|| NavGraph::build(obstacles))
+    }
+
+    /// The graph if it has been built.
+    pub fn get(&self) -> Option<&NavGraph> {
+        self.0.get()
+    }
+}
+
 /// Free leaves and their edge adjacency, in compressed sparse rows.
 #[derive(Clone, Debug)]
 pub struct NavGraph {

@@ -1,8 +1,12 @@
 //! Scalable memory lists (paper §4.2): remember the last `n` things seen, or those seen in
-//! the last `m` rounds, with O(1) amortised updates.
+//! the last `m` rounds, with O(1) updates.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 use std::hash::Hash;
+
+/// A fast, fixed-seed hasher: keys are small ids, nothing here faces untrusted input, and
+/// `SipHash` was the largest single cost of perception in crowds (issue 11 profile).
+type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 
 /// How much a [`MemoryList`] keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -13,16 +17,32 @@ pub enum Retention {
     LastRounds(u64),
 }
 
+/// No slot (end of the list).
+const NIL: u32 = u32::MAX;
+
+/// One remembered item, a link in the list from oldest to newest sighting.
+#[derive(Clone, Debug)]
+struct Slot<K, T> {
+    key: K,
+    round: u64,
+    item: T,
+    older: u32,
+    newer: u32,
+}
+
 /// Items keyed by id, newest sighting wins, bounded by a [`Retention`] policy.
+///
+/// A doubly linked list in a slab, oldest sighting first, plus a map from key to slot:
+/// recording, forgetting and evicting are O(1) each (no stale entries, no scans).
 #[derive(Clone, Debug)]
 pub struct MemoryList<K: Eq + Hash + Copy, T> {
     retention: Retention,
-    /// Sightings in the order they were recorded (key, sequence number, round); entries
-    /// whose sequence number is no longer the key's live one are stale.
-    log: VecDeque<(K, u64, u64)>,
-    /// Key → (sequence number, round, item) of its live sighting.
-    live: HashMap<K, (u64, u64, T)>,
-    next_seq: u64,
+    slots: Vec<Slot<K, T>>,
+    /// Slots of forgotten items, reused first.
+    free: Vec<u32>,
+    index: FastMap<K, u32>,
+    oldest: u32,
+    newest: u32,
 }
 
 impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
@@ -30,75 +50,156 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
     pub fn new(retention: Retention) -> Self {
         Self {
             retention,
-            log: VecDeque::new(),
-            live: HashMap::new(),
-            next_seq: 0,
+            slots: Vec::new(),
+            free: Vec::new(),
+            index: FastMap::default(),
+            oldest: NIL,
+            newest: NIL,
         }
     }
 
     /// Record that `item` (key `key`) was seen in `round`.
     pub fn record(&mut self, key: K, item: T, round: u64) {
-        let seq = self.next_seq;
-        self.next_seq += 1;
-        self.live.insert(key, (seq, round, item));
-        self.log.push_back((key, seq, round));
+        if let Some(&i) = self.index.get(&key) {
+            let slot = &mut self.slots[i as usize];
+            slot.item = item;
+            slot.round = round;
+            if self.newest != i {
+                self.unlink(i);
+                self.push_newest(i);
+            }
+        } else {
+            let slot = Slot {
+                key,
+                round,
+                item,
+                older: NIL,
+                newer: NIL,
+            };
+            let i = if let Some(i) = self.free.pop() {
+                self.slots[i as usize] = slot;
+                i
+            } else {
+                self.slots.push(slot);
+                u32::try_from(self.slots.len() - 1).expect("fewer than 2^32 remembered items")
+            };
+            self.index.insert(key, i);
+            self.push_newest(i);
+        }
         self.evict(round);
     }
 
     /// Forget an item.
     pub fn forget(&mut self, key: K) {
-        self.live.remove(&key);
-    }
-
-    fn is_live(&self, key: K, seq: u64) -> bool {
-        self.live.get(&key).is_some_and(|e| e.0 == seq)
+        if let Some(i) = self.index.remove(&key) {
+            self.unlink(i);
+            self.free.push(i);
+        }
     }
 
     /// Drop what the policy no longer keeps at `round`.
     pub fn evict(&mut self, round: u64) {
-        while let Some(&(k, seq, seen)) = self.log.front() {
-            let stale = !self.is_live(k, seq);
+        while self.oldest != NIL {
+            let oldest = &self.slots[self.oldest as usize];
             let expired = match self.retention {
-                Retention::LastN(n) => self.live.len() > n,
-                Retention::LastRounds(m) => seen + m < round,
+                Retention::LastN(n) => self.index.len() > n,
+                Retention::LastRounds(m) => oldest.round + m < round,
             };
-            if stale {
-                self.log.pop_front();
-            } else if expired {
-                self.live.remove(&k);
-                self.log.pop_front();
-            } else {
+            if !expired {
                 break;
             }
+            self.forget(oldest.key);
         }
-        // Keep the log from filling with stale entries behind a long-lived front.
-        if self.log.len() > 2 * self.live.len() + 16 {
-            let live = &self.live;
-            self.log.retain(|(k, seq, _)| live.get(k).is_some_and(|e| e.0 == *seq));
+    }
+
+    /// Take slot `i` out of the list.
+    fn unlink(&mut self, i: u32) {
+        let (older, newer) = {
+            let s = &self.slots[i as usize];
+            (s.older, s.newer)
+        };
+        match older {
+            NIL => self.oldest = newer,
+            o => self.slots[o as usize].newer = newer,
         }
+        match newer {
+            NIL => self.newest = older,
+            n => self.slots[n as usize].older = older,
+        }
+    }
+
+    /// Put slot `i` at the newest end.
+    fn push_newest(&mut self, i: u32) {
+        let newest = self.newest;
+        {
+            let s = &mut self.slots[i as usize];
+            s.older = newest;
+            s.newer = NIL;
+        }
+        match newest {
+            NIL => self.oldest = i,
+            n => self.slots[n as usize].newer = i,
+        }
+        self.newest = i;
     }
 
     /// Number of items remembered.
     pub fn len(&self) -> usize {
-        self.live.len()
+        self.index.len()
     }
 
     /// Whether nothing is remembered.
     pub fn is_empty(&self) -> bool {
-        self.live.is_empty()
+        self.index.is_empty()
     }
 
     /// Items with the round each was last seen, oldest first.
     pub fn iter(&self) -> impl Iterator<Item = (&T, u64)> {
-        self.log.iter().filter_map(|(k, seq, _)| {
-            let (s, round, item) = self.live.get(k)?;
-            (s == seq).then_some((item, *round))
+        let mut at = self.oldest;
+        std::iter::from_fn(move || {
+            let s = self.slots.get(at as usize)?;
+            at = s.newer;
+            Some((&s.item, s.round))
         })
     }
 
     /// The live item of a key.
     pub fn get(&self, key: K) -> Option<&T> {
-        self.live.get(&key).map(|e| &e.2)
+        self.index.get(&key).map(|&i| &self.slots[i as usize].item)
+    }
+
+    /// Bytes held (slots and index, capacity included), for memory accounting.
+    pub fn memory_bytes(&self) -> usize {
+        self.slots.capacity() * std::mem::size_of::<Slot<K, T>>()
+            + self.free.capacity() * 4
+            + self.index.capacity() * (std::mem::size_of::<(K, u32)>() + 1)
+    }
+
+    /// Check the list's invariants: every key maps to a slot holding it, the links run
+    /// both ways from oldest to newest through exactly the live slots, rounds never
+    /// decrease along the list, and the policy holds. Panics with the broken rule.
+    pub fn assert_well_formed(&self) {
+        let mut seen = 0;
+        let mut at = self.oldest;
+        let mut prev = NIL;
+        let mut last_round = 0;
+        while at != NIL {
+            let s = &self.slots[at as usize];
+            assert_eq!(s.older, prev, "back link of slot {at}");
+            assert_eq!(self.index.get(&s.key), Some(&at), "index entry of slot {at}");
+            assert!(s.round >= last_round, "rounds decrease at slot {at}");
+            last_round = s.round;
+            seen += 1;
+            assert!(seen <= self.index.len(), "the list has a cycle or extra slots");
+            prev = at;
+            at = s.newer;
+        }
+        assert_eq!(prev, self.newest, "newest end");
+        assert_eq!(seen, self.index.len(), "listed vs indexed items");
+        assert_eq!(self.slots.len(), seen + self.free.len(), "slots leaked");
+        if let Retention::LastN(n) = self.retention {
+            assert!(self.index.len() <= n, "more than {n} kept");
+        }
     }
 }
 
@@ -139,6 +240,48 @@ mod tests {
             m.record(round % 7, round, round);
         }
         assert_eq!(m.len(), 7);
-        assert!(m.log.len() <= 2 * 7 + 17);
+        assert_eq!(m.slots.len(), 7);
+        m.assert_well_formed();
+    }
+
+    /// The list against a brute-force model (a vector of (key, item, round) in sighting
+    /// order), through random records, forgets and evictions under both policies.
+    #[test]
+    fn matches_a_brute_force_model() {
+        use rand::{Rng, SeedableRng};
+        for (seed, retention) in [
+            (1, Retention::LastN(5)),
+            (2, Retention::LastRounds(4)),
+            (3, Retention::LastN(1)),
+        ] {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let mut list = MemoryList::new(retention);
+            let mut model: Vec<(u8, u32, u64)> = Vec::new();
+            let mut round = 0;
+            for step in 0..3_000u32 {
+                round += u64::from(rng.random_bool(0.3));
+                let key = rng.random_range(0..12u8);
+                model.retain(|e| e.0 != key);
+                if rng.random_bool(0.1) {
+                    list.forget(key);
+                } else {
+                    list.record(key, step, round);
+                    model.push((key, step, round));
+                    // The model's eviction, after every record as the list's.
+                    match retention {
+                        Retention::LastN(n) => {
+                            let excess = model.len().saturating_sub(n);
+                            model.drain(..excess);
+                        }
+                        Retention::LastRounds(m) => model.retain(|e| e.2 + m >= round),
+                    }
+                }
+                list.assert_well_formed();
+                let got: Vec<_> = list.iter().map(|(v, r)| (*v, r)).collect();
+                let want: Vec<_> = model.iter().map(|e| (e.1, e.2)).collect();
+                assert_eq!(got, want, "seed {seed}, step {step}");
+                assert_eq!(list.get(key).copied(), model.iter().find(|e| e.0 == key).map(|e| e.1));
+            }
+        }
     }
 }

@@ -16,9 +16,10 @@ pub(super) struct RandomWalk {
 
 impl Strategy for RandomWalk {
     fn needs(&self) -> Needs {
+        // The known map answers `can_move` for the collision tactic; other robots are
+        // never looked at (the physical unit keeps bodies apart), so they are not perceived.
         Needs {
             known_map: true,
-            robots: true,
             ..Needs::NONE
         }
     }

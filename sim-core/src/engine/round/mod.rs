@@ -19,7 +19,7 @@ mod resolve;
 
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
 
-use crate::engine::simulation::{Simulation, index_cell_m};
+use crate::engine::simulation::Simulation;
 use crate::world::RoundReport;
 
 impl Simulation {
@@ -40,10 +40,7 @@ impl Simulation {
         self.start_positions.clear();
         self.start_positions.extend(self.robots.iter().map(|r| r.position));
         let (messages, bytes) = self.resolve(round);
-        self.robot_index.rebuild(
-            self.robots.iter().map(|r| (r.id, r.position)),
-            index_cell_m(&self.types),
-        );
+        self.rebuild_robot_indexes();
         // 4: observe (the caller hands the report to the observers).
         self.report.metrics = self.metrics(round, messages, bytes);
         &self.report

@@ -209,7 +209,7 @@ impl Simulation {
         // The index holds start-of-round positions; robots move at most max_speed a round.
         let reach = radius + self.max_radius_m + self.max_speed_m;
         let mut hit = false;
-        self.robot_index.for_each_within(p, reach, |id, _| {
+        self.body_index.for_each_within(p, reach, |id, _| {
             let j = id.index();
             if j != i && !hit {
                 let other = &self.robots[j];

@@ -1,0 +1,209 @@
+//! The scale suite (issue 11): each scenario generates its own map with the editor's
+//! library (nothing large is committed), builds a [`Scenario`], and [`measure`] plays it,
+//! reporting set-up time, rounds per second after set-up, and peak memory.
+//!
+//! ```
+//! use scale::{RandomWalk, measure};
+//!
+//! // The dense random walk, shrunk: 20 walkers on a 64 m map.
+//! let scenario = RandomWalk { robots: 20, side_m: 64.0, ..RandomWalk::default() }.scenario()?;
+//! let m = measure(scenario, 10, 1)?;
+//! assert_eq!(m.rounds, 10);
+//! assert_eq!(m.robots, 20);
+//! # Ok::<(), scale::Error>(())
+//! ```
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use editor::generate::{GenerateOptions, cell_hash, unit};
+use sim_core::agent::{Params, StrategyRegistry};
+use sim_core::engine::{Group, Scenario, ScenarioBuilder, Simulation};
+use sim_core::glam::DVec2;
+use sim_core::spatial::ObstacleMap;
+use sim_core::world::{HomeBase, MapData, RobotType};
+
+/// What can go wrong while setting a scenario up.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The kernel refused the scenario.
+    #[error(transparent)]
+    Sim(#[from] sim_core::Error),
+    /// The map generator refused its options.
+    #[error(transparent)]
+    Editor(#[from] editor::EditorError),
+    /// Worker threads could not start.
+    #[error("cannot start worker threads: {0}")]
+    Threads(#[from] rayon::ThreadPoolBuildError),
+}
+
+/// This crate's result.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// The dense random walk of issue 11: `robots` random walkers (turn probability 0.1,
+/// 0.5 m steps, 5 m view, no energy use) on a white-noise map of `side_m` × `side_m` at
+/// `density`, all starting in a home disc of `home_radius_m` at the centre (cleared of
+/// obstacles). Each walker keeps its own known map and obeys collisions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RandomWalk {
+    /// Walkers (default 1,000).
+    pub robots: u32,
+    /// Map side (default 1,024 m, 1 m cells).
+    pub side_m: f64,
+    /// Blocked fraction of the white noise (default 0.3).
+    pub density: f64,
+    /// Home radius (default 20 m).
+    pub home_radius_m: f64,
+    /// Seed of map and run (default 1).
+    pub seed: u64,
+}
+
+impl Default for RandomWalk {
+    fn default() -> Self {
+        Self {
+            robots: 1_000,
+            side_m: 1_024.0,
+            density: 0.3,
+            home_radius_m: 20.0,
+            seed: 1,
+        }
+    }
+}
+
+impl RandomWalk {
+    /// The walker: an explorer body with 0.5 m steps, a 5 m view and no energy use.
+    pub fn walker() -> RobotType {
+        let mut t = RobotType::new("walker")
+            .with_speed_m_per_round(0.5)
+            .with_view_radius_m(5.0);
+        t.energy_per_m = 0.0;
+        t.energy_per_sense = 0.0;
+        t.energy_idle = 0.0;
+        t.energy_per_message = 0.0;
+        t
+    }
+
+    /// Generate the map and build the scenario.
+    pub fn scenario(&self) -> Result<Scenario> {
+        let opts = GenerateOptions {
+            width_m: self.side_m,
+            height_m: self.side_m,
+            density: Some(self.density),
+            seed: self.seed,
+            ..GenerateOptions::default()
+        };
+        let grid = opts.grid()?;
+        let density = opts.density_or(0.3)?;
+        let centre = DVec2::splat(self.side_m / 2.0);
+        // White noise as the editor's generator draws it, with the home disc (plus a cell)
+        // kept clear so that every walker has room to start.
+        let clear_m = self.home_radius_m + 1.5;
+        let obstacles = ObstacleMap::from_fn(grid, |x, y| {
+            let p = DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5);
+            p.distance(centre) > clear_m && unit(cell_hash(x, y, self.seed)) < density
+        });
+        let map = MapData {
+            obstacles,
+            home: HomeBase::Disc {
+                center: centre,
+                radius_m: self.home_radius_m,
+            },
+            treasures: Vec::new(),
+        };
+        let registry = StrategyRegistry::with_builtins();
+        Ok(ScenarioBuilder::new(Arc::new(map))
+            .with_name("dense-random-walk")
+            .with_seed(self.seed)
+            .with_rounds(u64::MAX)
+            .with_types(vec![Self::walker()])
+            .with_group(
+                Group::new("random_walk", 0, self.robots)
+                    .with_name("walkers")
+                    .with_params(Params::from_pairs([("turn_probability", "0.1")])),
+            )
+            .build(&registry)?)
+    }
+}
+
+/// What [`measure`] saw.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    /// Robots in the run.
+    pub robots: usize,
+    /// Quadtree leaves of the map.
+    pub leaves: usize,
+    /// Rounds timed.
+    pub rounds: u64,
+    /// Seconds to build the simulation from the scenario (the map generation is the
+    /// caller's, see [`Measurement::generate_s`]).
+    pub setup_s: f64,
+    /// Seconds spent generating the map and validating the scenario (filled by callers).
+    pub generate_s: f64,
+    /// Seconds for the timed rounds.
+    pub rounds_s: f64,
+    /// Peak resident set size of the process so far, bytes (Linux; 0 elsewhere).
+    pub peak_rss_bytes: u64,
+    /// Bytes held by the robots' known maps and memories at the end.
+    pub robot_memory_bytes: usize,
+    /// Explored fraction of the free area at the end.
+    pub explored_fraction: f64,
+    /// A digest of every robot's final position, to compare runs (thread counts).
+    pub digest: u64,
+}
+
+impl Measurement {
+    /// Rounds per second over the timed rounds.
+    pub fn rounds_per_s(&self) -> f64 {
+        self.rounds as f64 / self.rounds_s
+    }
+
+    /// Robot-rounds per second over the timed rounds.
+    pub fn robot_rounds_per_s(&self) -> f64 {
+        self.rounds_per_s() * self.robots as f64
+    }
+}
+
+/// Peak resident set size of this process, from `/proc/self/status` (0 where unknown).
+pub fn peak_rss_bytes() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|kb| kb.parse::<u64>().ok())
+        })
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// Build the simulation and play `rounds` rounds on `threads` worker threads (0: one per
+/// core), timing the set-up and the rounds apart.
+pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measurement> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
+    pool.install(|| {
+        let t0 = Instant::now();
+        let mut sim = Simulation::new(scenario)?;
+        let setup_s = t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        for _ in 0..rounds {
+            sim.step();
+        }
+        let rounds_s = t1.elapsed().as_secs_f64();
+        let digest = sim.robots().iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, r| {
+            let h = (h ^ r.position.x.to_bits()).wrapping_mul(0x0100_0000_01b3);
+            (h ^ r.position.y.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        });
+        Ok(Measurement {
+            robots: sim.robots().len(),
+            leaves: sim.obstacles().leaf_count(),
+            rounds,
+            setup_s,
+            generate_s: 0.0,
+            rounds_s,
+            peak_rss_bytes: peak_rss_bytes(),
+            robot_memory_bytes: sim.robot_memory_bytes(),
+            explored_fraction: sim.report().metrics.explored_fraction,
+            digest,
+        })
+    })
+}

@@ -1,0 +1,88 @@
+//! `smartteams-bench`: the scale suite from the command line. One scenario per process, so
+//! that the peak memory printed is that scenario's.
+
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use scale::{RandomWalk, measure};
+
+/// Time Smart Teams at scale: each scenario generates its own map, then prints set-up time,
+/// rounds per second after set-up, and peak memory.
+#[derive(Parser, Debug)]
+#[command(name = "smartteams-bench", version)]
+struct Cli {
+    #[command(subcommand)]
+    scenario: Scenario,
+    /// Rounds to time after set-up.
+    #[arg(long, default_value_t = 200, global = true)]
+    rounds: u64,
+    /// Worker threads (0: one per core).
+    #[arg(long, default_value_t = 0, global = true)]
+    threads: usize,
+}
+
+#[derive(Subcommand, Debug)]
+enum Scenario {
+    /// Random walkers on a white-noise map (issue 11's dense random walk).
+    RandomWalk {
+        /// Walkers.
+        #[arg(long, default_value_t = 1_000)]
+        robots: u32,
+        /// Map side, metres (1 m cells).
+        #[arg(long, default_value_t = 1_024.0)]
+        side_m: f64,
+        /// Blocked fraction.
+        #[arg(long, default_value_t = 0.3)]
+        density: f64,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+}
+
+fn main() {
+    if let Err(e) = run(&Cli::parse()) {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(cli: &Cli) -> Result<()> {
+    let t0 = Instant::now();
+    let (name, scenario) = match cli.scenario {
+        Scenario::RandomWalk {
+            robots,
+            side_m,
+            density,
+            seed,
+        } => {
+            let rw = RandomWalk {
+                robots,
+                side_m,
+                density,
+                seed,
+                ..RandomWalk::default()
+            };
+            ("random-walk", rw.scenario()?)
+        }
+    };
+    let generate_s = t0.elapsed().as_secs_f64();
+    let mut m = measure(scenario, cli.rounds, cli.threads)?;
+    m.generate_s = generate_s;
+    println!(
+        "{name}: {} robots, {} leaves, {} rounds | map+scenario {:.2} s, set-up {:.2} s | {:.1} rounds/s, {:.3e} robot-rounds/s | peak RSS {:.0} MB, robots' memory {:.1} MB | explored {:.4} | digest {:016x}",
+        m.robots,
+        m.leaves,
+        m.rounds,
+        m.generate_s,
+        m.setup_s,
+        m.rounds_per_s(),
+        m.robot_rounds_per_s(),
+        m.peak_rss_bytes as f64 / 1e6,
+        m.robot_memory_bytes as f64 / 1e6,
+        m.explored_fraction,
+        m.digest
+    );
+    Ok(())
+}

@@ -1,0 +1,54 @@
+//! The scale scenarios at a reduced size, so that they keep working (timings belong to
+//! `smartteams-bench`, not here).
+
+use scale::{RandomWalk, measure};
+use sim_core::engine::Simulation;
+
+fn small_walk() -> RandomWalk {
+    RandomWalk {
+        robots: 150,
+        side_m: 128.0,
+        home_radius_m: 8.0,
+        ..RandomWalk::default()
+    }
+}
+
+#[test]
+fn random_walk_gives_the_same_result_on_one_and_two_threads() {
+    let one = measure(small_walk().scenario().unwrap(), 40, 1).unwrap();
+    let two = measure(small_walk().scenario().unwrap(), 40, 2).unwrap();
+    assert_eq!(one.digest, two.digest);
+    assert_eq!(one.explored_fraction.to_bits(), two.explored_fraction.to_bits());
+    assert_eq!((one.robots, one.rounds), (150, 40));
+    // 150 walkers of 0.5 m steps for 40 rounds saw more than their 8 m home.
+    assert!(one.explored_fraction > 0.02, "{}", one.explored_fraction);
+}
+
+#[test]
+fn issue11_walkers_build_no_navigation_graph() {
+    let mut sim = Simulation::new(small_walk().scenario().unwrap()).unwrap();
+    for _ in 0..20 {
+        sim.step();
+    }
+    // No walker plans a route, so the graph (seconds on a big map) is never built.
+    assert!(sim.nav_if_built().is_none());
+    // The map is white noise of density 0.3 outside home, so walkers have been held back.
+    assert!(sim.robots().iter().all(|r| r.stats.distance_m > 0.0));
+    // Asked for, it is built then.
+    assert!(!sim.nav().is_empty());
+    assert!(sim.nav_if_built().is_some());
+}
+
+#[test]
+fn the_walker_map_keeps_home_clear_and_has_the_density_asked_for() {
+    let scenario = small_walk().scenario().unwrap();
+    let sim = Simulation::new(scenario).unwrap();
+    let obstacles = sim.obstacles();
+    let home = sim.map().home.center();
+    assert!(obstacles.is_disc_free(home, 8.0));
+    let blocked = obstacles.tree().count_cells(true) as f64;
+    let cells = 128.0 * 128.0;
+    // 0.3 of the cells outside the cleared disc of 9.5 m (≈ 284 cells).
+    let expected = 0.3 * (cells - 284.0);
+    assert!((blocked - expected).abs() < 0.03 * expected, "{blocked} vs {expected}");
+}
