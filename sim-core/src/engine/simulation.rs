@@ -12,7 +12,9 @@ use rand_chacha::ChaCha8Rng;
 use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
-use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex};
+use crate::spatial::{
+    Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex,
+};
 use crate::world::{Action, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
 /// A robot's brain: its strategy and mind, owned by the robot alone.
@@ -54,6 +56,8 @@ pub struct Simulation {
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
+    /// Each robot's view disc last marked in `explored`.
+    pub(super) explored_views: Vec<Option<Disc>>,
     pub(super) total_free_cells: u64,
     pub(super) report: RoundReport,
     pub(super) max_radius_m: f64,
@@ -137,6 +141,7 @@ impl Simulation {
             inboxes: vec![Vec::new(); n],
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
+            explored_views: vec![None; n],
             total_free_cells,
             report: RoundReport::default(),
             max_radius_m,

@@ -208,6 +208,45 @@ impl Shape for Capsule {
     }
 }
 
+/// The part of `disc` not wholly inside `seen`, for marking a view that moved: squares
+/// lying wholly inside the disc seen last time were marked then (known maps only grow), so
+/// they count as disjoint and the quadtree descent skips them (issue 11: half the disc's
+/// rim need not be walked again each round).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DiscBeyond {
+    /// The view now.
+    pub disc: Disc,
+    /// The view marked last time, if any.
+    pub seen: Option<Disc>,
+}
+
+impl DiscBeyond {
+    fn inside_seen(&self, b: &Aabb) -> bool {
+        self.seen
+            .is_some_and(|s| b.farthest_corner_distance_squared(s.center) <= s.radius * s.radius)
+    }
+}
+
+impl Shape for DiscBeyond {
+    #[inline]
+    fn intersects(&self, b: &Aabb) -> bool {
+        !self.inside_seen(b) && self.disc.intersects(b)
+    }
+
+    #[inline]
+    fn classify(&self, b: &Aabb) -> Overlap {
+        match self.disc.classify(b) {
+            Overlap::Disjoint => Overlap::Disjoint,
+            _ if self.inside_seen(b) => Overlap::Disjoint,
+            other => other,
+        }
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.disc.bounds()
+    }
+}
+
 /// The intersection of two shapes (used to clip a shape to the map's extent).
 #[derive(Clone, Copy, Debug)]
 pub struct Clipped<S> {

@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-use crate::spatial::geometry::{Aabb, Clipped, Disc, Shape};
+use crate::spatial::geometry::{Aabb, Clipped, Disc, DiscBeyond, Shape};
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::PartialCells;
@@ -17,6 +17,8 @@ pub struct KnownMap {
     tree: RegionQuadtree,
     /// Cells known, kept up to date by every mutation (maps only grow).
     known_cells: u64,
+    /// The view disc [`mark_view`](Self::mark_view) marked last: all it holds is known.
+    last_view: Option<Disc>,
 }
 
 impl KnownMap {
@@ -25,13 +27,18 @@ impl KnownMap {
         Self {
             tree: RegionQuadtree::uniform(grid, false),
             known_cells: 0,
+            last_view: None,
         }
     }
 
     /// Wrap a tree whose `FULL` leaves are known space.
     pub fn from_tree(tree: RegionQuadtree) -> Self {
         let known_cells = tree.count_cells(true);
-        Self { tree, known_cells }
+        Self {
+            tree,
+            known_cells,
+            last_view: None,
+        }
     }
 
     /// The grid.
@@ -54,6 +61,22 @@ impl KnownMap {
         })
     }
 
+    /// [`mark_disc`](Self::mark_disc) for a robot's view, which moves a little each round:
+    /// squares wholly inside the view this map marked last time are skipped, as they are
+    /// known already (maps only grow). Same result as `mark_disc`, less work.
+    pub fn mark_view(&mut self, center: DVec2, radius_m: f64) -> bool {
+        let disc = Disc {
+            center,
+            radius: radius_m,
+        };
+        let changed = self.mark(&DiscBeyond {
+            disc,
+            seen: self.last_view,
+        });
+        self.last_view = Some(disc);
+        changed
+    }
+
     /// Mark as known every map cell lying wholly inside `shape`.
     pub fn mark<S: Shape>(&mut self, shape: &S) -> bool {
         let before = self.known_cells;
@@ -67,15 +90,20 @@ impl KnownMap {
         shape: &S,
         mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
     ) {
-        let clipped = Clipped {
-            shape,
-            clip: self.grid().extent(),
-        };
+        let clip = self.grid().extent();
         let mut added = 0;
-        self.tree.fill_reporting(&clipped, true, PartialCells::Exclude, |sq| {
+        let mut report = |sq: crate::spatial::quadtree::Square| {
             added += sq.cells();
             newly_known(sq);
-        });
+        };
+        // Clipping costs a box test at every node; most shapes lie inside the map anyway.
+        if clip.contains_box(&shape.bounds()) {
+            self.tree
+                .fill_reporting(shape, true, PartialCells::Exclude, &mut report);
+        } else {
+            self.tree
+                .fill_reporting(&Clipped { shape, clip }, true, PartialCells::Exclude, &mut report);
+        }
         self.known_cells += added;
     }
 

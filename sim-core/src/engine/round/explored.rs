@@ -2,7 +2,7 @@
 //! where it perceived.
 
 use crate::engine::simulation::Simulation;
-use crate::spatial::Disc;
+use crate::spatial::{Disc, DiscBeyond};
 use crate::world::Event;
 
 impl Simulation {
@@ -12,14 +12,18 @@ impl Simulation {
         let obstacles = &self.map.obstacles;
         let cell_area = obstacles.grid().cell_area_m2();
         let before = self.explored_free_cells;
-        for (robot, agent) in self.robots.iter_mut().zip(&self.agents) {
+        let last_views = &mut self.explored_views;
+        for ((robot, agent), seen) in self.robots.iter_mut().zip(&self.agents).zip(last_views) {
             if !agent.needs.senses() || !robot.alive {
                 continue;
             }
-            let view = Disc {
+            let disc = Disc {
                 center: robot.position,
                 radius: self.types[robot.type_index].view_radius_m,
             };
+            // What lay wholly inside this robot's last view is explored already.
+            let view = DiscBeyond { disc, seen: *seen };
+            *seen = Some(disc);
             let mut fresh = 0;
             self.explored
                 .mark_reporting(&view, |sq| fresh += obstacles.tree().count_cells_in(sq, false));

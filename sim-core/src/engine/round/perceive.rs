@@ -61,7 +61,7 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
     let data = &mut agent.mind.data;
     let perception = &mut agent.mind.perception;
     if let Some(known) = data.known.as_mut() {
-        agent.known_changed |= known.mark_disc(p, view);
+        agent.known_changed |= known.mark_view(p, view);
     }
     perception.robots.clear();
     if needs.robots {
