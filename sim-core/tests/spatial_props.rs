@@ -257,6 +257,40 @@ proptest! {
         }
     }
 
+    /// A view that moves (issue 11: only what lies outside the last view is visited) marks
+    /// exactly the cells that marking each whole disc would, on a walk that also jumps and
+    /// changes radius, with merges from another map in between.
+    #[test]
+    fn moving_views_mark_exactly_what_whole_discs_mark(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut by_view = KnownMap::new(w.grid);
+        let mut by_disc = KnownMap::new(w.grid);
+        let mut c = w.random_point(&mut rng);
+        let mut r = rng.random_range(0.5..4.0) * w.grid.cell_m();
+        for step in 0..24 {
+            if rng.random_bool(0.2) {
+                c = w.random_point(&mut rng);
+                r = rng.random_range(0.0..4.0) * w.grid.cell_m();
+            } else {
+                c += DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..0.7) * w.grid.cell_m();
+            }
+            if step % 7 == 6 {
+                let mut other = KnownMap::new(w.grid);
+                other.mark_disc(w.random_point(&mut rng), 2.0 * w.grid.cell_m());
+                by_view.merge(&other);
+                by_disc.merge(&other);
+            }
+            let grew_view = by_view.mark_view(c, r);
+            let grew_disc = by_disc.mark_disc(c, r);
+            by_view.validate().unwrap();
+            prop_assert_eq!(grew_view, grew_disc);
+            prop_assert_eq!(by_view.known_cells(), by_disc.known_cells());
+        }
+        for (x, y) in w.cells() {
+            prop_assert_eq!(by_view.tree().cell_value(x, y), by_disc.tree().cell_value(x, y));
+        }
+    }
+
     #[test]
     fn known_maps_mark_conservatively_and_merge_as_union(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
