@@ -16,12 +16,14 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use editor::generate::{GenerateOptions, cell_hash, unit};
+use editor::generate::{GenerateOptions, cell_hash, mesas::mesas, unit};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use sim_core::agent::{Params, StrategyRegistry};
 use sim_core::engine::{Group, Scenario, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::ObstacleMap;
-use sim_core::world::{HomeBase, MapData, RobotType};
+use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
 
 /// What can go wrong while setting a scenario up.
 #[derive(Debug, thiserror::Error)]
@@ -32,6 +34,14 @@ pub enum Error {
     /// The map generator refused its options.
     #[error(transparent)]
     Editor(#[from] editor::EditorError),
+    /// No free spot for the home base near the map's centre.
+    #[error("no free spot for a home base of {radius_m} m within {searched_m} m of the map's centre")]
+    NoHome {
+        /// Home radius asked for.
+        radius_m: f64,
+        /// How far the search went.
+        searched_m: f64,
+    },
     /// Worker threads could not start.
     #[error("cannot start worker threads: {0}")]
     Threads(#[from] rayon::ThreadPoolBuildError),
@@ -123,6 +133,139 @@ impl RandomWalk {
             )
             .build(&registry)?)
     }
+}
+
+/// The paper's scenario (and the moonshot, scaled up): a Mars-like map of `mesas` rocks and
+/// mesas (the editor's generator, 1 m cells) of `side_m` × `side_m`, a home disc near the
+/// centre, `treasures` treasures within 400 m of home, and a swarm of 80 % cooperative
+/// frontier explorers (sensing, known maps, messages, known-map exchange), 10 % excavators
+/// and 10 % transporters, all starting crowded at home.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Swarm {
+    /// Robots (default 1,000).
+    pub robots: u32,
+    /// Map side (default 100 km).
+    pub side_m: f64,
+    /// Rocks and mesas on the map (default 6,000: about 1.3 M quadtree leaves at 100 km).
+    pub mesas: u64,
+    /// Largest mesa radius (default 200 m).
+    pub mesa_scale_m: f64,
+    /// Home radius (default 10 m).
+    pub home_radius_m: f64,
+    /// Treasures near home (default 200).
+    pub treasures: u32,
+    /// Seed of map and run (default 1).
+    pub seed: u64,
+}
+
+impl Default for Swarm {
+    fn default() -> Self {
+        Self {
+            robots: 1_000,
+            side_m: 100_000.0,
+            mesas: 6_000,
+            mesa_scale_m: 200.0,
+            home_radius_m: 10.0,
+            treasures: 200,
+            seed: 1,
+        }
+    }
+}
+
+impl Swarm {
+    /// The paper's scale: 1,000 robots on 100 km × 100 km with about 1.3 M leaves.
+    pub fn paper() -> Self {
+        Self::default()
+    }
+
+    /// The moonshot: 10,000 robots on 100 km × 100 km with over 10 M leaves.
+    pub fn moonshot() -> Self {
+        Self {
+            robots: 10_000,
+            mesas: 50_000,
+            home_radius_m: 30.0,
+            ..Self::default()
+        }
+    }
+
+    /// Generate the map and build the scenario.
+    pub fn scenario(&self) -> Result<Scenario> {
+        let opts = GenerateOptions {
+            width_m: self.side_m,
+            height_m: self.side_m,
+            count: Some(self.mesas),
+            scale_m: Some(self.mesa_scale_m),
+            seed: self.seed,
+            ..GenerateOptions::default()
+        };
+        let obstacles = mesas(&opts)?;
+        let home = free_spot_near(&obstacles, DVec2::splat(self.side_m / 2.0), self.home_radius_m + 2.0).ok_or(
+            Error::NoHome {
+                radius_m: self.home_radius_m,
+                searched_m: self.side_m / 4.0,
+            },
+        )?;
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x7EA5_0BE5);
+        let mut treasures = Vec::new();
+        while treasures.len() < self.treasures as usize {
+            let at =
+                home + DVec2::from_angle(rng.random_range(0.0..std::f64::consts::TAU)) * rng.random_range(20.0..400.0);
+            if obstacles.is_disc_free(at, 0.3) {
+                treasures.push(TreasureSpec {
+                    position: at,
+                    quantity: rng.random_range(1..=5),
+                });
+            }
+        }
+        let map = MapData {
+            obstacles,
+            home: HomeBase::Disc {
+                center: home,
+                radius_m: self.home_radius_m,
+            },
+            treasures,
+        };
+        let scouts = self.robots * 8 / 10;
+        let diggers = (self.robots - scouts) / 2;
+        let haulers = self.robots - scouts - diggers;
+        let scout = RobotType::explorer().with_view_radius_m(6.0).with_comm_radius_m(25.0);
+        let scout = RobotType {
+            name: "scout".into(),
+            ..scout
+        };
+        let registry = StrategyRegistry::with_builtins();
+        Ok(ScenarioBuilder::new(Arc::new(map))
+            .with_name("swarm")
+            .with_seed(self.seed)
+            .with_rounds(u64::MAX)
+            .with_types(vec![scout, RobotType::excavator(), RobotType::transporter()])
+            .with_group(
+                Group::new("cooperative", 0, scouts)
+                    .with_name("scouts")
+                    .with_params(Params::from_pairs([("share_every", "10"), ("avoid_radius_m", "6")])),
+            )
+            .with_group(Group::new("excavator", 1, diggers).with_name("diggers"))
+            .with_group(Group::new("transporter", 2, haulers).with_name("haulers"))
+            .build(&registry)?)
+    }
+}
+
+/// The free disc of `radius_m` nearest to `centre` on a spiral of 1 m steps, searched out to
+/// a quarter of the map's width.
+fn free_spot_near(obstacles: &ObstacleMap, centre: DVec2, radius_m: f64) -> Option<DVec2> {
+    let limit = obstacles.grid().extent().max.x / 4.0;
+    let mut d: f64 = 0.0;
+    while d <= limit {
+        let steps = (d * std::f64::consts::TAU).ceil().max(1.0) as u32;
+        for k in 0..steps {
+            let p = centre + DVec2::from_angle(f64::from(k) / f64::from(steps) * std::f64::consts::TAU) * d;
+            if obstacles.is_disc_free(p, radius_m) {
+                return Some(p);
+            }
+        }
+        d += radius_m.max(1.0);
+    }
+    None
 }
 
 /// What [`measure`] saw.

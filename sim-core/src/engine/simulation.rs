@@ -150,6 +150,11 @@ impl Simulation {
             map,
         };
         sim.rebuild_robot_indexes();
+        // Strategies that plan routes would build the graph in their first round; build it
+        // here instead, so that set-up time is set-up time. Without them it is never built.
+        if sim.agents.iter().any(|a| a.needs.obstacles) {
+            sim.nav.get_or_build(&sim.map.obstacles);
+        }
         sim.report.metrics = sim.metrics(0, 0, 0);
         Ok(sim)
     }

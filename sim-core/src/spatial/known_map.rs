@@ -138,11 +138,9 @@ impl KnownMap {
     /// Add everything `other` knows (both over the same map). Returns whether anything new
     /// became known.
     pub fn merge(&mut self, other: &KnownMap) -> bool {
-        let changed = self.tree.union_with(&other.tree);
-        if changed {
-            self.known_cells = self.tree.count_cells(true);
-        }
-        changed
+        let added = self.tree.union_counting(&other.tree);
+        self.known_cells += added;
+        added > 0
     }
 
     /// Number of known cells (kept up to date, no traversal).

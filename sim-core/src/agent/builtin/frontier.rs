@@ -1,6 +1,6 @@
 //! `frontier` and `cooperative`.
 
-use std::collections::BTreeMap;
+use std::collections::HashMap;
 
 use glam::DVec2;
 
@@ -12,8 +12,10 @@ use crate::world::{Action, Payload};
 pub(super) struct Frontier {
     core: Explorer,
     sharing: Option<Sharing>,
-    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds).
-    claims: BTreeMap<u32, (DVec2, u64)>,
+    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds). A
+    /// fast fixed-seed hash map: in a crowd hundreds arrive a round, and only their set
+    /// matters (goals near any of them are avoided), not their order.
+    claims: HashMap<u32, (DVec2, u64), foldhash::fast::FixedState>,
     announced: Option<DVec2>,
     shared_area: f64,
 }
@@ -23,7 +25,7 @@ impl Frontier {
         Self {
             core: Explorer::default(),
             sharing,
-            claims: BTreeMap::new(),
+            claims: HashMap::default(),
             announced: None,
             shared_area: 0.0,
         }

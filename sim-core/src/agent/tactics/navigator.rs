@@ -1,10 +1,12 @@
 //! Shortest paths on the navigation graph within known terrain, and frontier search.
 
+use std::cell::Cell;
+
 use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, KnownMap, Route};
+use crate::spatial::{Aabb, KnownMap, Overlap, Route, Shape};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -102,18 +104,64 @@ impl Navigator {
 /// The unknown point of `area` nearest to `p`, nudged a little into the unknown cell.
 fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
     let cell = known.grid().cell_m();
-    let mut best: Option<(f64, DVec2)> = None;
-    let _ = known.tree().visit_leaves_in(area, false, |_, b| {
+    let best_d = Cell::new(f64::INFINITY);
+    let mut best: Option<DVec2> = None;
+    let pruned = NearerThan {
+        area: *area,
+        p,
+        best: &best_d,
+    };
+    let _ = known.tree().visit_leaves_in(&pruned, false, |_, b| {
         let lo = b.min.max(area.min);
         let hi = b.max.min(area.max);
         // Aim a little inside the unknown box so reaching it reveals it.
         let inset = DVec2::splat((0.5 * cell).min(0.5 * (hi - lo).min_element()));
         let q = p.clamp(lo + inset, hi - inset);
         let d = q.distance_squared(p);
-        if best.is_none_or(|(bd, _)| d < bd) {
-            best = Some((d, q));
+        if d < best_d.get() {
+            best_d.set(d);
+            best = Some(q);
         }
         std::ops::ControlFlow::Continue(())
     });
-    best.map(|(_, q)| q)
+    best
+}
+
+/// `area`, minus the boxes whose part in `area` lies farther from `p` than the best
+/// distance found so far: their leaves cannot win (issue 11: the search scanned every
+/// unknown leaf of a large free node). Only strictly farther boxes are cut, so ties resolve
+/// as in a full scan (first visited wins) and the result is the same.
+struct NearerThan<'a> {
+    area: Aabb,
+    p: DVec2,
+    best: &'a Cell<f64>,
+}
+
+impl NearerThan<'_> {
+    fn too_far(&self, b: &Aabb) -> bool {
+        let part = Aabb {
+            min: b.min.max(self.area.min),
+            max: b.max.min(self.area.max),
+        };
+        part.distance_squared_to(self.p) > self.best.get()
+    }
+}
+
+impl Shape for NearerThan<'_> {
+    fn classify(&self, b: &Aabb) -> Overlap {
+        // Never "contains": boxes below must still be tested against the best distance.
+        if self.area.intersects(b) && !self.too_far(b) {
+            Overlap::Partial
+        } else {
+            Overlap::Disjoint
+        }
+    }
+
+    fn intersects(&self, b: &Aabb) -> bool {
+        self.area.intersects(b) && !self.too_far(b)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.area
+    }
 }

@@ -118,31 +118,50 @@ impl RegionQuadtree {
     /// Make `self` the cell-wise union (OR) of itself and `other`. Both must cover the same
     /// grid depth. Returns whether anything changed.
     pub fn union_with(&mut self, other: &RegionQuadtree) -> bool {
-        assert_eq!(self.grid.depth(), other.grid.depth(), "trees over different grids");
-        let mut changed = false;
-        self.root = self.union_node(self.root, other, other.root, &mut changed);
-        changed
+        self.union_counting(other) > 0
     }
 
-    fn union_node(&mut self, n: NodeRef, other: &RegionQuadtree, m: NodeRef, changed: &mut bool) -> NodeRef {
+    /// [`union_with`](Self::union_with), returning how many cells became `1`: a known map
+    /// keeps its count up to date without a traversal of the whole tree (issue 11: the
+    /// recount after every merge was a twentieth of a crowded round).
+    pub fn union_counting(&mut self, other: &RegionQuadtree) -> u64 {
+        assert_eq!(self.grid.depth(), other.grid.depth(), "trees over different grids");
+        let mut added = 0;
+        self.root = self.union_node(self.root, self.grid.depth(), other, other.root, &mut added);
+        added
+    }
+
+    fn union_node(&mut self, n: NodeRef, level: u8, other: &RegionQuadtree, m: NodeRef, added: &mut u64) -> NodeRef {
         if n == FULL || m == super::EMPTY {
             return n;
         }
         if m == FULL {
-            *changed = true;
+            *added += (1u64 << (2 * u32::from(level))) - self.full_cells(n, level);
             self.release(n);
             return FULL;
         }
         if n == super::EMPTY {
-            *changed = true;
+            *added += other.full_cells(m, level);
             return self.copy_from(other, m);
         }
         for i in 0..4 {
             let k = self.groups[n as usize][i];
-            let k2 = self.union_node(k, other, other.groups[m as usize][i], changed);
+            let k2 = self.union_node(k, level - 1, other, other.groups[m as usize][i], added);
             self.groups[n as usize][i] = k2;
         }
         self.merge_if_uniform(n)
+    }
+
+    /// Cells of value `1` under node `n` of a square at `level`.
+    fn full_cells(&self, n: NodeRef, level: u8) -> u64 {
+        match n {
+            FULL => 1u64 << (2 * u32::from(level)),
+            super::EMPTY => 0,
+            g => self.groups[g as usize]
+                .iter()
+                .map(|&k| self.full_cells(k, level - 1))
+                .sum(),
+        }
     }
 
     fn copy_from(&mut self, other: &RegionQuadtree, m: NodeRef) -> NodeRef {
