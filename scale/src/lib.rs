@@ -154,6 +154,9 @@ pub struct Swarm {
     pub home_radius_m: f64,
     /// Treasures near home (default 200).
     pub treasures: u32,
+    /// Bytes of messages each robot can receive per round (default 8,192: a 64 kbit/s radio
+    /// at one round a second; `u64::MAX`: no limit).
+    pub radio_bytes_per_round: u64,
     /// Seed of map and run (default 1).
     pub seed: u64,
 }
@@ -167,6 +170,7 @@ impl Default for Swarm {
             mesa_scale_m: 200.0,
             home_radius_m: 10.0,
             treasures: 200,
+            radio_bytes_per_round: 8_192,
             seed: 1,
         }
     }
@@ -233,12 +237,15 @@ impl Swarm {
             name: "scout".into(),
             ..scout
         };
+        let radio = self.radio_bytes_per_round;
+        let types =
+            [scout, RobotType::excavator(), RobotType::transporter()].map(|t| t.with_radio_bytes_per_round(radio));
         let registry = StrategyRegistry::with_builtins();
         Ok(ScenarioBuilder::new(Arc::new(map))
             .with_name("swarm")
             .with_seed(self.seed)
             .with_rounds(u64::MAX)
-            .with_types(vec![scout, RobotType::excavator(), RobotType::transporter()])
+            .with_types(types.to_vec())
             .with_group(
                 Group::new("cooperative", 0, scouts)
                     .with_name("scouts")

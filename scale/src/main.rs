@@ -55,6 +55,9 @@ enum Scenario {
         /// Home radius, metres.
         #[arg(long, default_value_t = 10.0)]
         home_radius_m: f64,
+        /// Bytes of messages a robot can receive per round (0: no limit).
+        #[arg(long, default_value_t = 8_192)]
+        radio_bytes_per_round: u64,
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -91,6 +94,7 @@ fn run(cli: &Cli) -> Result<()> {
             side_m,
             mesas,
             home_radius_m,
+            radio_bytes_per_round,
             seed,
         } => {
             let swarm = Swarm {
@@ -98,6 +102,11 @@ fn run(cli: &Cli) -> Result<()> {
                 side_m,
                 mesas,
                 home_radius_m,
+                radio_bytes_per_round: if radio_bytes_per_round == 0 {
+                    u64::MAX
+                } else {
+                    radio_bytes_per_round
+                },
                 seed,
                 ..Swarm::default()
             };

@@ -52,3 +52,28 @@ fn the_walker_map_keeps_home_clear_and_has_the_density_asked_for() {
     let expected = 0.3 * (cells - 284.0);
     assert!((blocked - expected).abs() < 0.03 * expected, "{blocked} vs {expected}");
 }
+
+#[test]
+fn the_swarm_gives_the_same_result_on_one_and_two_threads_and_stays_within_its_radios() {
+    let swarm = scale::Swarm {
+        robots: 120,
+        side_m: 2_000.0,
+        mesas: 60,
+        mesa_scale_m: 40.0,
+        treasures: 20,
+        radio_bytes_per_round: 2_000,
+        ..scale::Swarm::default()
+    };
+    let one = measure(swarm.scenario().unwrap(), 30, 1).unwrap();
+    let two = measure(swarm.scenario().unwrap(), 30, 2).unwrap();
+    assert_eq!(one.digest, two.digest);
+    assert_eq!(one.robots, 120);
+    let mut sim = Simulation::new(swarm.scenario().unwrap()).unwrap();
+    for _ in 0..10 {
+        sim.step();
+        for inbox in sim.pending_messages() {
+            let bytes: u64 = inbox.iter().map(|m| m.payload.size_bytes()).sum();
+            assert!(bytes <= 2_000, "{bytes} bytes received in a round");
+        }
+    }
+}

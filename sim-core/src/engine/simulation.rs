@@ -29,6 +29,17 @@ pub(super) struct Agent {
     pub(super) merged_from: HashMap<RobotId, u64>,
 }
 
+/// A message sent this round, before budgeted delivery.
+#[derive(Clone, Debug)]
+pub(super) struct Outgoing {
+    /// Sender's index.
+    pub(super) from: usize,
+    /// Its reach (the sender's communication radius).
+    pub(super) range_m: f64,
+    pub(super) message: Message,
+    pub(super) bytes: u64,
+}
+
 /// A running simulation. Its state changes only through its own methods (set-up here, the
 /// round steps in `round/`).
 pub struct Simulation {
@@ -62,6 +73,11 @@ pub struct Simulation {
     pub(super) report: RoundReport,
     pub(super) max_radius_m: f64,
     pub(super) max_speed_m: f64,
+    /// Whether some robot type has a finite radio budget: messages are then delivered by
+    /// [`deliver_within_budget`](Self::deliver_within_budget) after the resolve step.
+    pub(super) radio_limited: bool,
+    /// Messages sent this round, waiting for budgeted delivery (sender order).
+    pub(super) outgoing: Vec<Outgoing>,
     /// Positions at the start of the current round (send-time positions for messages).
     pub(super) start_positions: Vec<DVec2>,
 }
@@ -124,6 +140,7 @@ impl Simulation {
         }
         let total_free_cells = obstacles.tree().count_cells(false);
         let n = robots.len();
+        let radio_limited = types.iter().any(|t| t.radio_bytes_per_round < u64::MAX);
         let mut sim = Self {
             name,
             seed,
@@ -146,6 +163,8 @@ impl Simulation {
             report: RoundReport::default(),
             max_radius_m,
             max_speed_m,
+            radio_limited,
+            outgoing: Vec::new(),
             start_positions: Vec::new(),
             map,
         };

@@ -6,6 +6,8 @@
 //! counting sort (O(n), no per-round allocation once warm), and a query looks at the buckets
 //! of the cells its disc covers. Memory is O(robots), whatever the map size.
 
+use std::ops::ControlFlow;
+
 use glam::DVec2;
 
 use crate::spatial::ids::RobotId;
@@ -122,6 +124,20 @@ impl RobotIndex {
 
     /// Visit every robot within `radius_m` of `p` (closed disc), with its position.
     pub fn for_each_within(&self, p: DVec2, radius_m: f64, mut visit: impl FnMut(RobotId, DVec2)) {
+        let _ = self.try_for_each_within(p, radius_m, |id, q| {
+            visit(id, q);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// [`for_each_within`](Self::for_each_within) that the visitor may stop early; the
+    /// order is fixed by the index's contents (cell by cell), the same on every run.
+    pub fn try_for_each_within(
+        &self,
+        p: DVec2,
+        radius_m: f64,
+        mut visit: impl FnMut(RobotId, DVec2) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
         let r2 = radius_m * radius_m;
         let (x0, y0) = self.cell_of(p - DVec2::splat(radius_m));
         let (x1, y1) = self.cell_of(p + DVec2::splat(radius_m));
@@ -130,10 +146,10 @@ impl RobotIndex {
             // A disc wider than the swarm's spread: a scan is cheaper than the cells.
             for e in &self.entries {
                 if e.position.distance_squared(p) <= r2 {
-                    visit(e.id, e.position);
+                    visit(e.id, e.position)?;
                 }
             }
-            return;
+            return ControlFlow::Continue(());
         }
         for cy in y0..=y1 {
             for cx in x0..=x1 {
@@ -141,11 +157,12 @@ impl RobotIndex {
                 for e in &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize] {
                     // Other cells may share the bucket; each is visited from its own cell.
                     if e.cell == (cx, cy) && e.position.distance_squared(p) <= r2 {
-                        visit(e.id, e.position);
+                        visit(e.id, e.position)?;
                     }
                 }
             }
         }
+        ControlFlow::Continue(())
     }
 
     /// Bytes held.

@@ -83,6 +83,11 @@ robot_type_table! {
     excavation_per_round: u32 = 0, NonNegative;
     /// Units it can carry (default 0).
     carry_capacity: u32 = 0, NonNegative;
+    /// Bytes of messages it can receive per round (default: no limit). A radio has a
+    /// bandwidth: a receiver takes messages addressed to it first, then broadcasts, until
+    /// the next one would not fit; the rest are lost. A finite budget keeps crowds from
+    /// making delivery quadratic in the number of robots.
+    radio_bytes_per_round: u64 = u64::MAX, NonNegative;
 }
 
 /// The range a numeric field of [`RobotType`] must lie in (always finite too).
@@ -131,6 +136,20 @@ impl FieldValue for f64 {
             .ok()
             .filter(|x| x.is_finite())
             .ok_or_else(|| crate::Error::InvalidParameter(format!("{field} must be a number, got '{text}'")))
+    }
+}
+
+impl FieldValue for u64 {
+    fn as_f64(self) -> f64 {
+        self as f64
+    }
+    fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
+        text.trim().parse::<u64>().map_err(|_| {
+            crate::Error::InvalidParameter(format!(
+                "{field} must be a whole number from 0 to {}, got '{text}'",
+                u64::MAX
+            ))
+        })
     }
 }
 
@@ -218,6 +237,11 @@ impl RobotType {
     /// Enable digging at `units_per_round`.
     pub fn with_excavation(mut self, units_per_round: u32) -> Self {
         self.excavation_per_round = units_per_round;
+        self
+    }
+    /// Set the bytes of messages it can receive per round.
+    pub fn with_radio_bytes_per_round(mut self, bytes: u64) -> Self {
+        self.radio_bytes_per_round = bytes;
         self
     }
     /// Set the cargo capacity.

@@ -40,6 +40,9 @@ impl Simulation {
         self.start_positions.clear();
         self.start_positions.extend(self.robots.iter().map(|r| r.position));
         let (messages, bytes) = self.resolve(round);
+        if self.radio_limited {
+            self.deliver_within_budget();
+        }
         self.rebuild_robot_indexes();
         // 4: observe (the caller hands the report to the observers).
         self.report.metrics = self.metrics(round, messages, bytes);

@@ -2,12 +2,13 @@
 //! trims what is illegal (speed, energy, obstacles, other robots, abilities, capacity), then
 //! applies the rest; messages are addressed to whoever was in range at send time.
 
+use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use glam::DVec2;
 
-use crate::engine::simulation::Simulation;
-use crate::spatial::{RobotId, TreasureId};
+use crate::engine::simulation::{Outgoing, Simulation};
+use crate::spatial::{RobotId, RobotIndex, TreasureId};
 use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
 
 impl Simulation {
@@ -224,12 +225,22 @@ impl Simulation {
     fn send(&mut self, i: usize, kind: &RobotType, round: u64, to: Recipient, payload: Payload) {
         let from = self.robots[i].id;
         let at = self.start_positions[i];
+        let bytes = payload.size_bytes();
         let message = Message {
             from,
             sent_round: round,
             to,
             payload: Arc::new(payload),
         };
+        if self.radio_limited {
+            self.outgoing.push(Outgoing {
+                from: i,
+                range_m: kind.comm_radius_m,
+                message,
+                bytes,
+            });
+            return;
+        }
         let mut receivers: Vec<RobotId> = Vec::new();
         match to {
             Recipient::Broadcast => {
@@ -255,5 +266,98 @@ impl Simulation {
                 self.report.links.push(Link { from, to });
             }
         }
+    }
+
+    /// Deliver this round's messages when radios have a budget: receiver by receiver (in id
+    /// order), messages addressed to it first, then broadcasts of senders in range in the
+    /// index's fixed order, until the next would overflow its budget. The accepted ones go
+    /// to the inbox in sender order, as unbudgeted delivery would put them. Work per
+    /// receiver is bounded by its budget, not by the crowd around it.
+    pub(super) fn deliver_within_budget(&mut self) {
+        let outgoing = std::mem::take(&mut self.outgoing);
+        if outgoing.is_empty() {
+            return;
+        }
+        let n = self.robots.len();
+        // Each sender's messages are contiguous (resolve runs in sender order).
+        let mut first = vec![u32::MAX; n];
+        let mut last = vec![0u32; n];
+        let mut direct: Vec<(u32, u32)> = Vec::new();
+        for (k, o) in outgoing.iter().enumerate() {
+            let k = k as u32;
+            match o.message.to {
+                Recipient::Broadcast => {
+                    first[o.from] = first[o.from].min(k);
+                    last[o.from] = k + 1;
+                }
+                Recipient::Direct(target) => direct.push((target.get(), k)),
+            }
+        }
+        direct.sort_unstable();
+        let max_range = outgoing.iter().map(|o| o.range_m).fold(0.0, f64::max);
+        let mut senders = RobotIndex::new();
+        senders.rebuild(
+            (0..n)
+                .filter(|&i| first[i] != u32::MAX)
+                .map(|i| (self.robots[i].id, self.start_positions[i])),
+            max_range.clamp(1.0, 64.0),
+        );
+        let mut accepted: Vec<u32> = Vec::new();
+        let mut d = 0;
+        for r in 0..n {
+            let to = self.robots[r].id;
+            let here = self.start_positions[r];
+            let budget = self.types[self.robots[r].type_index].radio_bytes_per_round;
+            let mut used = 0u64;
+            let mut fits = |bytes: u64| {
+                let ok = used.checked_add(bytes).is_some_and(|u| u <= budget);
+                if ok {
+                    used += bytes;
+                }
+                ok
+            };
+            accepted.clear();
+            while d < direct.len() && direct[d].0 < to.get() {
+                d += 1;
+            }
+            while d < direct.len() && direct[d].0 == to.get() {
+                let o = &outgoing[direct[d].1 as usize];
+                let sender = self.robots[o.from].id;
+                if sender != to && self.start_positions[o.from].distance(here) <= o.range_m && fits(o.bytes) {
+                    accepted.push(direct[d].1);
+                }
+                d += 1;
+            }
+            if !self.robots[r].alive {
+                continue;
+            }
+            let _ = senders.try_for_each_within(here, max_range, |sender, at| {
+                let s = sender.index();
+                if sender == to {
+                    return ControlFlow::Continue(());
+                }
+                for k in first[s]..last[s] {
+                    let o = &outgoing[k as usize];
+                    if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
+                        if !fits(o.bytes) {
+                            return ControlFlow::Break(());
+                        }
+                        accepted.push(k);
+                    }
+                }
+                ControlFlow::Continue(())
+            });
+            accepted.sort_unstable();
+            for &k in &accepted {
+                let o = &outgoing[k as usize];
+                self.inboxes[r].push(o.message.clone());
+                self.report.links.push(Link {
+                    from: o.message.from,
+                    to,
+                });
+            }
+        }
+        self.outgoing = outgoing;
+        self.outgoing.clear();
     }
 }

@@ -1,0 +1,105 @@
+//! Radio budgets (issue 11): a receiver takes messages addressed to it first, then
+//! broadcasts, until the next would overflow `radio_bytes_per_round`. Expected inboxes are
+//! worked out by hand from the payload sizes (a position is 33 bytes, a custom message its
+//! tag plus its data).
+
+use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
+use sim_core::engine::{Group, ScenarioBuilder, Simulation};
+use sim_core::glam::DVec2;
+use sim_core::spatial::{Grid, ObstacleMap, RobotId};
+use sim_core::world::{Action, HomeBase, MapData, Payload, Recipient, RobotType};
+
+/// Every round: broadcast its position, and send 10 bytes ("hi" + 8 bytes) to robot 0.
+struct Chatter;
+
+impl Strategy for Chatter {
+    fn needs(&self) -> Needs {
+        Needs {
+            messages: true,
+            ..Needs::NONE
+        }
+    }
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        ctx.broadcast(Payload::Position {
+            position: ctx.position(),
+            goal: None,
+        });
+        if ctx.me.id != RobotId::new(0) {
+            ctx.send(
+                RobotId::new(0),
+                Payload::Custom {
+                    kind: "hi".into(),
+                    data: vec![0; 8],
+                },
+            );
+        }
+        Action::Idle
+    }
+}
+
+/// 12 chatters at the home of a free 20 m × 20 m map (all within each other's 20 m range).
+fn chatters(radio_bytes_per_round: u64) -> Simulation {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 20, 20).unwrap();
+    let map = MapData {
+        obstacles: ObstacleMap::empty(grid),
+        home: HomeBase::Disc {
+            center: DVec2::splat(10.0),
+            radius_m: 3.0,
+        },
+        treasures: Vec::new(),
+    };
+    let mut registry = StrategyRegistry::empty();
+    registry.register("chatter", "test", |_| Ok(Box::new(Chatter)));
+    let kind = RobotType::explorer().with_radio_bytes_per_round(radio_bytes_per_round);
+    let scenario = ScenarioBuilder::new(map)
+        .with_types(vec![kind])
+        .with_group(Group::new("chatter", 0, 12))
+        .build(&registry)
+        .unwrap();
+    Simulation::new(scenario).unwrap()
+}
+
+/// (sender, is a broadcast) of each robot's pending messages.
+fn inboxes(sim: &Simulation) -> Vec<Vec<(u32, bool)>> {
+    sim.pending_messages()
+        .iter()
+        .map(|inbox| {
+            inbox
+                .iter()
+                .map(|m| (m.from.get(), m.to == Recipient::Broadcast))
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn issue11_a_budget_that_never_fills_delivers_exactly_what_no_budget_does() {
+    let mut free = chatters(u64::MAX);
+    let mut roomy = chatters(u64::MAX - 1);
+    for _ in 0..3 {
+        free.step();
+        roomy.step();
+        assert_eq!(inboxes(&free), inboxes(&roomy));
+    }
+    // Robot 0 hears 11 direct messages and 11 broadcasts, in sender order.
+    assert_eq!(inboxes(&free)[0].len(), 22);
+    assert_eq!(inboxes(&free)[5].len(), 11);
+}
+
+#[test]
+fn issue11_a_full_radio_drops_the_rest() {
+    let mut sim = chatters(70);
+    sim.step();
+    let got = inboxes(&sim);
+    // Robot 0: direct messages first, 10 bytes each: 7 fit in 70 bytes (senders 1..=7, in
+    // order); then no 33-byte broadcast fits.
+    assert_eq!(got[0], (1..=7).map(|s| (s, false)).collect::<Vec<_>>());
+    // Everyone else: two 33-byte broadcasts fit in 70 bytes, a third would not.
+    for (r, inbox) in got.iter().enumerate().skip(1) {
+        assert_eq!(inbox.len(), 2, "robot {r}: {inbox:?}");
+        assert!(inbox.iter().all(|&(s, broadcast)| broadcast && s != r as u32));
+        assert!(inbox[0].0 < inbox[1].0, "sender order: {inbox:?}");
+    }
+    // Sent counts are unaffected: 12 broadcasts and 11 direct messages.
+    assert_eq!(sim.report().metrics.messages, 23);
+}
