@@ -13,6 +13,9 @@
 //! # Ok::<(), scale::Error>(())
 //! ```
 
+pub mod fig4;
+pub mod plot;
+
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -41,6 +44,17 @@ pub enum Error {
         radius_m: f64,
         /// How far the search went.
         searched_m: f64,
+    },
+    /// A plot could not be drawn.
+    #[error("plot: {0}")]
+    Plot(String),
+    /// An output file could not be written.
+    #[error("{path}: {cause}")]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        cause: std::io::Error,
     },
     /// Worker threads could not start.
     #[error("cannot start worker threads: {0}")]
@@ -259,7 +273,7 @@ impl Swarm {
 
 /// The free disc of `radius_m` nearest to `centre` on a spiral of 1 m steps, searched out to
 /// a quarter of the map's width.
-fn free_spot_near(obstacles: &ObstacleMap, centre: DVec2, radius_m: f64) -> Option<DVec2> {
+pub(crate) fn free_spot_near(obstacles: &ObstacleMap, centre: DVec2, radius_m: f64) -> Option<DVec2> {
     let limit = obstacles.grid().extent().max.x / 4.0;
     let mut d: f64 = 0.0;
     while d <= limit {

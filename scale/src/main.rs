@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
+use scale::fig4::Fig4;
 use scale::{RandomWalk, Swarm, measure};
 
 /// Time Smart Teams at scale: each scenario generates its own map, then prints set-up time,
@@ -62,6 +63,19 @@ enum Scenario {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
+    /// map, and explored fraction against rounds; CSV and PNG files.
+    Fig4 {
+        /// Folder for the CSV and PNG files.
+        #[arg(long, default_value = "docs/fig4")]
+        out: std::path::PathBuf,
+        /// A small, fast version (200 rounds, up to 200 robots), for a first look.
+        #[arg(long)]
+        quick: bool,
+        /// Write CSV only.
+        #[arg(long)]
+        no_plots: bool,
+    },
 }
 
 fn main() {
@@ -72,6 +86,24 @@ fn main() {
 }
 
 fn run(cli: &Cli) -> Result<()> {
+    if let Scenario::Fig4 { out, quick, no_plots } = &cli.scenario {
+        let fig = if *quick {
+            Fig4 {
+                rounds: 200,
+                robot_counts: vec![10, 50, 100, 200],
+                explored_counts: vec![10, 100],
+                explored_rounds: 200,
+                ..Fig4::default()
+            }
+        } else {
+            Fig4::default()
+        };
+        let data = fig.run(|what| eprintln!("fig4: {what}"))?;
+        for path in data.write(out, !no_plots)? {
+            println!("wrote {}", path.display());
+        }
+        return Ok(());
+    }
     let t0 = Instant::now();
     let (name, scenario) = match cli.scenario {
         Scenario::RandomWalk {
@@ -112,6 +144,7 @@ fn run(cli: &Cli) -> Result<()> {
             };
             ("swarm", swarm.scenario()?)
         }
+        Scenario::Fig4 { .. } => unreachable!("handled above"),
     };
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, cli.rounds, cli.threads)?;

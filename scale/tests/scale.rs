@@ -77,3 +77,40 @@ fn the_swarm_gives_the_same_result_on_one_and_two_threads_and_stays_within_its_r
         }
     }
 }
+
+/// Fig. 4 at a reduced size: the shape the paper reports holds (memory flattens in time
+/// and grows with the number of robots), and the CSV files say what was measured.
+#[test]
+fn fig4_small_has_the_papers_shape_and_writes_its_csv() {
+    let fig = scale::fig4::Fig4 {
+        side_m: 256.0,
+        mesas: 20,
+        robots_over_time: 10,
+        rounds: 300,
+        every: 10,
+        robot_counts: vec![5, 10, 20],
+        rounds_before_count: 20,
+        explored_counts: vec![2, 8],
+        explored_rounds: 100,
+        seed: 3,
+    };
+    let data = fig.run(|_| {}).unwrap();
+    assert_eq!(data.memory_over_time.len(), 31);
+    // Memory grows fast while robots leave home, far slower once explored parts merge:
+    // the last 100 rounds add less than the first 100 did.
+    let at = |round: u64| data.memory_over_time.iter().find(|p| p.0 == round).unwrap().1 as f64;
+    assert!(at(300) - at(200) < at(100) - at(0), "{:?}", data.memory_over_time);
+    // More robots hold more known maps after the same number of rounds.
+    let by: Vec<usize> = data.memory_by_robots.iter().map(|p| p.1).collect();
+    assert!(by[0] < by[1] && by[1] < by[2], "{by:?}");
+    // More robots explore more.
+    let last = |i: usize| data.explored[i].1.last().unwrap().1;
+    assert!(last(0) < last(1));
+    let dir = std::env::temp_dir().join(format!("smartteams-fig4-{}", std::process::id()));
+    let written = data.write(&dir, false).unwrap();
+    assert_eq!(written.len(), 3);
+    let robots_csv = std::fs::read_to_string(dir.join("memory-vs-robots.csv")).unwrap();
+    assert_eq!(robots_csv.lines().count(), 4);
+    assert!(robots_csv.starts_with("robots,known_map_bytes,bytes_per_robot,kernel_map_bytes\n5,"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
