@@ -168,57 +168,42 @@ impl Fig4Data {
             path: dir.to_path_buf(),
             cause,
         })?;
-        let mut written = Vec::new();
-        let mut csv_file = |name: &str, header: &[&str], rows: Vec<Vec<String>>| -> Result<()> {
-            let path = dir.join(name);
-            let mut w = csv::Writer::from_writer(Vec::new());
-            let bytes = std::iter::once(header.iter().map(|h| (*h).to_owned()).collect())
-                .chain(rows)
-                .try_for_each(|r: Vec<String>| w.write_record(&r))
-                .and_then(|()| w.into_inner().map_err(|e| e.into_error().into()))
-                .map_err(|e| Error::Write {
-                    path: path.clone(),
-                    cause: std::io::Error::other(e),
-                })?;
-            std::fs::write(&path, bytes).map_err(|cause| Error::Write {
-                path: path.clone(),
-                cause,
-            })?;
-            written.push(path);
-            Ok(())
-        };
-        csv_file(
-            "memory-vs-rounds.csv",
-            &["round", "known_map_bytes", "bytes_per_robot", "explored_fraction"],
-            self.memory_over_time
-                .iter()
-                .map(|&(round, bytes, explored)| {
-                    let per = bytes as f64 / f64::from(self.robots_of_left().max(1));
-                    vec![
-                        round.to_string(),
-                        bytes.to_string(),
-                        format!("{per:.1}"),
-                        format!("{explored:.6}"),
-                    ]
-                })
-                .collect(),
+        let mut written = self.write_csv_files(dir)?;
+        if plots {
+            written.extend(self.write_plots(dir)?);
+        }
+        Ok(written)
+    }
+
+    fn write_csv_files(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let per_robot = |bytes: usize, robots: u32| format!("{:.1}", bytes as f64 / f64::from(robots.max(1)));
+        let left = dir.join("memory-vs-rounds.csv");
+        write_csv(
+            &left,
+            ["round", "known_map_bytes", "bytes_per_robot", "explored_fraction"],
+            self.memory_over_time.iter().map(|&(round, bytes, explored)| {
+                vec![
+                    round.to_string(),
+                    bytes.to_string(),
+                    per_robot(bytes, self.robots_over_time),
+                    format!("{explored:.6}"),
+                ]
+            }),
         )?;
-        csv_file(
-            "memory-vs-robots.csv",
-            &["robots", "known_map_bytes", "bytes_per_robot", "kernel_map_bytes"],
-            self.memory_by_robots
-                .iter()
-                .map(|&(n, bytes)| {
-                    let per = bytes as f64 / f64::from(n.max(1));
-                    vec![
-                        n.to_string(),
-                        bytes.to_string(),
-                        format!("{per:.1}"),
-                        self.kernel_bytes.to_string(),
-                    ]
-                })
-                .collect(),
+        let right = dir.join("memory-vs-robots.csv");
+        write_csv(
+            &right,
+            ["robots", "known_map_bytes", "bytes_per_robot", "kernel_map_bytes"],
+            self.memory_by_robots.iter().map(|&(n, bytes)| {
+                vec![
+                    n.to_string(),
+                    bytes.to_string(),
+                    per_robot(bytes, n),
+                    self.kernel_bytes.to_string(),
+                ]
+            }),
         )?;
+        let explored = dir.join("explored-vs-rounds.csv");
         let mut header = vec!["round".to_owned()];
         header.extend(self.explored.iter().map(|(n, _)| format!("robots_{n}")));
         let rounds: Vec<u64> = self
@@ -226,10 +211,10 @@ impl Fig4Data {
             .first()
             .map(|(_, c)| c.iter().map(|p| p.0).collect())
             .unwrap_or_default();
-        let rows = rounds
-            .iter()
-            .enumerate()
-            .map(|(i, round)| {
+        write_csv(
+            &explored,
+            header,
+            rounds.iter().enumerate().map(|(i, round)| {
                 let mut row = vec![round.to_string()];
                 row.extend(
                     self.explored
@@ -237,80 +222,95 @@ impl Fig4Data {
                         .map(|(_, c)| c.get(i).map_or(String::new(), |p| format!("{:.6}", p.1))),
                 );
                 row
-            })
-            .collect();
-        let header_refs: Vec<&str> = header.iter().map(String::as_str).collect();
-        csv_file("explored-vs-rounds.csv", &header_refs, rows)?;
-        if plots {
-            let kib = |b: usize| b as f64 / 1024.0;
-            let left = dir.join("fig4-left.png");
-            plot::line_chart(
-                &left,
-                &format!(
-                    "Known-map memory of {} robots ({} leaves)",
-                    self.robots_of_left(),
-                    self.leaves
-                ),
-                "rounds",
-                "KiB, all robots",
-                &[Series {
-                    label: "all known maps",
-                    points: self
-                        .memory_over_time
-                        .iter()
-                        .map(|&(r, b, _)| (r as f64, kib(b)))
-                        .collect(),
-                }],
-            )?;
-            let right = dir.join("fig4-right.png");
-            let robots_max = self.memory_by_robots.iter().map(|p| p.0).max().unwrap_or(1);
-            plot::line_chart(
-                &right,
-                "Known-map memory after 50 rounds",
-                "robots",
-                "KiB",
-                &[
-                    Series {
-                        label: "all known maps",
-                        points: self
-                            .memory_by_robots
-                            .iter()
-                            .map(|&(n, b)| (f64::from(n), kib(b)))
-                            .collect(),
-                    },
-                    Series {
-                        label: "the kernel's obstacle map",
-                        points: vec![
-                            (0.0, kib(self.kernel_bytes)),
-                            (f64::from(robots_max), kib(self.kernel_bytes)),
-                        ],
-                    },
-                ],
-            )?;
-            let explored = dir.join("explored.png");
-            let labels: Vec<String> = self.explored.iter().map(|(n, _)| format!("{n} robots")).collect();
-            let series: Vec<Series> = self
-                .explored
-                .iter()
-                .zip(&labels)
-                .map(|((_, c), label)| Series {
-                    label,
-                    points: c.iter().map(|&(r, f)| (r as f64, f)).collect(),
-                })
-                .collect();
-            plot::line_chart(
-                &explored,
-                "Explored fraction (frontier exploration)",
-                "rounds",
-                "explored fraction",
-                &series,
-            )?;
-            written.extend([left, right, explored]);
-        }
-        Ok(written)
+            }),
+        )?;
+        Ok(vec![left, right, explored])
     }
 
-    fn robots_of_left(&self) -> u32 {
-        self.robots_over_time
+    fn write_plots(&self, dir: &Path) -> Result<Vec<PathBuf>> {
+        let kib = |b: usize| b as f64 / 1024.0;
+        let left = dir.join("fig4-left.png");
+        plot::line_chart(
+            &left,
+            &format!(
+                "Known-map memory of {} robots ({} leaves)",
+                self.robots_over_time, self.leaves
+            ),
+            "rounds",
+            "KiB, all robots",
+            &[Series {
+                label: "all known maps",
+                points: self
+                    .memory_over_time
+                    .iter()
+                    .map(|&(r, b, _)| (r as f64, kib(b)))
+                    .collect(),
+            }],
+        )?;
+        let right = dir.join("fig4-right.png");
+        let robots_max = self.memory_by_robots.iter().map(|p| p.0).max().unwrap_or(1);
+        plot::line_chart(
+            &right,
+            "Known-map memory after 50 rounds",
+            "robots",
+            "KiB",
+            &[
+                Series {
+                    label: "all known maps",
+                    points: self
+                        .memory_by_robots
+                        .iter()
+                        .map(|&(n, b)| (f64::from(n), kib(b)))
+                        .collect(),
+                },
+                Series {
+                    label: "the kernel's obstacle map",
+                    points: vec![
+                        (0.0, kib(self.kernel_bytes)),
+                        (f64::from(robots_max), kib(self.kernel_bytes)),
+                    ],
+                },
+            ],
+        )?;
+        let explored = dir.join("explored.png");
+        let labels: Vec<String> = self.explored.iter().map(|(n, _)| format!("{n} robots")).collect();
+        let series: Vec<Series> = self
+            .explored
+            .iter()
+            .zip(&labels)
+            .map(|((_, c), label)| Series {
+                label,
+                points: c.iter().map(|&(r, f)| (r as f64, f)).collect(),
+            })
+            .collect();
+        plot::line_chart(
+            &explored,
+            "Explored fraction (frontier exploration)",
+            "rounds",
+            "explored fraction",
+            &series,
+        )?;
+        Ok(vec![left, right, explored])
     }
+}
+
+/// Write a header and rows as CSV to `path`.
+fn write_csv<H: AsRef<[u8]>>(
+    path: &Path,
+    header: impl IntoIterator<Item = H>,
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> Result<()> {
+    let fail = |e: csv::Error| Error::Write {
+        path: path.to_path_buf(),
+        cause: std::io::Error::other(e),
+    };
+    let mut w = csv::Writer::from_path(path).map_err(fail)?;
+    w.write_record(header).map_err(fail)?;
+    for row in rows {
+        w.write_record(&row).map_err(fail)?;
+    }
+    w.flush().map_err(|cause| Error::Write {
+        path: path.to_path_buf(),
+        cause,
+    })
 }

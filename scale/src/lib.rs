@@ -327,6 +327,38 @@ impl Measurement {
     }
 }
 
+impl Measurement {
+    /// Column names of [`csv_row`](Self::csv_row).
+    pub const COLUMNS: [&str; 10] = [
+        "robots",
+        "leaves",
+        "rounds",
+        "generate_s",
+        "setup_s",
+        "rounds_per_s",
+        "us_per_robot_round",
+        "peak_rss_bytes",
+        "robot_memory_bytes",
+        "digest",
+    ];
+
+    /// The measurement as one CSV row (columns [`COLUMNS`](Self::COLUMNS)).
+    pub fn csv_row(&self) -> Vec<String> {
+        vec![
+            self.robots.to_string(),
+            self.leaves.to_string(),
+            self.rounds.to_string(),
+            format!("{:.3}", self.generate_s),
+            format!("{:.3}", self.setup_s),
+            format!("{:.3}", self.rounds_per_s()),
+            format!("{:.3}", 1e6 / self.robot_rounds_per_s()),
+            self.peak_rss_bytes.to_string(),
+            self.robot_memory_bytes.to_string(),
+            format!("{:016x}", self.digest),
+        ]
+    }
+}
+
 /// Peak resident set size of this process, from `/proc/self/status` (0 where unknown).
 pub fn peak_rss_bytes() -> u64 {
     std::fs::read_to_string("/proc/self/status")

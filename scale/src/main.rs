@@ -1,6 +1,8 @@
 //! `smartteams-bench`: the scale suite from the command line. One scenario per process, so
 //! that the peak memory printed is that scenario's.
 
+mod curves;
+
 use std::time::Instant;
 
 use anyhow::Result;
@@ -59,9 +61,26 @@ enum Scenario {
         /// Bytes of messages a robot can receive per round (0: no limit).
         #[arg(long, default_value_t = 8_192)]
         radio_bytes_per_round: u64,
+        /// Print the measurement as one CSV row (for `curves`) instead of a sentence.
+        #[arg(long)]
+        csv_row: bool,
         /// Seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+    },
+    /// Curves: `swarm` rounds per second and peak memory against robots (100 → 10,000) and
+    /// against leaves (10⁵ → 10⁷), and the speed-up from 1 to 2 threads. Each point runs in
+    /// its own process (so that its peak memory is its own); CSV and PNG files.
+    Curves {
+        /// Folder for the CSV and PNG files.
+        #[arg(long, default_value = "docs/curves")]
+        out: std::path::PathBuf,
+        /// Largest swarm of the robots curve.
+        #[arg(long, default_value_t = 10_000)]
+        max_robots: u32,
+        /// Write CSV only.
+        #[arg(long)]
+        no_plots: bool,
     },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
@@ -104,6 +123,14 @@ fn run(cli: &Cli) -> Result<()> {
         }
         return Ok(());
     }
+    if let Scenario::Curves {
+        out,
+        max_robots,
+        no_plots,
+    } = &cli.scenario
+    {
+        return curves::run(out, *max_robots, !no_plots);
+    }
     let t0 = Instant::now();
     let (name, scenario) = match cli.scenario {
         Scenario::RandomWalk {
@@ -128,6 +155,7 @@ fn run(cli: &Cli) -> Result<()> {
             home_radius_m,
             radio_bytes_per_round,
             seed,
+            csv_row: _,
         } => {
             let swarm = Swarm {
                 robots,
@@ -144,11 +172,15 @@ fn run(cli: &Cli) -> Result<()> {
             };
             ("swarm", swarm.scenario()?)
         }
-        Scenario::Fig4 { .. } => unreachable!("handled above"),
+        Scenario::Fig4 { .. } | Scenario::Curves { .. } => unreachable!("handled above"),
     };
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, cli.rounds, cli.threads)?;
     m.generate_s = generate_s;
+    if matches!(cli.scenario, Scenario::Swarm { csv_row: true, .. }) {
+        println!("{}", m.csv_row().join(","));
+        return Ok(());
+    }
     println!(
         "{name}: {} robots, {} leaves, {} rounds | map+scenario {:.2} s, set-up {:.2} s | {:.1} rounds/s, {:.3e} robot-rounds/s | peak RSS {:.0} MB, robots' memory {:.1} MB | explored {:.4} | digest {:016x}",
         m.robots,

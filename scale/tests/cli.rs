@@ -1,0 +1,82 @@
+//! `smartteams-bench` as a user types it, at sizes that finish at once.
+
+use std::process::Command;
+
+fn bench(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_smartteams-bench"))
+        .args(args)
+        .output()
+        .expect("the bench binary runs")
+}
+
+#[test]
+fn random_walk_prints_its_measurement() {
+    let out = bench(&[
+        "random-walk",
+        "--robots",
+        "20",
+        "--side-m",
+        "64",
+        "--rounds",
+        "3",
+        "--threads",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("random-walk: 20 robots, ") && text.contains(" 3 rounds |") && text.contains("rounds/s"),
+        "{text}"
+    );
+}
+
+#[test]
+fn swarm_csv_row_has_every_column_and_threads_do_not_change_it() {
+    let row = |threads: &str| {
+        let out = bench(&[
+            "swarm",
+            "--robots",
+            "40",
+            "--side-m",
+            "1000",
+            "--mesas",
+            "20",
+            "--rounds",
+            "5",
+            "--threads",
+            threads,
+            "--csv-row",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout)
+            .trim()
+            .split(',')
+            .map(str::to_owned)
+            .collect::<Vec<_>>()
+    };
+    let (one, two) = (row("1"), row("2"));
+    assert_eq!(one.len(), scale::Measurement::COLUMNS.len());
+    assert_eq!((one[0].as_str(), one[2].as_str()), ("40", "5"));
+    assert_eq!(one[9], two[9], "digests differ between 1 and 2 threads");
+}
+
+#[test]
+fn a_swarm_that_cannot_fit_at_home_is_a_clear_error() {
+    // A 40 m map holds some tens of thousands of 0.125 m robots, not 100,000.
+    let out = bench(&[
+        "swarm",
+        "--robots",
+        "100000",
+        "--side-m",
+        "40",
+        "--mesas",
+        "1",
+        "--home-radius-m",
+        "3",
+        "--rounds",
+        "1",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("error: ") && err.contains("at most"), "{err}");
+}
