@@ -26,7 +26,7 @@ pub(super) struct Agent {
     pub(super) known_changed: bool,
     /// Known cells of the last map merged from each sender: a map that has not grown since
     /// is already contained in ours (maps only grow), so merging it again is skipped.
-    pub(super) merged_from: HashMap<RobotId, u64>,
+    pub(super) merged_from: HashMap<RobotId, u64, foldhash::fast::FixedState>,
 }
 
 /// A message sent this round, before budgeted delivery.
@@ -134,7 +134,7 @@ impl Simulation {
                     mind: Mind::new(DataModule::new(needs.known_map.then(|| KnownMap::new(grid)), tr, rr)),
                     action: Action::Idle,
                     known_changed: false,
-                    merged_from: HashMap::new(),
+                    merged_from: HashMap::default(),
                 });
             }
         }

@@ -6,6 +6,7 @@ use std::ops::ControlFlow;
 use std::sync::Arc;
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use crate::engine::simulation::{Outgoing, Simulation};
 use crate::spatial::{RobotId, RobotIndex, TreasureId};
@@ -302,60 +303,71 @@ impl Simulation {
                 .map(|i| (self.robots[i].id, self.start_positions[i])),
             max_range.clamp(1.0, 64.0),
         );
-        let mut accepted: Vec<u32> = Vec::new();
-        let mut d = 0;
-        for r in 0..n {
-            let to = self.robots[r].id;
-            let here = self.start_positions[r];
-            let budget = self.types[self.robots[r].type_index].radio_bytes_per_round;
-            let mut used = 0u64;
-            let mut fits = |bytes: u64| {
-                let ok = used.checked_add(bytes).is_some_and(|u| u <= budget);
-                if ok {
-                    used += bytes;
+        // Receivers are independent (each reads the shared sends and writes its own inbox),
+        // so they run in parallel; links are gathered in receiver order, as on one thread.
+        let robots = &self.robots;
+        let types = &self.types;
+        let starts = &self.start_positions;
+        let links: Vec<Vec<Link>> = self
+            .inboxes
+            .par_iter_mut()
+            .enumerate()
+            .map(|(r, inbox)| {
+                let to = robots[r].id;
+                if !robots[r].alive {
+                    return Vec::new();
                 }
-                ok
-            };
-            accepted.clear();
-            while d < direct.len() && direct[d].0 < to.get() {
-                d += 1;
-            }
-            while d < direct.len() && direct[d].0 == to.get() {
-                let o = &outgoing[direct[d].1 as usize];
-                let sender = self.robots[o.from].id;
-                if sender != to && self.start_positions[o.from].distance(here) <= o.range_m && fits(o.bytes) {
-                    accepted.push(direct[d].1);
-                }
-                d += 1;
-            }
-            if !self.robots[r].alive {
-                continue;
-            }
-            let _ = senders.try_for_each_within(here, max_range, |sender, at| {
-                let s = sender.index();
-                if sender == to {
-                    return ControlFlow::Continue(());
-                }
-                for k in first[s]..last[s] {
+                let here = starts[r];
+                let budget = types[robots[r].type_index].radio_bytes_per_round;
+                let mut used = 0u64;
+                let mut fits = |bytes: u64| {
+                    let ok = used.checked_add(bytes).is_some_and(|u| u <= budget);
+                    if ok {
+                        used += bytes;
+                    }
+                    ok
+                };
+                let mut accepted: Vec<u32> = Vec::new();
+                let mine = direct.partition_point(|e| e.0 < to.get());
+                for &(target, k) in direct[mine..].iter().take_while(|e| e.0 == to.get()) {
+                    debug_assert_eq!(target, to.get());
                     let o = &outgoing[k as usize];
-                    if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
-                        if !fits(o.bytes) {
-                            return ControlFlow::Break(());
-                        }
+                    if o.from != r && starts[o.from].distance(here) <= o.range_m && fits(o.bytes) {
                         accepted.push(k);
                     }
                 }
-                ControlFlow::Continue(())
-            });
-            accepted.sort_unstable();
-            for &k in &accepted {
-                let o = &outgoing[k as usize];
-                self.inboxes[r].push(o.message.clone());
-                self.report.links.push(Link {
-                    from: o.message.from,
-                    to,
+                let _ = senders.try_for_each_within(here, max_range, |sender, at| {
+                    let s = sender.index();
+                    if s == r {
+                        return ControlFlow::Continue(());
+                    }
+                    for k in first[s]..last[s] {
+                        let o = &outgoing[k as usize];
+                        if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
+                            if !fits(o.bytes) {
+                                return ControlFlow::Break(());
+                            }
+                            accepted.push(k);
+                        }
+                    }
+                    ControlFlow::Continue(())
                 });
-            }
+                accepted.sort_unstable();
+                accepted
+                    .iter()
+                    .map(|&k| {
+                        let o = &outgoing[k as usize];
+                        inbox.push(o.message.clone());
+                        Link {
+                            from: o.message.from,
+                            to,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        for l in links {
+            self.report.links.extend(l);
         }
         self.outgoing = outgoing;
         self.outgoing.clear();
