@@ -144,12 +144,23 @@ impl RegionQuadtree {
             *added += other.full_cells(m, level);
             return self.copy_from(other, m);
         }
+        // Maps that were exchanged before are mostly alike: settle equal leaves here rather
+        // than in a call, and write back (and try to merge) only children that changed.
+        let (kids, theirs) = (self.groups[n as usize], other.groups[m as usize]);
+        let mut changed = false;
         for i in 0..4 {
-            let k = self.groups[n as usize][i];
-            let k2 = self.union_node(k, level - 1, other, other.groups[m as usize][i], added);
-            self.groups[n as usize][i] = k2;
+            let (k, mk) = (kids[i], theirs[i]);
+            if k == FULL || mk == super::EMPTY {
+                continue;
+            }
+            let k2 = self.union_node(k, level - 1, other, mk, added);
+            if k2 != k {
+                self.groups[n as usize][i] = k2;
+                changed = true;
+            }
         }
-        self.merge_if_uniform(n)
+        // Only a child that became a leaf can make the group uniform.
+        if changed { self.merge_if_uniform(n) } else { n }
     }
 
     /// Cells of value `1` under node `n` of a square at `level`.
