@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # The Rerun logging benchmark of BENCHMARKS.md: 1,000 robots for 200 rounds
-# (configs/bench-1000.xml), `--no-viewer` against `--rrd`, alternating so that a machine's
+# (configs/bench-1000.xml; CONFIG=configs/bench-10000.xml for 10,000 robots), `--no-viewer` against `--rrd`, alternating so that a machine's
 # drift hits both alike. Prints each pair, then the medians and the median ratio.
 #   usage: bash scripts/bench-logging.sh [PAIRS] [extra smartteams run options for the --rrd runs]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pairs=${1:-5}
+config=${CONFIG:-configs/bench-1000.xml}
 shift || true
 cargo build --profile ci -p viewer-bridge -p editor --bins --locked -q
 bin=target/ci/smartteams
@@ -20,8 +21,8 @@ trap 'rm -rf "$out"' EXIT
 secs() { sed -n 's/.* robots in \([0-9.]*\) s .*/\1/p'; }
 plain=() logged=()
 for i in $(seq "$pairs"); do
-    a=$("$bin" run configs/bench-1000.xml --no-viewer | secs)
-    summary=$("$bin" run configs/bench-1000.xml --rrd "$out/bench.rrd" "$@")
+    a=$("$bin" run "$config" --no-viewer | secs)
+    summary=$("$bin" run "$config" --rrd "$out/bench.rrd" "$@")
     b=$(echo "$summary" | secs)
     plain+=("$a") logged+=("$b")
     echo "pair $i: --no-viewer $a s, --rrd $b s ($(echo "$summary" | sed -n 's/.*; logging \(.*\))/logging \1/p'))"
