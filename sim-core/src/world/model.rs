@@ -139,33 +139,28 @@ impl FieldValue for f64 {
     }
 }
 
-impl FieldValue for u64 {
-    fn as_f64(self) -> f64 {
-        self as f64
-    }
-    fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
-        text.trim().parse::<u64>().map_err(|_| {
-            crate::Error::InvalidParameter(format!(
-                "{field} must be a whole number from 0 to {}, got '{text}'",
-                u64::MAX
-            ))
-        })
-    }
+/// Whole-number fields: parsed as the type itself, so the range error names its bounds.
+macro_rules! whole_field_value {
+    ($($t:ty),*) => {$(
+        impl FieldValue for $t {
+            // Only compared with 0 in `validate`: precision above 2^53 does not matter.
+            #[allow(clippy::cast_lossless)]
+            fn as_f64(self) -> f64 {
+                self as f64
+            }
+            fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
+                text.trim().parse::<$t>().map_err(|_| {
+                    crate::Error::InvalidParameter(format!(
+                        "{field} must be a whole number from 0 to {}, got '{text}'",
+                        <$t>::MAX
+                    ))
+                })
+            }
+        }
+    )*};
 }
 
-impl FieldValue for u32 {
-    fn as_f64(self) -> f64 {
-        f64::from(self)
-    }
-    fn parse_field(field: &str, text: &str) -> crate::Result<Self> {
-        text.trim().parse::<u32>().map_err(|_| {
-            crate::Error::InvalidParameter(format!(
-                "{field} must be a whole number from 0 to {}, got '{text}'",
-                u32::MAX
-            ))
-        })
-    }
-}
+whole_field_value!(u32, u64);
 
 /// How close (centre to treasure, beyond the body radius) a robot must be to dig or load.
 pub const REACH_M: f64 = 0.5;
