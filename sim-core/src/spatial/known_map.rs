@@ -65,16 +65,31 @@ impl KnownMap {
     /// squares wholly inside the view this map marked last time are skipped, as they are
     /// known already (maps only grow). Same result as `mark_disc`, less work.
     pub fn mark_view(&mut self, center: DVec2, radius_m: f64) -> bool {
+        self.mark_view_reporting(center, radius_m, |_| {})
+    }
+
+    /// [`mark_view`](Self::mark_view), calling `newly_known` with the squares that became
+    /// known.
+    pub fn mark_view_reporting(
+        &mut self,
+        center: DVec2,
+        radius_m: f64,
+        newly_known: impl FnMut(crate::spatial::quadtree::Square),
+    ) -> bool {
         let disc = Disc {
             center,
             radius: radius_m,
         };
-        let changed = self.mark(&DiscBeyond {
-            disc,
-            seen: self.last_view,
-        });
+        let before = self.known_cells;
+        self.mark_reporting(
+            &DiscBeyond {
+                disc,
+                seen: self.last_view,
+            },
+            newly_known,
+        );
         self.last_view = Some(disc);
-        changed
+        self.known_cells > before
     }
 
     /// Mark as known every map cell lying wholly inside `shape`.

@@ -21,12 +21,21 @@ impl Simulation {
                 center: robot.position,
                 radius: self.types[robot.type_index].view_radius_m,
             };
-            // What lay wholly inside this robot's last view is explored already.
-            let view = DiscBeyond { disc, seen: *seen };
-            *seen = Some(disc);
             let mut fresh = 0;
-            self.explored
-                .mark_reporting(&view, |sq| fresh += obstacles.tree().count_cells_in(sq, false));
+            let mut count_free = |sq| fresh += obstacles.tree().count_cells_in(sq, false);
+            if agent.mind.data.known.is_some() {
+                // Only what its own map gained can be new to everyone (a descent per square
+                // instead of a walk along the view's rim).
+                for &sq in &agent.new_squares {
+                    let square = obstacles.grid().square(sq.x, sq.y, sq.level);
+                    self.explored.mark_reporting(&square, &mut count_free);
+                }
+            } else {
+                // What lay wholly inside this robot's last view is explored already.
+                self.explored
+                    .mark_reporting(&DiscBeyond { disc, seen: *seen }, &mut count_free);
+            }
+            *seen = Some(disc);
             self.explored_free_cells += fresh;
             robot.stats.explored_m2 += fresh as f64 * cell_area;
         }

@@ -60,8 +60,10 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
     let view = kind.view_radius_m;
     let data = &mut agent.mind.data;
     let perception = &mut agent.mind.perception;
+    agent.new_squares.clear();
     if let Some(known) = data.known.as_mut() {
-        agent.known_changed |= known.mark_view(p, view);
+        let squares = &mut agent.new_squares;
+        agent.known_changed |= known.mark_view_reporting(p, view, |sq| squares.push(sq));
     }
     perception.robots.clear();
     if needs.robots {
