@@ -80,6 +80,8 @@ pub struct Simulation {
     /// Whether some robot type has a finite radio budget: messages are then delivered by
     /// [`deliver_within_budget`](Self::deliver_within_budget) after the resolve step.
     pub(super) radio_limited: bool,
+    /// Scratch list of robots near a move (kept to reuse its allocation).
+    pub(super) near_scratch: Vec<u32>,
     /// Messages sent this round, waiting for budgeted delivery (sender order).
     pub(super) outgoing: Vec<Outgoing>,
     /// Positions at the start of the current round (send-time positions for messages).
@@ -170,6 +172,7 @@ impl Simulation {
             max_speed_m,
             radio_limited,
             outgoing: Vec::new(),
+            near_scratch: Vec::new(),
             start_positions: Vec::new(),
             map,
         };

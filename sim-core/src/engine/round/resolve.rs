@@ -181,16 +181,20 @@ impl Simulation {
             }
             d *= lo;
         }
-        // Other robots: halve the move until the end position overlaps nobody.
+        // Other robots: halve the move until the end position overlaps nobody. Who could be
+        // in the way is asked of the index once for the whole move, not once per halving.
+        let mut near = std::mem::take(&mut self.near_scratch);
+        self.robots_near_move(i, from, d.length(), kind.radius_m, &mut near);
         let mut step = d;
         let mut tries = 0;
-        while step.length() > 1e-9 && self.overlaps_someone(i, from + step, kind.radius_m) {
+        while step.length() > 1e-9 && self.overlaps_any(&near, from + step, kind.radius_m) {
             step *= 0.5;
             tries += 1;
             if tries > 8 {
                 step = DVec2::ZERO;
             }
         }
+        self.near_scratch = near;
         let moved = step.length();
         if moved <= 1e-12 {
             return Outcome::Refused;
@@ -206,20 +210,27 @@ impl Simulation {
         }
     }
 
-    /// Whether a disc at `p` would overlap another robot where it stands now.
-    fn overlaps_someone(&self, i: usize, p: DVec2, radius: f64) -> bool {
-        // The index holds start-of-round positions; robots move at most max_speed a round.
-        let reach = radius + self.max_radius_m + self.max_speed_m;
-        let mut hit = false;
-        self.body_index.for_each_within(p, reach, |id, _| {
-            let j = id.index();
-            if j != i && !hit {
-                let other = &self.robots[j];
-                let rr = radius + self.types[other.type_index].radius_m;
-                hit = other.position.distance_squared(p) < rr * rr;
+    /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere within
+    /// `length` of `from`. The index holds start-of-round positions and robots move at most
+    /// `max_speed_m` a round, so one touching an end point `p` now started within
+    /// `radius + max_radius_m + max_speed_m` of `p`, hence within that plus `length` of `from`.
+    fn robots_near_move(&self, i: usize, from: DVec2, length: f64, radius: f64, near: &mut Vec<u32>) {
+        near.clear();
+        let reach = radius + self.max_radius_m + self.max_speed_m + length;
+        self.body_index.for_each_within(from, reach, |id, _| {
+            if id.index() != i {
+                near.push(id.get());
             }
         });
-        hit
+    }
+
+    /// Whether a disc at `p` would overlap one of `near` where it stands now.
+    fn overlaps_any(&self, near: &[u32], p: DVec2, radius: f64) -> bool {
+        near.iter().any(|&j| {
+            let other = &self.robots[j as usize];
+            let rr = radius + self.types[other.type_index].radius_m;
+            other.position.distance_squared(p) < rr * rr
+        })
     }
 
     /// Address a message to the robots in range at send time (start-of-round positions).
