@@ -20,17 +20,20 @@ mod resolve;
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
 
 use crate::engine::simulation::Simulation;
-use crate::world::RoundReport;
+use crate::world::{RoundMetrics, RoundReport};
 
 impl Simulation {
     /// Play one round and return its report.
     pub fn step(&mut self) -> &RoundReport {
         self.round += 1;
         let round = self.round;
-        self.report = RoundReport {
-            round,
-            ..RoundReport::default()
-        };
+        // Cleared, not replaced: in crowds the links alone are millions a round, and fresh
+        // vectors would be grown (and their pages faulted in) again every round.
+        self.report.round = round;
+        self.report.metrics = RoundMetrics::default();
+        self.report.events.clear();
+        self.report.links.clear();
+        self.report.known_changed.clear();
         // 1 + 2: perceive and decide, in parallel.
         self.deliver_messages();
         self.perceive_and_decide(round);
