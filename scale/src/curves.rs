@@ -65,15 +65,23 @@ fn write_csv(path: &Path, extra: &str, rows: &[(String, Vec<String>)]) -> Result
     Ok(())
 }
 
+/// The field `name` (one of [`Measurement::COLUMNS`]) of a measurement row.
+fn field<'a>(row: &'a [String], name: &str) -> &'a str {
+    let i = Measurement::COLUMNS
+        .iter()
+        .position(|c| *c == name)
+        .expect("known column");
+    &row[i]
+}
+
 fn column(rows: &[(String, Vec<String>)], x: &str, y: &str, scale: f64) -> Vec<(f64, f64)> {
-    let at = |name: &str| {
-        Measurement::COLUMNS
-            .iter()
-            .position(|c| *c == name)
-            .expect("known column")
-    };
     rows.iter()
-        .filter_map(|(_, r)| Some((r[at(x)].parse::<f64>().ok()?, r[at(y)].parse::<f64>().ok()? * scale)))
+        .filter_map(|(_, r)| {
+            Some((
+                field(r, x).parse::<f64>().ok()?,
+                field(r, y).parse::<f64>().ok()? * scale,
+            ))
+        })
         .collect()
 }
 
@@ -99,9 +107,10 @@ pub fn run(out: &Path, max_robots: u32, plots: bool) -> Result<()> {
         threads.push((t.to_string(), point(&swarm_args(1_000, 6_000, 100, t))?));
     }
     write_csv(&out.join("threads.csv"), "threads", &threads)?;
-    let rate = |r: &[String]| r[5].parse::<f64>().unwrap_or(f64::NAN);
+    let rate = |r: &[String]| field(r, "rounds_per_s").parse::<f64>().unwrap_or(f64::NAN);
+    let digest = |r: &[String]| field(r, "digest").to_owned();
     let speedup = rate(&threads[1].1) / rate(&threads[0].1);
-    let same = threads[0].1[9] == threads[1].1[9];
+    let same = digest(&threads[0].1) == digest(&threads[1].1);
     println!(
         "1 → 2 threads: {speedup:.2}× ({:.1} → {:.1} rounds/s), {} results",
         rate(&threads[0].1),
@@ -111,8 +120,8 @@ pub fn run(out: &Path, max_robots: u32, plots: bool) -> Result<()> {
     if !same {
         bail!(
             "1 and 2 threads gave different results (digests {} and {})",
-            threads[0].1[9],
-            threads[1].1[9]
+            digest(&threads[0].1),
+            digest(&threads[1].1)
         );
     }
     if plots {

@@ -307,7 +307,7 @@ pub struct Measurement {
     pub rounds_s: f64,
     /// Peak resident set size of the process so far, bytes (Linux; 0 elsewhere).
     pub peak_rss_bytes: u64,
-    /// Bytes held by the robots' known maps and memories at the end.
+    /// Bytes held by the robots' known maps at the end.
     pub robot_memory_bytes: usize,
     /// Explored fraction of the free area at the end.
     pub explored_fraction: f64,

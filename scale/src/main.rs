@@ -105,34 +105,18 @@ fn main() {
 }
 
 fn run(cli: &Cli) -> Result<()> {
-    if let Scenario::Fig4 { out, quick, no_plots } = &cli.scenario {
-        let fig = if *quick {
-            Fig4 {
-                rounds: 200,
-                robot_counts: vec![10, 50, 100, 200],
-                explored_counts: vec![10, 100],
-                explored_rounds: 200,
-                ..Fig4::default()
-            }
-        } else {
-            Fig4::default()
-        };
-        let data = fig.run(|what| eprintln!("fig4: {what}"))?;
-        for path in data.write(out, !no_plots)? {
-            println!("wrote {}", path.display());
-        }
-        return Ok(());
-    }
-    if let Scenario::Curves {
-        out,
-        max_robots,
-        no_plots,
-    } = &cli.scenario
-    {
-        return curves::run(out, *max_robots, !no_plots);
-    }
     let t0 = Instant::now();
-    let (name, scenario) = match cli.scenario {
+    let (name, scenario, csv_row) = match cli.scenario {
+        Scenario::Fig4 {
+            ref out,
+            quick,
+            no_plots,
+        } => return fig4(out, quick, !no_plots),
+        Scenario::Curves {
+            ref out,
+            max_robots,
+            no_plots,
+        } => return curves::run(out, max_robots, !no_plots),
         Scenario::RandomWalk {
             robots,
             side_m,
@@ -146,7 +130,7 @@ fn run(cli: &Cli) -> Result<()> {
                 seed,
                 ..RandomWalk::default()
             };
-            ("random-walk", rw.scenario()?)
+            ("random-walk", rw.scenario()?, false)
         }
         Scenario::Swarm {
             robots,
@@ -155,7 +139,7 @@ fn run(cli: &Cli) -> Result<()> {
             home_radius_m,
             radio_bytes_per_round,
             seed,
-            csv_row: _,
+            csv_row,
         } => {
             let swarm = Swarm {
                 robots,
@@ -170,19 +154,18 @@ fn run(cli: &Cli) -> Result<()> {
                 seed,
                 ..Swarm::default()
             };
-            ("swarm", swarm.scenario()?)
+            ("swarm", swarm.scenario()?, csv_row)
         }
-        Scenario::Fig4 { .. } | Scenario::Curves { .. } => unreachable!("handled above"),
     };
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, cli.rounds, cli.threads)?;
     m.generate_s = generate_s;
-    if matches!(cli.scenario, Scenario::Swarm { csv_row: true, .. }) {
+    if csv_row {
         println!("{}", m.csv_row().join(","));
         return Ok(());
     }
     println!(
-        "{name}: {} robots, {} leaves, {} rounds | map+scenario {:.2} s, set-up {:.2} s | {:.1} rounds/s, {:.3e} robot-rounds/s | peak RSS {:.0} MB, robots' memory {:.1} MB | explored {:.4} | digest {:016x}",
+        "{name}: {} robots, {} leaves, {} rounds | map+scenario {:.2} s, set-up {:.2} s | {:.1} rounds/s, {:.3e} robot-rounds/s | peak RSS {:.0} MB, known maps {:.1} MB | explored {:.4} | digest {:016x}",
         m.robots,
         m.leaves,
         m.rounds,
@@ -195,5 +178,25 @@ fn run(cli: &Cli) -> Result<()> {
         m.explored_fraction,
         m.digest
     );
+    Ok(())
+}
+
+/// The Fig. 4 runs (`quick`: 200 rounds, up to 200 robots) written into `out`.
+fn fig4(out: &std::path::Path, quick: bool, plots: bool) -> Result<()> {
+    let fig = if quick {
+        Fig4 {
+            rounds: 200,
+            robot_counts: vec![10, 50, 100, 200],
+            explored_counts: vec![10, 100],
+            explored_rounds: 200,
+            ..Fig4::default()
+        }
+    } else {
+        Fig4::default()
+    };
+    let data = fig.run(|what| eprintln!("fig4: {what}"))?;
+    for path in data.write(out, plots)? {
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }

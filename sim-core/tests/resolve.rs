@@ -270,16 +270,22 @@ fn dig_load_unload() -> Plan {
     ])
 }
 
-#[test]
-fn load_beyond_capacity_is_trimmed_to_capacity() {
-    let mut sim = simulation(
+/// One digger-carrier playing [`dig_load_unload`] from `start`, with a treasure of 20 units
+/// at `treasure`.
+fn digger_carrier_sim(treasure: DVec2, start: Start) -> Simulation {
+    simulation(
         map(vec![TreasureSpec {
-            position: DVec2::new(3.3, 5.1),
+            position: treasure,
             quantity: 20,
         }]),
         vec![digger_carrier()],
-        vec![(0, Start::At(DVec2::new(3.0, 5.1)), dig_load_unload())],
-    );
+        vec![(0, start, dig_load_unload())],
+    )
+}
+
+#[test]
+fn load_beyond_capacity_is_trimmed_to_capacity() {
+    let mut sim = digger_carrier_sim(DVec2::new(3.3, 5.1), Start::At(DVec2::new(3.0, 5.1)));
     // Round 1: dig 5 → buried 15, loose 5.
     sim.step();
     let t = sim.treasures()[0];
@@ -304,14 +310,7 @@ fn load_beyond_capacity_is_trimmed_to_capacity() {
 /// never hold, as `amount = room.min(t.loose)`.)
 #[test]
 fn issue10_load_limited_by_capacity_reports_trimmed() {
-    let mut sim = simulation(
-        map(vec![TreasureSpec {
-            position: DVec2::new(3.3, 5.1),
-            quantity: 20,
-        }]),
-        vec![digger_carrier()],
-        vec![(0, Start::At(DVec2::new(3.0, 5.1)), dig_load_unload())],
-    );
+    let mut sim = digger_carrier_sim(DVec2::new(3.3, 5.1), Start::At(DVec2::new(3.0, 5.1)));
     sim.step();
     sim.step();
     // 5 loose, room 3: 3 loaded of the 5 asked for.
@@ -320,14 +319,7 @@ fn issue10_load_limited_by_capacity_reports_trimmed() {
 
 #[test]
 fn unload_outside_home_is_refused() {
-    let mut sim = simulation(
-        map(vec![TreasureSpec {
-            position: DVec2::new(3.3, 5.1),
-            quantity: 20,
-        }]),
-        vec![digger_carrier()],
-        vec![(0, Start::At(DVec2::new(3.0, 5.1)), dig_load_unload())],
-    );
+    let mut sim = digger_carrier_sim(DVec2::new(3.3, 5.1), Start::At(DVec2::new(3.0, 5.1)));
     for _ in 0..4 {
         sim.step();
     }
@@ -343,14 +335,7 @@ fn unload_outside_home_is_refused() {
 #[test]
 fn unload_at_home_delivers() {
     // The same script, starting at home with the treasure 0.3 m east of home's centre.
-    let mut sim = simulation(
-        map(vec![TreasureSpec {
-            position: DVec2::new(1.8, 1.5),
-            quantity: 20,
-        }]),
-        vec![digger_carrier()],
-        vec![(0, Start::Home, dig_load_unload())],
-    );
+    let mut sim = digger_carrier_sim(DVec2::new(1.8, 1.5), Start::Home);
     for _ in 0..4 {
         sim.step();
     }

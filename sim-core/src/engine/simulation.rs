@@ -259,7 +259,7 @@ impl Simulation {
         &self.inboxes
     }
 
-    /// Total memory held by the robots' data modules (known maps and memories), bytes.
+    /// Total memory held by the robots' known maps, bytes (what the paper's Fig. 4 plots).
     pub fn robot_memory_bytes(&self) -> usize {
         self.agents
             .iter()

@@ -168,13 +168,6 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         self.index.get(&key).map(|&i| &self.slots[i as usize].item)
     }
 
-    /// Bytes held (slots and index, capacity included), for memory accounting.
-    pub fn memory_bytes(&self) -> usize {
-        self.slots.capacity() * std::mem::size_of::<Slot<K, T>>()
-            + self.free.capacity() * 4
-            + self.index.capacity() * (std::mem::size_of::<(K, u32)>() + 1)
-    }
-
     /// Check the list's invariants: every key maps to a slot holding it, the links run
     /// both ways from oldest to newest through exactly the live slots, rounds never
     /// decrease along the list, and the policy holds. Panics with the broken rule.
