@@ -474,3 +474,60 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(config(512))]
+
+    /// Issue 11: the packed bottom trusts `classify_cells` to agree with `classify` on
+    /// every cell, for every shape that answers it.
+    #[test]
+    fn classify_cells_agrees_with_classify_cell_by_cell(
+        seed in any::<u64>(),
+        cell_m in 0.05f64..5.0,
+        kind in 0usize..5,
+    ) {
+        use sim_core::spatial::{BlockCells, CellMasks, Clipped, DiscBeyond};
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = DVec2::new(rng.random_range(-100.0..100.0), rng.random_range(-100.0..100.0));
+        let corner = |i: u32| origin + DVec2::splat(f64::from(i) * cell_m);
+        let cells = BlockCells {
+            xs: std::array::from_fn(|i| corner(i as u32).x),
+            ys: std::array::from_fn(|i| corner(i as u32).y),
+        };
+        let side = 8.0 * cell_m;
+        let mut point = || origin + DVec2::new(rng.random_range(-0.5..1.5), rng.random_range(-0.5..1.5)) * side;
+        let (p, q) = (point(), point());
+        // Radii and boxes on the scale of the block, and points on cell corners, so the
+        // boundary cases (a corner exactly on the rim) come up.
+        let r = side * rng.random_range(0.05..1.0);
+        let snapped = (p / cell_m).round() * cell_m;
+        let disc = Disc { center: if kind == 4 { snapped } else { p }, radius: r };
+        let shape: Box<dyn Shape> = match kind {
+            0 | 4 => Box::new(disc),
+            1 => Box::new(Aabb { min: p.min(q), max: p.max(q) }),
+            2 => Box::new(DiscBeyond { disc, seen: Some(Disc { center: q, radius: r }) }),
+            _ => Box::new(Clipped { shape: disc, clip: Aabb { min: p.min(q), max: p.max(q) } }),
+        };
+        let got = shape.classify_cells(&cells).expect("this shape classifies cells at once");
+        let mut want = CellMasks { contains: 0, intersects: 0 };
+        for j in 0..8 {
+            for i in 0..8 {
+                let b = Aabb {
+                    min: DVec2::new(cells.xs[i], cells.ys[j]),
+                    max: DVec2::new(cells.xs[i + 1], cells.ys[j + 1]),
+                };
+                let bit = 1u64 << (8 * j + i);
+                match shape.classify(&b) {
+                    Overlap::Disjoint => {}
+                    Overlap::Partial => want.intersects |= bit,
+                    Overlap::Contains => {
+                        want.intersects |= bit;
+                        want.contains |= bit;
+                    }
+                }
+            }
+        }
+        prop_assert_eq!(got, want);
+        prop_assert_eq!(shape.intersects_cells(&cells), Some(want.intersects));
+    }
+}

@@ -96,11 +96,102 @@ pub trait Shape {
     }
     /// A box enclosing the shape.
     fn bounds(&self) -> Aabb;
+    /// [`classify`](Self::classify) for each of the 64 cells of an 8 × 8 block at once, or
+    /// `None` (the default) to have them classified one square at a time. The quadtree's
+    /// packed bottom asks this; an answer must agree with `classify` cell by cell.
+    #[inline]
+    fn classify_cells(&self, _cells: &BlockCells) -> Option<CellMasks> {
+        None
+    }
+    /// The `intersects` half of [`classify_cells`](Self::classify_cells), all a query
+    /// needs.
+    #[inline]
+    fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
+        self.classify_cells(cells).map(|m| m.intersects)
+    }
+}
+
+/// The cells of an 8 × 8 block: the x of its 9 column edges and the y of its 9 row edges
+/// (cell `(i, j)` spans `xs[i]..xs[i + 1]` × `ys[j]..ys[j + 1]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlockCells {
+    /// Column edges, west to east.
+    pub xs: [f64; 9],
+    /// Row edges, south to north.
+    pub ys: [f64; 9],
+}
+
+/// How a shape relates to each cell of a [`BlockCells`]: bit `8 j + i` is cell `(i, j)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellMasks {
+    /// Cells the shape wholly contains ([`Overlap::Contains`]).
+    pub contains: u64,
+    /// Cells the shape overlaps at all (not [`Overlap::Disjoint`]); a superset of `contains`.
+    pub intersects: u64,
+}
+
+impl CellMasks {
+    /// The cells both `self` and `other` contain or overlap (an intersection of shapes).
+    #[must_use]
+    pub fn and(self, other: CellMasks) -> CellMasks {
+        CellMasks {
+            contains: self.contains & other.contains,
+            intersects: self.intersects & other.intersects,
+        }
+    }
+}
+
+/// Per-cell squared distances from `c` along one axis of a block: (to the nearest point, to
+/// the farthest edge), computed as [`Aabb::distance_squared_to`] and
+/// [`Aabb::farthest_corner_distance_squared`] do, so the sums are bit for bit theirs.
+#[inline]
+fn axis_distances(edges: &[f64; 9], c: f64) -> ([f64; 8], [f64; 8]) {
+    let mut near = [0.0; 8];
+    let mut far = [0.0; 8];
+    for i in 0..8 {
+        let (lo, hi) = (edges[i], edges[i + 1]);
+        let d = c.max(lo).min(hi) - c;
+        near[i] = d * d;
+        let f = (c - lo).abs().max((c - hi).abs());
+        far[i] = f * f;
+    }
+    (near, far)
+}
+
+/// The cells `(i, j)` of a block for which `test(along_x[i], along_y[j])` holds, as a row-major
+/// mask; branch-free, as cells on a shape's rim are as likely in as out.
+#[inline]
+fn cell_mask(along_x: &[f64; 8], along_y: &[f64; 8], test: impl Fn(f64, f64) -> bool) -> u64 {
+    let mut mask = 0u64;
+    for (j, &y) in along_y.iter().enumerate() {
+        for (i, &x) in along_x.iter().enumerate() {
+            mask |= u64::from(test(x, y)) << (8 * j + i);
+        }
+    }
+    mask
+}
+
+/// Per-cell tests along one axis of a block, as a row mask (bit `i`: column `i`).
+#[inline]
+fn axis_mask(edges: &[f64; 9], test: impl Fn(f64, f64) -> bool) -> u64 {
+    (0..8).fold(0, |m, i| m | u64::from(test(edges[i], edges[i + 1])) << i)
+}
+
+/// The cells in rows where `rows` is set and columns where `cols` is set.
+#[inline]
+fn outer_mask(cols: u64, rows: u64) -> u64 {
+    (0..8).fold(0, |m, j| if rows >> j & 1 != 0 { m | cols << (8 * j) } else { m })
 }
 
 impl<S: Shape + ?Sized> Shape for &S {
     fn classify(&self, b: &Aabb) -> Overlap {
         (**self).classify(b)
+    }
+    fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
+        (**self).classify_cells(cells)
+    }
+    fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
+        (**self).intersects_cells(cells)
     }
     fn bounds(&self) -> Aabb {
         (**self).bounds()
@@ -144,6 +235,24 @@ impl Shape for Disc {
             max: self.center + r,
         }
     }
+
+    fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
+        let r2 = self.radius * self.radius;
+        let (near_x, far_x) = axis_distances(&cells.xs, self.center.x);
+        let (near_y, far_y) = axis_distances(&cells.ys, self.center.y);
+        // The sums are exactly those of `classify`.
+        let intersects = cell_mask(&near_x, &near_y, |x, y| x + y < r2);
+        let contains = cell_mask(&far_x, &far_y, |x, y| x + y <= r2) & intersects;
+        Some(CellMasks { contains, intersects })
+    }
+
+    fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
+        let r2 = self.radius * self.radius;
+        let (near_x, _) = axis_distances(&cells.xs, self.center.x);
+        let (near_y, _) = axis_distances(&cells.ys, self.center.y);
+        let hits = cell_mask(&near_x, &near_y, |x, y| x + y < r2);
+        Some(hits)
+    }
 }
 
 impl Shape for Aabb {
@@ -159,6 +268,19 @@ impl Shape for Aabb {
 
     fn bounds(&self) -> Aabb {
         *self
+    }
+
+    fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
+        // Both tests split by axis: a cell passes when its column and its row do.
+        let cols_in = axis_mask(&cells.xs, |lo, hi| self.min.x < hi && lo < self.max.x);
+        let rows_in = axis_mask(&cells.ys, |lo, hi| self.min.y < hi && lo < self.max.y);
+        let cols_within = axis_mask(&cells.xs, |lo, hi| self.min.x <= lo && hi <= self.max.x);
+        let rows_within = axis_mask(&cells.ys, |lo, hi| self.min.y <= lo && hi <= self.max.y);
+        let intersects = outer_mask(cols_in, rows_in);
+        Some(CellMasks {
+            contains: outer_mask(cols_within, rows_within) & intersects,
+            intersects,
+        })
     }
 }
 
@@ -245,6 +367,20 @@ impl Shape for DiscBeyond {
     fn bounds(&self) -> Aabb {
         self.disc.bounds()
     }
+
+    fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
+        let m = self.disc.classify_cells(cells)?;
+        let Some(seen) = self.seen else { return Some(m) };
+        // Inside the old view: farthest corner within its radius.
+        let r2 = seen.radius * seen.radius;
+        let (_, far_x) = axis_distances(&cells.xs, seen.center.x);
+        let (_, far_y) = axis_distances(&cells.ys, seen.center.y);
+        let inside = cell_mask(&far_x, &far_y, |x, y| x + y <= r2);
+        Some(CellMasks {
+            contains: m.contains & !inside,
+            intersects: m.intersects & !inside,
+        })
+    }
 }
 
 /// The intersection of two shapes (used to clip a shape to the map's extent).
@@ -263,6 +399,10 @@ impl<S: Shape> Shape for Clipped<S> {
             (Overlap::Contains, Overlap::Contains) => Overlap::Contains,
             _ => Overlap::Partial,
         }
+    }
+
+    fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
+        Some(self.clip.classify_cells(cells)?.and(self.shape.classify_cells(cells)?))
     }
 
     fn bounds(&self) -> Aabb {

@@ -13,8 +13,8 @@ mod robot_index;
 mod treasure_index;
 
 pub use geometry::{
-    Aabb, Capsule, Clipped, Disc, DiscBeyond, Overlap, Shape, clip_line, clip_segment, point_segment_distance_squared,
-    segment_box_distance_squared, segment_enters_box_interior,
+    Aabb, BlockCells, Capsule, CellMasks, Clipped, Disc, DiscBeyond, Overlap, Shape, clip_line, clip_segment,
+    point_segment_distance_squared, segment_box_distance_squared, segment_enters_box_interior,
 };
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};

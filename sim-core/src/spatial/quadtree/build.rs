@@ -1,5 +1,6 @@
 //! Building region quadtrees bottom-up, merging uniform siblings as they are made.
 
+use super::block::{self, BLOCK_LEVEL};
 use super::{EMPTY, FULL, NodeRef, RegionQuadtree, Square, leaf};
 use crate::spatial::grid::Grid;
 use crate::{Error, Result};
@@ -111,6 +112,10 @@ impl RegionQuadtree {
     }
 
     fn build_square(&mut self, sq: Square, padding: bool, classify: &mut impl FnMut(Square) -> Region) -> NodeRef {
+        if self.packs(sq.level) {
+            let bits = self.build_bits(sq, padding, classify);
+            return self.store_bits(EMPTY, bits);
+        }
         let (w, h) = (u64::from(self.grid.width_cells()), u64::from(self.grid.height_cells()));
         let (x0, y0, side) = (u64::from(sq.x), u64::from(sq.y), u64::from(sq.side_cells()));
         if x0 >= w || y0 >= h {
@@ -126,5 +131,29 @@ impl RegionQuadtree {
         }
         let kids = [0, 1, 2, 3].map(|i| self.build_square(sq.child(i), padding, classify));
         self.make_node(kids)
+    }
+
+    /// [`build_square`](Self::build_square) for a square at or below [`BLOCK_LEVEL`], as
+    /// bits: the same questions to `classify`, in the same order.
+    fn build_bits(&self, sq: Square, padding: bool, classify: &mut impl FnMut(Square) -> Region) -> u64 {
+        debug_assert!(sq.level <= BLOCK_LEVEL);
+        let all = block::low_bits(sq.level);
+        let (w, h) = (u64::from(self.grid.width_cells()), u64::from(self.grid.height_cells()));
+        let (x0, y0, side) = (u64::from(sq.x), u64::from(sq.y), u64::from(sq.side_cells()));
+        if x0 >= w || y0 >= h {
+            return if padding { all } else { 0 };
+        }
+        if x0 + side <= w && y0 + side <= h {
+            match classify(sq) {
+                Region::Empty => return 0,
+                Region::Full => return all,
+                Region::Mixed if sq.level == 0 => return all,
+                Region::Mixed => {}
+            }
+        }
+        let shift = block::child_cells(sq.level);
+        (0..4).fold(0, |acc, i| {
+            acc | self.build_bits(sq.child(i), padding, classify) << (i as u32 * shift)
+        })
     }
 }

@@ -1,7 +1,8 @@
 //! The tree as a bit string: preorder, 2 bits a node (0 empty, 1 full, 2 internal; children
 //! SW, SE, NW, NE), 4 nodes a byte, low bits first. The map file stores obstacles this way.
 
-use super::{EMPTY, FULL, NodeRef, RegionQuadtree, is_leaf};
+use super::block::{self, BLOCK_LEVEL, Node};
+use super::{EMPTY, FULL, NodeRef, RegionQuadtree, leaf};
 use crate::spatial::grid::Grid;
 
 impl RegionQuadtree {
@@ -13,7 +14,7 @@ impl RegionQuadtree {
     /// Append the preorder encoding (`⌈encoded_node_count / 4⌉` bytes) to `out`.
     pub(crate) fn encode_preorder(&self, out: &mut Vec<u8>) {
         let mut bits = BitWriter { out, acc: 0, n: 0 };
-        encode(self, self.root(), &mut bits);
+        encode(self, self.node(self.root()), &mut bits);
         bits.flush();
     }
 
@@ -31,13 +32,17 @@ impl RegionQuadtree {
             packed,
             next: 0,
             nodes,
-            groups: Vec::with_capacity(((nodes - 1) / 4) as usize),
+            groups: Vec::new(),
+            blocks: Vec::new(),
+            pack: RegionQuadtree::uniform(grid, false).packs(BLOCK_LEVEL),
         };
         let root = dec.node(grid.depth()).map_err(|e| (dec.next, e))?;
         if dec.next != nodes {
             return Err((0, format!("tree ends after {} of {nodes} nodes", dec.next)));
         }
-        Ok(RegionQuadtree::from_parts(grid, root, dec.groups))
+        dec.groups.shrink_to_fit();
+        dec.blocks.shrink_to_fit();
+        Ok(RegionQuadtree::from_parts(grid, root, dec.groups, dec.blocks))
     }
 }
 
@@ -64,13 +69,13 @@ impl BitWriter<'_> {
     }
 }
 
-fn encode(tree: &RegionQuadtree, n: NodeRef, bits: &mut BitWriter) {
+fn encode(tree: &RegionQuadtree, n: Node, bits: &mut BitWriter) {
     match n {
-        EMPTY => bits.put(0),
-        FULL => bits.put(1),
+        Node::Leaf(false) => bits.put(0),
+        Node::Leaf(true) => bits.put(1),
         _ => {
             bits.put(2);
-            for &k in tree.children(n) {
+            for k in tree.kids(n) {
                 encode(tree, k, bits);
             }
         }
@@ -82,34 +87,75 @@ struct Decoder<'a> {
     next: u64,
     nodes: u64,
     groups: Vec<[NodeRef; 4]>,
+    blocks: Vec<u64>,
+    /// Whether mixed squares at [`BLOCK_LEVEL`] become blocks.
+    pack: bool,
 }
 
 impl Decoder<'_> {
-    fn node(&mut self, level: u8) -> Result<NodeRef, String> {
+    /// The next node's code, its index in preorder.
+    fn code(&mut self) -> Result<(u8, u64), String> {
         if self.next >= self.nodes {
             return Err(format!("tree runs past its {} nodes", self.nodes));
         }
         let i = self.next;
         self.next += 1;
         match (self.packed[(i / 4) as usize] >> (2 * (i % 4))) & 3 {
-            0 => Ok(EMPTY),
-            1 => Ok(FULL),
-            2 if level == 0 => Err(format!("node {i} splits a single cell")),
-            2 => {
+            3 => Err(format!("node {i} has invalid code 3")),
+            c => Ok((c, i)),
+        }
+    }
+
+    fn node(&mut self, level: u8) -> Result<NodeRef, String> {
+        if self.pack && level == BLOCK_LEVEL {
+            let bits = self.bits(level)?;
+            if let Node::Leaf(v) = Node::from_bits(bits, level) {
+                return Ok(leaf(v));
+            }
+            self.blocks.push(bits);
+            return Ok(super::BLOCK_TAG + (self.blocks.len() - 1) as NodeRef);
+        }
+        match self.code()? {
+            (0, _) => Ok(EMPTY),
+            (1, _) => Ok(FULL),
+            (_, i) if level == 0 => Err(format!("node {i} splits a single cell")),
+            (_, i) => {
                 let mut kids = [EMPTY; 4];
                 for k in &mut kids {
                     *k = self.node(level - 1)?;
                 }
-                if is_leaf(kids[0]) && kids.iter().all(|&k| k == kids[0]) {
+                if super::is_leaf(kids[0]) && kids.iter().all(|&k| k == kids[0]) {
                     return Err(format!("node {i} has four equal leaves (not canonical)"));
-                }
-                if self.groups.len() >= self.groups.capacity() {
-                    return Err("more internal nodes than the node count allows".into());
                 }
                 self.groups.push(kids);
                 Ok((self.groups.len() - 1) as NodeRef)
             }
-            s => Err(format!("node {i} has invalid code {s}")),
+        }
+    }
+
+    /// The cells of the next subtree, a square at `level` ≤ [`BLOCK_LEVEL`], as bits.
+    fn bits(&mut self, level: u8) -> Result<u64, String> {
+        match self.code()? {
+            (0, _) => Ok(0),
+            (1, _) => Ok(block::low_bits(level)),
+            (_, i) if level == 0 => Err(format!("node {i} splits a single cell")),
+            (_, i) => {
+                let shift = block::child_cells(level);
+                let mut bits = 0;
+                let mut leaves = [None; 4];
+                for (k, leaf) in leaves.iter_mut().enumerate() {
+                    let kid = self.bits(level - 1)?;
+                    if let Node::Leaf(v) = Node::from_bits(kid, level - 1) {
+                        *leaf = Some(v);
+                    }
+                    bits |= kid << (k as u32 * shift);
+                }
+                // Four equal leaves are one leaf; four equal mixed children are fine.
+                if leaves[0].is_some() && leaves.iter().all(|&l| l == leaves[0]) {
+                    return Err(format!("node {i} has four equal leaves (not canonical)"));
+                }
+                Ok(bits)
+            }
         }
     }
 }

@@ -5,6 +5,8 @@
 //! The walk never visits cells: for every internal node it joins the leaves along the two
 //! seams between its children, so the cost is linear in the number of leaves along seams.
 
+use std::borrow::Cow;
+
 use glam::DVec2;
 
 use super::{EMPTY, FULL, NodeRef, RegionQuadtree, Square, is_leaf};
@@ -22,7 +24,9 @@ enum Slot {
 /// Free-space components of a map's obstacle tree.
 #[derive(Debug)]
 pub struct Components<'a> {
-    tree: &'a RegionQuadtree,
+    /// The tree with groups down to single cells: the seam walk needs an id for every
+    /// internal node, which the bits of a block do not have.
+    tree: Cow<'a, RegionQuadtree>,
     /// Free-leaf id of child `i` of group `g` (or `NONE`).
     ids: Vec<[u32; 4]>,
     root_id: u32,
@@ -37,6 +41,11 @@ pub struct Components<'a> {
 impl<'a> Components<'a> {
     /// Label the free leaves of `tree` (`FULL` = blocked).
     pub fn new(tree: &'a RegionQuadtree) -> Self {
+        let tree = if tree.packed {
+            Cow::Owned(tree.unpacked())
+        } else {
+            Cow::Borrowed(tree)
+        };
         let mut c = Components {
             tree,
             ids: Vec::new(),
@@ -160,9 +169,9 @@ impl<'a> Components<'a> {
             self.join_h(s[2], s[3]);
             self.join_v(s[0], s[2]);
             self.join_v(s[1], s[3]);
-            for k in self.tree.children(g) {
-                if !is_leaf(*k) {
-                    stack.push(*k);
+            for &k in self.tree.children(g) {
+                if !is_leaf(k) {
+                    stack.push(k);
                 }
             }
         }

@@ -1,20 +1,32 @@
 //! The binary region quadtree behind the obstacle map and the robots' known maps.
 //!
-//! A node is a `u32`: one of two leaf codes (`EMPTY`, `FULL`) or the index of a group of
+//! A node is a `u32`: one of two leaf codes (`EMPTY`, `FULL`), the index of a group of
 //! four children in `groups` (order: SW, SE, NW, NE — bit 0 of the child index is the x half,
-//! bit 1 the y half). A node's square is derived on descent from the grid, so nodes carry no
-//! coordinates, uniform space costs nothing below its leaf, and a query prunes a subtree with
-//! one box test. Uniform siblings are always merged (see [`RegionQuadtree::validate`]).
+//! bit 1 the y half), or the index of a *block* in `blocks`. A node's square is derived on
+//! descent from the grid, so nodes carry no coordinates, uniform space costs nothing below
+//! its leaf, and a query prunes a subtree with one box test. Uniform siblings are always
+//! merged (see [`RegionQuadtree::validate`]).
+//!
+//! **Bit-packed bottom** (issue 11): in a tree at least 8 cells a side, every mixed square
+//! of 8 × 8 cells is a block, one `u64` with a bit per cell in Z order (see [`block`]),
+//! instead of up to 21 groups of four references. The quadtree below a block is still
+//! there, implicit in the bits: a 4 × 4 or 2 × 2 run of equal bits is a leaf. Queries see
+//! it through [`Node`], so they walk one tree whatever its storage; updates and unions act
+//! on a block with a few word operations. The result is the same canonical tree, leaves and
+//! visiting order as before, in a fraction of the memory (a group is 16 bytes, a block 8).
 //!
 //! Split by operation: `build` (from rasters, predicates and region classifiers), `query`
 //! (shape visitors, ray casting, areas), `update` (fill, union), `validate`, `codec` (the
-//! map file's bit string) and `components` (connected free space). Node references are
-//! internal to sim-core; users see squares, values and shapes.
+//! map file's bit string), `block` (the packed bottom) and `components` (connected free
+//! space). Node references are internal to sim-core; users see squares, values and shapes.
 
+pub(crate) mod block;
 mod build;
 mod codec;
 mod components;
 mod query;
+#[cfg(test)]
+mod tests;
 mod update;
 mod validate;
 
@@ -22,7 +34,9 @@ pub use build::{BitGrid, Region};
 pub use components::Components;
 pub use update::PartialCells;
 
+use crate::spatial::geometry::BlockCells;
 use crate::spatial::grid::{Grid, MAX_DEPTH};
+use block::{BLOCK_LEVEL, Node, internal_nodes_in};
 
 /// A node reference: a leaf code or a group index.
 pub(crate) type NodeRef = u32;
@@ -30,13 +44,23 @@ pub(crate) type NodeRef = u32;
 pub(crate) const EMPTY: NodeRef = u32::MAX;
 /// Leaf code of a uniformly full square (obstacle / known space).
 pub(crate) const FULL: NodeRef = u32::MAX - 1;
+/// Set in a block reference; the other bits index `blocks`.
+const BLOCK_TAG: u32 = 1 << 31;
 /// Largest usable group index.
-const MAX_GROUPS: usize = (u32::MAX - 2) as usize;
+const MAX_GROUPS: usize = (BLOCK_TAG - 1) as usize;
+/// Largest usable block index.
+const MAX_BLOCKS: usize = (FULL - BLOCK_TAG - 1) as usize;
 
 /// Whether a node reference is a leaf.
 #[inline]
 pub(crate) fn is_leaf(n: NodeRef) -> bool {
     n >= FULL
+}
+
+/// Whether a node reference is a block (an 8 × 8 square stored as bits).
+#[inline]
+pub(crate) fn is_block(n: NodeRef) -> bool {
+    (BLOCK_TAG..FULL).contains(&n)
 }
 
 /// The leaf code for a value.
@@ -53,6 +77,15 @@ pub struct RegionQuadtree {
     groups: Vec<[NodeRef; 4]>,
     /// Groups released by updates, reused before `groups` grows.
     free_groups: Vec<u32>,
+    /// Mixed 8 × 8 squares, a bit per cell in Z order.
+    blocks: Vec<u64>,
+    /// Blocks released by updates, reused before `blocks` grows.
+    free_blocks: Vec<u32>,
+    /// Internal nodes implicit in the live blocks (so the leaf count stays O(1)).
+    block_internal: usize,
+    /// Whether mixed squares of [`BLOCK_LEVEL`] are blocks (false only in trees under
+    /// 8 cells a side, and in the unpacked copies that [`Components`] walks).
+    packed: bool,
 }
 
 /// A square of the tree: lower-left cell and level (`2^level` cells a side).
@@ -120,14 +153,14 @@ pub(crate) fn untag(sq: Square) -> (Square, bool) {
 /// Fixed-capacity traversal stack: a depth-first walk never holds more than three pending
 /// siblings per level plus the current node, so no query allocates.
 pub(crate) struct Stack {
-    items: [(NodeRef, Square); 4 * MAX_DEPTH as usize + 4],
+    items: [(Node, Square); 4 * MAX_DEPTH as usize + 4],
     len: usize,
 }
 
 impl Stack {
     #[inline]
-    pub(crate) fn new(root: NodeRef, depth: u8) -> Self {
-        let zero = (EMPTY, Square { x: 0, y: 0, level: 0 });
+    pub(crate) fn new(root: Node, depth: u8) -> Self {
+        let zero = (Node::Leaf(false), Square { x: 0, y: 0, level: 0 });
         let mut s = Self {
             items: [zero; 4 * MAX_DEPTH as usize + 4],
             len: 0,
@@ -143,12 +176,12 @@ impl Stack {
         s
     }
     #[inline]
-    pub(crate) fn push(&mut self, n: NodeRef, sq: Square) {
+    pub(crate) fn push(&mut self, n: Node, sq: Square) {
         self.items[self.len] = (n, sq);
         self.len += 1;
     }
     #[inline]
-    pub(crate) fn pop(&mut self) -> Option<(NodeRef, Square)> {
+    pub(crate) fn pop(&mut self) -> Option<(Node, Square)> {
         if self.len == 0 {
             None
         } else {
@@ -166,16 +199,22 @@ impl RegionQuadtree {
             root: leaf(value),
             groups: Vec::new(),
             free_groups: Vec::new(),
+            blocks: Vec::new(),
+            free_blocks: Vec::new(),
+            block_internal: 0,
+            packed: grid.depth() >= BLOCK_LEVEL,
         }
     }
 
     /// A tree from decoded parts; callers must [`validate`](Self::validate) it.
-    pub(crate) fn from_parts(grid: Grid, root: NodeRef, groups: Vec<[NodeRef; 4]>) -> Self {
+    pub(crate) fn from_parts(grid: Grid, root: NodeRef, groups: Vec<[NodeRef; 4]>, blocks: Vec<u64>) -> Self {
+        let block_internal = blocks.iter().map(|&b| internal_nodes_in(b)).sum();
         Self {
-            grid,
             root,
             groups,
-            free_groups: Vec::new(),
+            blocks,
+            block_internal,
+            ..Self::uniform(grid, false)
         }
     }
 
@@ -198,15 +237,21 @@ impl RegionQuadtree {
         }
     }
 
-    /// The children of an internal node.
+    /// The children of a group.
     #[inline]
     pub(crate) fn children(&self, n: NodeRef) -> &[NodeRef; 4] {
         &self.groups[n as usize]
     }
 
-    /// Number of internal nodes in use.
+    /// Whether a square at `level` is stored as a block when mixed.
+    #[inline]
+    pub(crate) fn packs(&self, level: u8) -> bool {
+        self.packed && level == BLOCK_LEVEL
+    }
+
+    /// Number of internal nodes in use (those implicit in blocks included).
     pub fn internal_nodes(&self) -> usize {
-        self.groups.len() - self.free_groups.len()
+        self.groups.len() - self.free_groups.len() + self.block_internal
     }
 
     /// Number of leaves (`3 × internal + 1`, as every internal node has four children).
@@ -219,32 +264,36 @@ impl RegionQuadtree {
         std::mem::size_of::<Self>()
             + self.groups.capacity() * std::mem::size_of::<[NodeRef; 4]>()
             + self.free_groups.capacity() * std::mem::size_of::<u32>()
+            + self.blocks.capacity() * std::mem::size_of::<u64>()
+            + self.free_blocks.capacity() * std::mem::size_of::<u32>()
     }
 
     /// Give memory that updates released back to the allocator by compacting the tree.
     pub fn compact(&mut self) {
-        if self.free_groups.is_empty() {
+        if self.free_groups.is_empty() && self.free_blocks.is_empty() {
             return;
         }
-        let mut out = Vec::with_capacity(self.internal_nodes());
-        self.root = self.copy_into(self.root, &mut out);
-        self.groups = out;
+        let mut groups = Vec::with_capacity(self.groups.len() - self.free_groups.len());
+        let mut blocks = Vec::with_capacity(self.blocks.len() - self.free_blocks.len());
+        self.root = self.copy_into(self.root, &mut groups, &mut blocks);
+        self.groups = groups;
+        self.blocks = blocks;
         self.free_groups = Vec::new();
+        self.free_blocks = Vec::new();
     }
 
-    fn copy_into(&self, n: NodeRef, out: &mut Vec<[NodeRef; 4]>) -> NodeRef {
+    fn copy_into(&self, n: NodeRef, groups: &mut Vec<[NodeRef; 4]>, blocks: &mut Vec<u64>) -> NodeRef {
         if is_leaf(n) {
             return n;
         }
+        if is_block(n) {
+            blocks.push(self.blocks[(n - BLOCK_TAG) as usize]);
+            return BLOCK_TAG + (blocks.len() - 1) as NodeRef;
+        }
         let c = self.groups[n as usize];
-        let kids = [
-            self.copy_into(c[0], out),
-            self.copy_into(c[1], out),
-            self.copy_into(c[2], out),
-            self.copy_into(c[3], out),
-        ];
-        out.push(kids);
-        (out.len() - 1) as NodeRef
+        let kids = c.map(|k| self.copy_into(k, groups, blocks));
+        groups.push(kids);
+        (groups.len() - 1) as NodeRef
     }
 
     /// Store a group of children, merging it into a leaf when all four are the same leaf.
@@ -256,15 +305,113 @@ impl RegionQuadtree {
             self.groups[i as usize] = kids;
             i
         } else {
-            assert!(self.groups.len() < MAX_GROUPS, "quadtree exceeds 2^32 nodes");
+            assert!(self.groups.len() < MAX_GROUPS, "quadtree exceeds 2^31 groups");
             self.groups.push(kids);
             (self.groups.len() - 1) as NodeRef
         }
     }
 
-    /// Release a subtree's groups for reuse.
+    /// The cells of a node at [`BLOCK_LEVEL`] or below as bits (see [`block`]), whatever
+    /// its storage: a leaf, a block, or (in unpacked trees) groups.
+    pub(crate) fn bits_of(&self, n: NodeRef, level: u8) -> u64 {
+        debug_assert!(level <= BLOCK_LEVEL);
+        match n {
+            EMPTY => 0,
+            FULL => block::low_bits(level),
+            b if is_block(b) => self.blocks[(b - BLOCK_TAG) as usize],
+            g => {
+                let kids = self.groups[g as usize];
+                let shift = block::child_cells(level);
+                (0..4).fold(0, |acc, i| acc | self.bits_of(kids[i], level - 1) << (i as u32 * shift))
+            }
+        }
+    }
+
+    /// Replace node `n` at [`BLOCK_LEVEL`] (a leaf or a block) by the square whose cells
+    /// are `bits`: a leaf if they agree, else a block (`n`'s own if it was one).
+    pub(crate) fn store_bits(&mut self, n: NodeRef, bits: u64) -> NodeRef {
+        if bits == 0 || bits == u64::MAX {
+            self.release(n);
+            return leaf(bits != 0);
+        }
+        if is_block(n) {
+            let slot = &mut self.blocks[(n - BLOCK_TAG) as usize];
+            if *slot != bits {
+                self.block_internal = self.block_internal - internal_nodes_in(*slot) + internal_nodes_in(bits);
+                *slot = bits;
+            }
+            return n;
+        }
+        self.block_internal += internal_nodes_in(bits);
+        if let Some(i) = self.free_blocks.pop() {
+            self.blocks[i as usize] = bits;
+            BLOCK_TAG + i
+        } else {
+            assert!(self.blocks.len() < MAX_BLOCKS, "quadtree exceeds 2^31 blocks");
+            self.blocks.push(bits);
+            BLOCK_TAG + (self.blocks.len() - 1) as NodeRef
+        }
+    }
+
+    /// The cell edges of the block at square `sq`, for [`Shape::classify_cells`].
+    #[inline]
+    pub(crate) fn block_cells(&self, sq: Square) -> BlockCells {
+        let mut cells = BlockCells {
+            xs: [0.0; 9],
+            ys: [0.0; 9],
+        };
+        for i in 0..9 {
+            // `Grid::corner`, the same arithmetic as the boxes `classify` sees.
+            let c = self.grid.corner(sq.x + i, sq.y + i);
+            cells.xs[i as usize] = c.x;
+            cells.ys[i as usize] = c.y;
+        }
+        cells
+    }
+
+    /// The view of node `n` that walks see (blocks as their bits).
+    #[inline]
+    pub(crate) fn node(&self, n: NodeRef) -> Node {
+        match n {
+            EMPTY => Node::Leaf(false),
+            FULL => Node::Leaf(true),
+            b if is_block(b) => Node::Bits {
+                bits: self.blocks[(b - BLOCK_TAG) as usize],
+                level: BLOCK_LEVEL,
+            },
+            g => Node::Group(g),
+        }
+    }
+
+    /// The four children of an internal node.
+    #[inline]
+    pub(crate) fn kids(&self, node: Node) -> [Node; 4] {
+        match node {
+            Node::Group(g) => self.groups[g as usize].map(|k| self.node(k)),
+            Node::Bits { bits, level } => block::kids(bits, level),
+            Node::Leaf(_) => unreachable!("a leaf has no children"),
+        }
+    }
+
+    /// Child `i` of an internal node.
+    #[inline]
+    pub(crate) fn kid(&self, node: Node, i: usize) -> Node {
+        match node {
+            Node::Group(g) => self.node(self.groups[g as usize][i]),
+            Node::Bits { bits, level } => block::kid(bits, level, i),
+            Node::Leaf(_) => unreachable!("a leaf has no children"),
+        }
+    }
+
+    /// Release a subtree's groups and blocks for reuse.
     pub(crate) fn release(&mut self, n: NodeRef) {
         if is_leaf(n) {
+            return;
+        }
+        if is_block(n) {
+            let i = n - BLOCK_TAG;
+            self.block_internal -= internal_nodes_in(self.blocks[i as usize]);
+            self.free_blocks.push(i);
             return;
         }
         let kids = self.groups[n as usize];
@@ -272,5 +419,24 @@ impl RegionQuadtree {
             self.release(k);
         }
         self.free_groups.push(n);
+    }
+
+    /// The same tree with groups down to single cells and no blocks, for walks that need a
+    /// reference to every internal node ([`Components`]).
+    pub(crate) fn unpacked(&self) -> RegionQuadtree {
+        let mut out = Self {
+            packed: false,
+            ..Self::uniform(self.grid, false)
+        };
+        out.root = out.unpack_from(self, self.node(self.root));
+        out
+    }
+
+    fn unpack_from(&mut self, other: &RegionQuadtree, node: Node) -> NodeRef {
+        if let Node::Leaf(v) = node {
+            return leaf(v);
+        }
+        let kids = other.kids(node).map(|k| self.unpack_from(other, k));
+        self.make_node(kids)
     }
 }

@@ -4,13 +4,19 @@ use std::ops::ControlFlow;
 
 use glam::DVec2;
 
-use super::{FULL, NodeRef, RegionQuadtree, Square, Stack, is_leaf, leaf, tag, tag_square, untag};
+use super::block::{self, BLOCK_LEVEL, Node};
+use super::{RegionQuadtree, Square, Stack, is_block, is_leaf, tag, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Overlap, Shape, clip_line};
 
 impl RegionQuadtree {
     /// Visit every leaf of the given value whose square overlaps `shape` (in world
     /// coordinates), with its square and world box. The visitor may stop the walk early.
     /// Returns `ControlFlow::Break` if it did.
+    ///
+    /// The order is fixed (the same tree and shape give the same sequence) but not
+    /// spatial: a node's leaf children come before its other descendants, except inside an
+    /// 8 × 8 block of a shape that [classifies cells at once](Shape::classify_cells),
+    /// whose leaves come in Z order.
     #[inline]
     pub fn visit_leaves_in<S: Shape>(
         &self,
@@ -18,27 +24,44 @@ impl RegionQuadtree {
         value: bool,
         mut visit: impl FnMut(Square, Aabb) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
-        let want = leaf(value);
         let root = self.root_square();
-        let Some(inside) = self.classify_node(shape, self.root, want, root) else {
+        let root_node = self.node(self.root);
+        let Some(inside) = self.classify_node(shape, root_node, value, root) else {
             return ControlFlow::Continue(());
         };
         // Stack entries carry "wholly inside the shape" in the level's top bit: below such a
         // node every wanted leaf is reported without further tests.
-        let mut stack = Stack::new(self.root, tag(root.level, inside));
+        let mut stack = Stack::new(root_node, tag(root.level, inside));
         while let Some((n, tagged)) = stack.pop() {
             let (sq, inside) = untag(tagged);
-            if is_leaf(n) {
+            if let Node::Leaf(_) = n {
                 visit(sq, self.grid.square(sq.x, sq.y, sq.level))?;
                 continue;
             }
-            let kids = self.groups[n as usize];
+            if let Node::Bits {
+                bits,
+                level: BLOCK_LEVEL,
+            } = n
+            {
+                // A whole block: classify its 64 cells at once if the shape can, then find
+                // the leaves to visit with word operations (they come in Z order).
+                let hits = if inside {
+                    Some(u64::MAX)
+                } else {
+                    shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
+                };
+                if let Some(hits) = hits {
+                    self.visit_block(if value { bits } else { !bits }, sq, hits, &mut visit)?;
+                    continue;
+                }
+            }
+            let kids = self.kids(n);
             // Leaf children are visited at once (no stack round trip); internal ones are
             // pushed in reverse so they pop in SW, SE, NW, NE order.
             for i in (0..4).rev() {
                 let (k, csq) = (kids[i], sq.child(i));
-                if is_leaf(k) {
-                    if k == want {
+                if let Node::Leaf(v) = k {
+                    if v == value {
                         let b = self.grid.square(csq.x, csq.y, csq.level);
                         // A leaf needs only the cheap half of the test.
                         if inside || shape.intersects(&b) {
@@ -59,11 +82,40 @@ impl RegionQuadtree {
         ControlFlow::Continue(())
     }
 
+    /// Visit the leaves of a block at `sq` whose cells are all in `wanted` and that share
+    /// a cell with `hits` (Z order), in Z order.
+    fn visit_block(
+        &self,
+        wanted: u64,
+        sq: Square,
+        hits: u64,
+        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let (mut leaves, quarters, squares) = block::leaves_hit(wanted, hits);
+        while leaves != 0 {
+            let i = leaves.trailing_zeros();
+            leaves &= leaves - 1;
+            let (dx, dy) = block::cell_at(i);
+            let level = if quarters >> i & 1 != 0 {
+                2
+            } else {
+                u8::from(squares >> i & 1 != 0)
+            };
+            let leaf = Square {
+                x: sq.x + dx,
+                y: sq.y + dy,
+                level,
+            };
+            visit(leaf, self.grid.square(leaf.x, leaf.y, level))?;
+        }
+        ControlFlow::Continue(())
+    }
+
     /// `None` if the node cannot hold a wanted leaf overlapping the shape, else whether it
     /// lies wholly inside the shape.
     #[inline]
-    fn classify_node<S: Shape>(&self, shape: &S, n: NodeRef, want: NodeRef, sq: Square) -> Option<bool> {
-        if is_leaf(n) && n != want {
+    fn classify_node<S: Shape>(&self, shape: &S, n: Node, want: bool, sq: Square) -> Option<bool> {
+        if matches!(n, Node::Leaf(v) if v != want) {
             return None;
         }
         match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
@@ -90,11 +142,14 @@ impl RegionQuadtree {
         let mut n = self.root;
         let mut level = self.grid.depth();
         while !is_leaf(n) {
+            if is_block(n) {
+                return self.bits_of(n, BLOCK_LEVEL) >> block::cell_index(x, y) & 1 != 0;
+            }
             level -= 1;
             let i = ((x >> level) & 1) | (((y >> level) & 1) << 1);
-            n = self.groups[n as usize][i as usize];
+            n = self.children(n)[i as usize];
         }
-        n == FULL
+        n == super::FULL
     }
 
     /// The value at world point `p`, or `None` outside the covering square.
@@ -106,24 +161,23 @@ impl RegionQuadtree {
     /// the interior of a leaf of the given value, within `max_dist`. A ray that starts inside
     /// such a leaf hits at 0.
     pub fn first_hit(&self, origin: DVec2, dir: DVec2, max_dist: f64, value: bool) -> Option<f64> {
-        let want = leaf(value);
         let mut best = f64::INFINITY;
-        let mut stack = Stack::new(self.root, self.grid.depth());
+        let mut stack = Stack::new(self.node(self.root), self.grid.depth());
         while let Some((n, sq)) = stack.pop() {
-            if is_leaf(n) && n != want {
+            if matches!(n, Node::Leaf(v) if v != value) {
                 continue;
             }
             let b = self.grid.square(sq.x, sq.y, sq.level);
             let Some((t0, t1)) = clip_line(origin, dir, 0.0, max_dist.min(best), &b) else {
                 continue;
             };
-            if is_leaf(n) {
+            if let Node::Leaf(_) = n {
                 // Grazing an edge or a corner is no hit: the chord must reach the interior.
                 if b.contains_strictly(origin + dir * (0.5 * (t0 + t1))) && t0 < best {
                     best = t0;
                 }
             } else {
-                let kids = self.groups[n as usize];
+                let kids = self.kids(n);
                 // Near children last, so they pop first and tighten `best` early.
                 let near = usize::from(dir.x < 0.0) | (usize::from(dir.y < 0.0) << 1);
                 for i in [near ^ 3, near ^ 2, near ^ 1, near] {
@@ -136,12 +190,12 @@ impl RegionQuadtree {
 
     /// Visit every leaf with its square and value.
     pub fn for_each_leaf(&self, mut visit: impl FnMut(Square, bool)) {
-        let mut stack = Stack::new(self.root, self.grid.depth());
+        let mut stack = Stack::new(self.node(self.root), self.grid.depth());
         while let Some((n, sq)) = stack.pop() {
-            if is_leaf(n) {
-                visit(sq, n == FULL);
+            if let Node::Leaf(v) = n {
+                visit(sq, v);
             } else {
-                let kids = self.groups[n as usize];
+                let kids = self.kids(n);
                 for i in (0..4).rev() {
                     stack.push(kids[i], sq.child(i));
                 }
@@ -171,33 +225,32 @@ impl RegionQuadtree {
     /// from the root: the cheap test for squares of the grid (navigation nodes are such).
     #[inline]
     pub fn square_value(&self, sq: Square) -> Option<bool> {
-        let mut n = self.root;
+        match self.descend_to(sq) {
+            // A leaf on the way covers the square; an internal node at its level is mixed.
+            Node::Leaf(v) => Some(v),
+            _ => None,
+        }
+    }
+
+    /// The node of square `sq`, or the leaf above it that covers it.
+    #[inline]
+    fn descend_to(&self, sq: Square) -> Node {
+        let mut n = self.node(self.root);
         let mut level = self.grid.depth();
         while level > sq.level {
-            if is_leaf(n) {
+            if let Node::Leaf(_) = n {
                 break;
             }
             level -= 1;
             let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
-            n = self.groups[n as usize][i as usize];
+            n = self.kid(n, i as usize);
         }
-        // A leaf on the way covers the square; an internal node at its level is mixed.
-        if is_leaf(n) { Some(n == FULL) } else { None }
+        n
     }
 
     /// Number of cells of `sq` holding `value`.
     pub fn count_cells_in(&self, sq: Square, value: bool) -> u64 {
-        let mut n = self.root;
-        let mut level = self.grid.depth();
-        while level > sq.level {
-            if is_leaf(n) {
-                return if n == leaf(value) { sq.cells() } else { 0 };
-            }
-            level -= 1;
-            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
-            n = self.groups[n as usize][i as usize];
-        }
-        self.subtree_cells(n, leaf(value), sq)
+        self.subtree_cells(self.descend_to(sq), value, sq)
     }
 
     /// Number of cells where `self` holds `a` and `other` holds `b`. Both trees must cover
@@ -205,18 +258,24 @@ impl RegionQuadtree {
     pub fn count_cells_where(&self, a: bool, other: &RegionQuadtree, b: bool) -> u64 {
         assert_eq!(self.grid.depth(), other.grid.depth(), "trees over different grids");
         let root = self.root_square();
-        self.lockstep(self.root, leaf(a), other, other.root, leaf(b), root)
+        self.lockstep(self.node(self.root), a, other, other.node(other.root), b, root)
     }
 
-    fn lockstep(&self, n: NodeRef, a: NodeRef, other: &RegionQuadtree, m: NodeRef, b: NodeRef, sq: Square) -> u64 {
-        match (is_leaf(n), is_leaf(m)) {
-            (true, _) if n != a => 0,
-            (_, true) if m != b => 0,
-            (true, true) => sq.cells(),
-            (true, false) => other.subtree_cells(m, b, sq),
-            (false, true) => self.subtree_cells(n, a, sq),
-            (false, false) => {
-                let (kn, km) = (self.groups[n as usize], other.groups[m as usize]);
+    fn lockstep(&self, n: Node, a: bool, other: &RegionQuadtree, m: Node, b: bool, sq: Square) -> u64 {
+        match (n, m) {
+            (Node::Leaf(v), _) if v != a => 0,
+            (_, Node::Leaf(v)) if v != b => 0,
+            (Node::Leaf(_), Node::Leaf(_)) => sq.cells(),
+            (Node::Leaf(_), _) => other.subtree_cells(m, b, sq),
+            (_, Node::Leaf(_)) => self.subtree_cells(n, a, sq),
+            // Both packed at the same level: the cells where both hold their value.
+            (Node::Bits { bits: x, level }, Node::Bits { bits: y, .. }) => {
+                let all = block::low_bits(level);
+                let (x, y) = (if a { x } else { !x & all }, if b { y } else { !y & all });
+                u64::from((x & y).count_ones())
+            }
+            _ => {
+                let (kn, km) = (self.kids(n), other.kids(m));
                 (0..4)
                     .map(|i| self.lockstep(kn[i], a, other, km[i], b, sq.child(i)))
                     .sum()
@@ -224,11 +283,23 @@ impl RegionQuadtree {
         }
     }
 
-    fn subtree_cells(&self, n: NodeRef, want: NodeRef, sq: Square) -> u64 {
-        if is_leaf(n) {
-            return if n == want { sq.cells() } else { 0 };
+    fn subtree_cells(&self, n: Node, want: bool, sq: Square) -> u64 {
+        match n {
+            Node::Leaf(v) => {
+                if v == want {
+                    sq.cells()
+                } else {
+                    0
+                }
+            }
+            Node::Bits { bits, .. } => {
+                let ones = u64::from(bits.count_ones());
+                if want { ones } else { sq.cells() - ones }
+            }
+            Node::Group(_) => {
+                let kids = self.kids(n);
+                (0..4).map(|i| self.subtree_cells(kids[i], want, sq.child(i))).sum()
+            }
         }
-        let kids = self.groups[n as usize];
-        (0..4).map(|i| self.subtree_cells(kids[i], want, sq.child(i))).sum()
     }
 }

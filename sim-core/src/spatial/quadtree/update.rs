@@ -1,7 +1,8 @@
 //! In-place updates. Groups freed by an update are reused by the next, so a tree's memory
 //! follows the size of the region it describes, not the number of updates made to it.
 
-use super::{FULL, NodeRef, RegionQuadtree, Square, is_leaf, leaf};
+use super::block::{self, BLOCK_LEVEL, Node};
+use super::{FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
 use crate::spatial::geometry::{Aabb, Overlap, Shape};
 
 /// What [`RegionQuadtree::fill`] does with a cell the shape covers only in part.
@@ -59,6 +60,9 @@ impl RegionQuadtree {
         if n == want {
             return n;
         }
+        if self.packs(sq.level) {
+            return self.fill_block(n, sq, shape, want == FULL, partial, changed);
+        }
         match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
             Overlap::Disjoint => n,
             Overlap::Partial if sq.level == 0 => {
@@ -90,17 +94,94 @@ impl RegionQuadtree {
         }
     }
 
+    /// [`fill_node`](Self::fill_node) on node `n` at [`BLOCK_LEVEL`] (a leaf or a block):
+    /// one word operation when the shape classifies the 64 cells at once.
+    fn fill_block<S: Shape>(
+        &mut self,
+        n: NodeRef,
+        sq: Square,
+        shape: &S,
+        value: bool,
+        partial: PartialCells,
+        changed: &mut impl FnMut(Square),
+    ) -> NodeRef {
+        let bits = self.bits_of(n, BLOCK_LEVEL);
+        let filled = match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
+            Overlap::Disjoint => return n,
+            Overlap::Contains => {
+                self.report_node(self.node(n), sq, value, changed);
+                if value { u64::MAX } else { 0 }
+            }
+            Overlap::Partial => match shape.classify_cells(&self.block_cells(sq)) {
+                Some(m) => {
+                    let cover = block::z_order(match partial {
+                        PartialCells::Include => m.intersects,
+                        PartialCells::Exclude => m.contains,
+                    });
+                    let filled = if value { bits | cover } else { bits & !cover };
+                    report_bits(filled ^ bits, sq, changed);
+                    filled
+                }
+                None => self.fill_bits(bits, sq, shape, value, partial, changed),
+            },
+        };
+        self.store_bits(n, filled)
+    }
+
+    /// [`fill_node`](Self::fill_node) on the cells `bits` of a square at or below
+    /// [`BLOCK_LEVEL`]: the same tests in the same order, on a word instead of nodes.
+    fn fill_bits<S: Shape>(
+        &self,
+        bits: u64,
+        sq: Square,
+        shape: &S,
+        value: bool,
+        partial: PartialCells,
+        changed: &mut impl FnMut(Square),
+    ) -> u64 {
+        let target = if value { block::low_bits(sq.level) } else { 0 };
+        if bits == target {
+            return bits;
+        }
+        match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
+            Overlap::Disjoint => bits,
+            Overlap::Partial if sq.level == 0 => {
+                if partial == PartialCells::Include {
+                    changed(sq);
+                    target
+                } else {
+                    bits
+                }
+            }
+            Overlap::Contains => {
+                self.report_node(Node::from_bits(bits, sq.level), sq, value, changed);
+                target
+            }
+            Overlap::Partial => {
+                let shift = block::child_cells(sq.level);
+                (0..4).fold(0, |acc, i| {
+                    let kid = block::child_bits(bits, sq.level, i);
+                    acc | self.fill_bits(kid, sq.child(i), shape, value, partial, changed) << (i as u32 * shift)
+                })
+            }
+        }
+    }
+
     /// Report the leaves below `n` that differ from `want`.
+    #[inline]
     fn report_leaves(&self, n: NodeRef, sq: Square, want: NodeRef, changed: &mut impl FnMut(Square)) {
-        if is_leaf(n) {
-            if n != want {
+        self.report_node(self.node(n), sq, want == FULL, changed);
+    }
+
+    fn report_node(&self, n: Node, sq: Square, want: bool, changed: &mut impl FnMut(Square)) {
+        if let Node::Leaf(v) = n {
+            if v != want {
                 changed(sq);
             }
             return;
         }
-        let kids = self.groups[n as usize];
-        for (i, k) in kids.into_iter().enumerate() {
-            self.report_leaves(k, sq.child(i), want, changed);
+        for (i, k) in self.kids(n).into_iter().enumerate() {
+            self.report_node(k, sq.child(i), want, changed);
         }
     }
 
@@ -142,7 +223,17 @@ impl RegionQuadtree {
         }
         if n == super::EMPTY {
             *added += other.full_cells(m, level);
-            return self.copy_from(other, m);
+            return self.copy_from(other, m, level);
+        }
+        if self.packs(level) {
+            // Both mixed: one OR settles the 64 cells.
+            let (mine, theirs) = (self.bits_of(n, level), other.bits_of(m, level));
+            let union = mine | theirs;
+            if union == mine {
+                return n;
+            }
+            *added += u64::from(union.count_ones() - mine.count_ones());
+            return self.store_bits(n, union);
         }
         // Maps that were exchanged before are mostly alike: settle equal leaves here rather
         // than in a call, and write back (and try to merge) only children that changed.
@@ -168,6 +259,7 @@ impl RegionQuadtree {
         match n {
             FULL => 1u64 << (2 * u32::from(level)),
             super::EMPTY => 0,
+            b if is_block(b) => u64::from(self.bits_of(b, level).count_ones()),
             g => self.groups[g as usize]
                 .iter()
                 .map(|&k| self.full_cells(k, level - 1))
@@ -175,11 +267,34 @@ impl RegionQuadtree {
         }
     }
 
-    fn copy_from(&mut self, other: &RegionQuadtree, m: NodeRef) -> NodeRef {
+    /// A copy of `other`'s subtree `m` at `level`, stored in `self`.
+    fn copy_from(&mut self, other: &RegionQuadtree, m: NodeRef, level: u8) -> NodeRef {
         if is_leaf(m) {
             return m;
         }
-        let kids = other.groups[m as usize].map(|k| self.copy_from(other, k));
+        if self.packs(level) {
+            let bits = other.bits_of(m, level);
+            return self.store_bits(super::EMPTY, bits);
+        }
+        if is_block(m) {
+            return self.unpack_from(other, other.node(m));
+        }
+        let kids = other.children(m).map(|k| self.copy_from(other, k, level - 1));
         self.make_node(kids)
+    }
+}
+
+/// Report the set cells of `bits`, a square at `sq` (≤ [`BLOCK_LEVEL`]), as the fewest
+/// squares of the implicit quadtree.
+fn report_bits(bits: u64, sq: Square, changed: &mut impl FnMut(Square)) {
+    if bits == 0 {
+        return;
+    }
+    if bits == block::low_bits(sq.level) {
+        changed(sq);
+        return;
+    }
+    for i in 0..4 {
+        report_bits(block::child_bits(bits, sq.level, i), sq.child(i), changed);
     }
 }

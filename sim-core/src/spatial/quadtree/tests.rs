@@ -1,0 +1,191 @@
+//! The packed bottom changes storage, not the tree (issue 11): a packed tree and its
+//! unpacked twin (groups down to single cells, the representation before blocks) get the
+//! same random updates and must agree on every leaf, count, visit order and byte.
+
+use std::collections::BTreeSet;
+use std::ops::ControlFlow;
+
+use glam::DVec2;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::{PartialCells, RegionQuadtree, Square};
+use crate::spatial::geometry::{Aabb, Capsule, Clipped, Disc, DiscBeyond, Shape};
+use crate::spatial::grid::Grid;
+
+/// A shape of a random kind over the grid: each kind the packed bottom handles by cell
+/// masks (disc, box, clipped disc) and one it handles square by square (capsule, which
+/// does not classify cells at once).
+fn random_shape(rng: &mut ChaCha8Rng, grid: &Grid) -> Box<dyn Shape> {
+    let e = grid.extent();
+    let size = e.max - e.min;
+    let mut point = || e.min - size * 0.1 + size * 1.2 * DVec2::new(rng.random(), rng.random());
+    let (p, q) = (point(), point());
+    let r = size.max_element() * rng.random_range(0.02..0.4);
+    match rng.random_range(0..4) {
+        0 => Box::new(Disc { center: p, radius: r }),
+        1 => Box::new(Aabb {
+            min: p.min(q),
+            max: p.max(q),
+        }),
+        2 => Box::new(Clipped {
+            shape: Disc { center: p, radius: r },
+            clip: Aabb {
+                min: p.min(q),
+                max: p.max(q),
+            },
+        }),
+        _ => Box::new(Capsule {
+            a: p,
+            b: q,
+            radius: r * 0.2,
+        }),
+    }
+}
+
+fn leaves(t: &RegionQuadtree) -> Vec<(Square, bool)> {
+    let mut out = Vec::new();
+    t.for_each_leaf(|sq, v| out.push((sq, v)));
+    out
+}
+
+fn cells_of(squares: &[Square]) -> BTreeSet<(u32, u32)> {
+    let mut out = BTreeSet::new();
+    for sq in squares {
+        for y in sq.y..sq.y + sq.side_cells() {
+            for x in sq.x..sq.x + sq.side_cells() {
+                assert!(out.insert((x, y)), "cell ({x}, {y}) reported twice");
+            }
+        }
+    }
+    out
+}
+
+fn assert_same(packed: &RegionQuadtree, twin: &RegionQuadtree, what: &str) {
+    packed.assert_well_formed();
+    twin.assert_well_formed();
+    assert!(!twin.packed);
+    assert_eq!(leaves(packed), leaves(twin), "{what}: leaves");
+    assert_eq!(packed.leaf_count(), twin.leaf_count(), "{what}: leaf count");
+    assert_eq!(packed.leaf_count(), leaves(packed).len(), "{what}: counted leaves");
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    packed.encode_preorder(&mut a);
+    twin.encode_preorder(&mut b);
+    assert_eq!(a, b, "{what}: encoding");
+}
+
+fn random_tree(rng: &mut ChaCha8Rng, grid: Grid) -> RegionQuadtree {
+    let density = rng.random_range(0.0..1.0);
+    let clumpy = rng.random_bool(0.5);
+    RegionQuadtree::from_fn(grid, rng.random(), |x, y| {
+        if clumpy {
+            (x / 5 + y / 3) % 3 == 0
+        } else {
+            rng.random_bool(density)
+        }
+    })
+}
+
+#[test]
+fn issue11_packed_trees_are_the_unpacked_tree() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0xB10C);
+    for case in 0..120 {
+        let (w, h) = (rng.random_range(1..70), rng.random_range(1..70));
+        let origin = DVec2::new(rng.random_range(-20.0..20.0), rng.random_range(-20.0..20.0));
+        let grid = Grid::new(origin, rng.random_range(0.1..3.0), w, h).unwrap();
+        let mut packed = random_tree(&mut rng, grid);
+        let mut twin = packed.unpacked();
+        assert_eq!(packed.packed, grid.depth() >= 3);
+        assert_same(&packed, &twin, &format!("case {case}: built"));
+        let mut bytes = Vec::new();
+        packed.encode_preorder(&mut bytes);
+        let decoded = RegionQuadtree::decode_preorder(grid, &bytes, packed.encoded_node_count()).unwrap();
+        assert_eq!(decoded.packed, packed.packed);
+        assert_same(&decoded, &twin, &format!("case {case}: decoded"));
+
+        for step in 0..12 {
+            let what = format!("case {case} step {step}");
+            let shape = random_shape(&mut rng, &grid);
+            if rng.random_bool(0.25) {
+                let other = random_tree(&mut rng, grid);
+                let added = packed.union_counting(&other);
+                assert_eq!(added, twin.union_counting(&other.unpacked()), "{what}: union count");
+                assert_same(&packed, &twin, &format!("{what}: union"));
+                continue;
+            }
+            if rng.random_bool(0.2) {
+                // A moving view, as known maps mark it: what the last view wholly covered
+                // is known already, so squares inside it may be skipped either way.
+                let b = shape.bounds();
+                let (center, radius) = ((b.min + b.max) * 0.5, (b.max - b.min).min_element() * 0.5);
+                let seen = Disc {
+                    center: center + DVec2::new(radius * 0.1, 0.0),
+                    radius,
+                };
+                let view = DiscBeyond {
+                    disc: Disc { center, radius },
+                    seen: Some(seen),
+                };
+                for t in [&mut packed, &mut twin] {
+                    t.fill(&seen, true, PartialCells::Exclude);
+                }
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                packed.fill_reporting(&view, true, PartialCells::Exclude, |sq| a.push(sq));
+                twin.fill_reporting(&view, true, PartialCells::Exclude, |sq| b.push(sq));
+                assert_eq!(cells_of(&a), cells_of(&b), "{what}: cells a moving view adds");
+                assert_same(&packed, &twin, &format!("{what}: moving view"));
+                continue;
+            }
+            let value = rng.random_bool(0.6);
+            let partial = if rng.random_bool(0.5) {
+                PartialCells::Include
+            } else {
+                PartialCells::Exclude
+            };
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            packed.fill_reporting(&&*shape, value, partial, |sq| a.push(sq));
+            twin.fill_reporting(&&*shape, value, partial, |sq| b.push(sq));
+            assert_eq!(cells_of(&a), cells_of(&b), "{what}: changed cells");
+            assert_same(&packed, &twin, &format!("{what}: fill"));
+
+            // Queries: the same leaves in the same order, the same answers.
+            let probe = random_shape(&mut rng, &grid);
+            let v = rng.random_bool(0.5);
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            let _ = packed.visit_leaves_in(&&*probe, v, |sq, _| {
+                a.push(sq);
+                ControlFlow::Continue(())
+            });
+            let _ = twin.visit_leaves_in(&&*probe, v, |sq, _| {
+                b.push(sq);
+                ControlFlow::Continue(())
+            });
+            if probe
+                .classify_cells(&packed.block_cells(Square { x: 0, y: 0, level: 3 }))
+                .is_none()
+            {
+                // Shapes walked square by square keep the order exactly (nearest-point
+                // searches break ties by it).
+                assert_eq!(a, b, "{what}: visit order");
+            }
+            let key = |sq: &Square| (sq.x, sq.y, sq.level);
+            let (sorted_a, sorted_b): (BTreeSet<_>, BTreeSet<_>) =
+                (a.iter().map(key).collect(), b.iter().map(key).collect());
+            assert_eq!(a.len(), sorted_a.len(), "{what}: a leaf visited twice");
+            assert_eq!(sorted_a, sorted_b, "{what}: visited leaves");
+            assert_eq!(packed.count_cells_where(true, &twin, false), 0, "{what}");
+            assert_eq!(packed.count_cells(true), twin.count_cells(true), "{what}");
+            let (x, y) = (rng.random_range(0..w), rng.random_range(0..h));
+            assert_eq!(packed.cell_value(x, y), twin.cell_value(x, y), "{what}");
+            let dir = DVec2::from_angle(rng.random_range(0.0..std::f64::consts::TAU));
+            let o = grid.extent().min + (grid.extent().max - grid.extent().min) * rng.random::<f64>();
+            assert_eq!(
+                packed.first_hit(o, dir, 50.0, v),
+                twin.first_hit(o, dir, 50.0, v),
+                "{what}"
+            );
+        }
+        packed.compact();
+        assert_same(&packed, &twin, &format!("case {case}: compacted"));
+    }
+}
