@@ -151,18 +151,20 @@ pub(crate) fn untag(sq: Square) -> (Square, bool) {
 }
 
 /// Fixed-capacity traversal stack: a depth-first walk never holds more than three pending
-/// siblings per level plus the current node, so no query allocates.
-pub(crate) struct Stack {
-    items: [(Node, Square); 4 * MAX_DEPTH as usize + 4],
+/// siblings per level plus the current node, so no query allocates. Entries are node
+/// references in the hot walks (16 bytes an entry: the stack is zeroed on every query).
+pub(crate) struct Stack<T> {
+    items: [(T, Square); 4 * MAX_DEPTH as usize + 4],
     len: usize,
 }
 
-impl Stack {
+impl<T: Copy> Stack<T> {
+    /// A stack holding `root` at the root square of a tree of `depth`; `zero` fills the
+    /// unused slots.
     #[inline]
-    pub(crate) fn new(root: Node, depth: u8) -> Self {
-        let zero = (Node::Leaf(false), Square { x: 0, y: 0, level: 0 });
+    pub(crate) fn new(zero: T, root: T, depth: u8) -> Self {
         let mut s = Self {
-            items: [zero; 4 * MAX_DEPTH as usize + 4],
+            items: [(zero, Square { x: 0, y: 0, level: 0 }); 4 * MAX_DEPTH as usize + 4],
             len: 0,
         };
         s.push(
@@ -176,12 +178,12 @@ impl Stack {
         s
     }
     #[inline]
-    pub(crate) fn push(&mut self, n: Node, sq: Square) {
+    pub(crate) fn push(&mut self, n: T, sq: Square) {
         self.items[self.len] = (n, sq);
         self.len += 1;
     }
     #[inline]
-    pub(crate) fn pop(&mut self) -> Option<(Node, Square)> {
+    pub(crate) fn pop(&mut self) -> Option<(T, Square)> {
         if self.len == 0 {
             None
         } else {

@@ -25,58 +25,116 @@ impl RegionQuadtree {
         mut visit: impl FnMut(Square, Aabb) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
         let root = self.root_square();
-        let root_node = self.node(self.root);
-        let Some(inside) = self.classify_node(shape, root_node, value, root) else {
+        let Some(inside) = self.classify_node(shape, self.node(self.root), value, root) else {
             return ControlFlow::Continue(());
         };
         // Stack entries carry "wholly inside the shape" in the level's top bit: below such a
         // node every wanted leaf is reported without further tests.
-        let mut stack = Stack::new(root_node, tag(root.level, inside));
+        let mut stack = Stack::new(super::EMPTY, self.root, tag(root.level, inside));
         while let Some((n, tagged)) = stack.pop() {
             let (sq, inside) = untag(tagged);
-            if let Node::Leaf(_) = n {
+            if is_leaf(n) {
                 visit(sq, self.grid.square(sq.x, sq.y, sq.level))?;
                 continue;
             }
-            if let Node::Bits {
-                bits,
-                level: BLOCK_LEVEL,
-            } = n
-            {
-                // A whole block: classify its 64 cells at once if the shape can, then find
-                // the leaves to visit with word operations (they come in Z order).
-                let hits = if inside {
-                    Some(u64::MAX)
-                } else {
-                    shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
-                };
-                if let Some(hits) = hits {
-                    self.visit_block(if value { bits } else { !bits }, sq, hits, &mut visit)?;
-                    continue;
+            if is_block(n) {
+                self.visit_in_block(shape, self.bits_of(n, BLOCK_LEVEL), sq, value, inside, &mut visit)?;
+                continue;
+            }
+            let kids = *self.children(n);
+            // Leaf or not is in the reference: no block is loaded before it is descended into.
+            let leaves = kids.map(|k| is_leaf(k).then_some(k == super::FULL));
+            let descend = self.visit_step(shape, leaves, sq, value, inside, &mut visit)?;
+            // Pushed in reverse so they pop in SW, SE, NW, NE order.
+            for i in (0..4).rev() {
+                if let Some(inside) = descend[i] {
+                    stack.push(kids[i], tag_square(sq.child(i), inside));
                 }
             }
-            let kids = self.kids(n);
-            // Leaf children are visited at once (no stack round trip); internal ones are
-            // pushed in reverse so they pop in SW, SE, NW, NE order.
-            for i in (0..4).rev() {
-                let (k, csq) = (kids[i], sq.child(i));
-                if let Node::Leaf(v) = k {
-                    if v == value {
-                        let b = self.grid.square(csq.x, csq.y, csq.level);
-                        // A leaf needs only the cheap half of the test.
-                        if inside || shape.intersects(&b) {
-                            visit(csq, b)?;
-                        }
-                    }
-                } else if inside {
-                    stack.push(k, tag_square(csq, true));
-                } else {
-                    match shape.classify(&self.grid.square(csq.x, csq.y, csq.level)) {
-                        Overlap::Disjoint => {}
-                        Overlap::Partial => stack.push(k, tag_square(csq, false)),
-                        Overlap::Contains => stack.push(k, tag_square(csq, true)),
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// One node of [`visit_leaves_in`](Self::visit_leaves_in)'s walk, given the value of
+    /// each child that is a leaf: visit its leaf children of the wanted value that overlap
+    /// the shape (at once, in reverse order, no stack round trip), then classify the
+    /// others, all before any is descended into: `Some(inside)` for each child to descend
+    /// into.
+    #[inline]
+    fn visit_step<S: Shape>(
+        &self,
+        shape: &S,
+        leaves: [Option<bool>; 4],
+        sq: Square,
+        value: bool,
+        inside: bool,
+        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<(), [Option<bool>; 4]> {
+        let mut descend = [None; 4];
+        for i in (0..4).rev() {
+            let csq = sq.child(i);
+            if let Some(v) = leaves[i] {
+                if v == value {
+                    let b = self.grid.square(csq.x, csq.y, csq.level);
+                    // A leaf needs only the cheap half of the test.
+                    if inside || shape.intersects(&b) {
+                        visit(csq, b)?;
                     }
                 }
+            } else if inside {
+                descend[i] = Some(true);
+            } else {
+                descend[i] = match shape.classify(&self.grid.square(csq.x, csq.y, csq.level)) {
+                    Overlap::Disjoint => None,
+                    Overlap::Partial => Some(false),
+                    Overlap::Contains => Some(true),
+                };
+            }
+        }
+        ControlFlow::Continue(descend)
+    }
+
+    /// [`visit_leaves_in`](Self::visit_leaves_in) below a block at `sq`: with the shape's
+    /// cell masks if it has them (leaves found by word operations, in Z order), else the
+    /// same walk as above the block, on its bits.
+    fn visit_in_block<S: Shape>(
+        &self,
+        shape: &S,
+        bits: u64,
+        sq: Square,
+        value: bool,
+        inside: bool,
+        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let hits = if inside {
+            Some(u64::MAX)
+        } else {
+            shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
+        };
+        match hits {
+            Some(hits) => self.visit_block(if value { bits } else { !bits }, sq, hits, visit),
+            None => self.visit_bits(shape, bits, sq, value, inside, visit),
+        }
+    }
+
+    /// The walk of [`visit_leaves_in`](Self::visit_leaves_in) below a mixed square `bits`
+    /// at `sq` (≤ [`BLOCK_LEVEL`]), in the same order (recursion visits subtrees in the
+    /// order the stack pops them).
+    fn visit_bits<S: Shape>(
+        &self,
+        shape: &S,
+        bits: u64,
+        sq: Square,
+        value: bool,
+        inside: bool,
+        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let kids = block::kids(bits, sq.level);
+        let leaves = kids.map(|k| if let Node::Leaf(v) = k { Some(v) } else { None });
+        let descend = self.visit_step(shape, leaves, sq, value, inside, visit)?;
+        for i in 0..4 {
+            if let (Some(inside), Node::Bits { bits, .. }) = (descend[i], kids[i]) {
+                self.visit_bits(shape, bits, sq.child(i), value, inside, visit)?;
             }
         }
         ControlFlow::Continue(())
@@ -162,7 +220,7 @@ impl RegionQuadtree {
     /// such a leaf hits at 0.
     pub fn first_hit(&self, origin: DVec2, dir: DVec2, max_dist: f64, value: bool) -> Option<f64> {
         let mut best = f64::INFINITY;
-        let mut stack = Stack::new(self.node(self.root), self.grid.depth());
+        let mut stack = Stack::new(Node::Leaf(false), self.node(self.root), self.grid.depth());
         while let Some((n, sq)) = stack.pop() {
             if matches!(n, Node::Leaf(v) if v != value) {
                 continue;
@@ -190,7 +248,7 @@ impl RegionQuadtree {
 
     /// Visit every leaf with its square and value.
     pub fn for_each_leaf(&self, mut visit: impl FnMut(Square, bool)) {
-        let mut stack = Stack::new(self.node(self.root), self.grid.depth());
+        let mut stack = Stack::new(Node::Leaf(false), self.node(self.root), self.grid.depth());
         while let Some((n, sq)) = stack.pop() {
             if let Node::Leaf(v) = n {
                 visit(sq, v);
