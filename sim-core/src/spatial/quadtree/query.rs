@@ -38,7 +38,7 @@ impl RegionQuadtree {
                 continue;
             }
             if is_block(n) {
-                self.visit_in_block(shape, self.bits_of(n, BLOCK_LEVEL), sq, value, inside, &mut visit)?;
+                self.visit_bits(shape, self.bits_of(n, BLOCK_LEVEL), sq, value, inside, &mut visit)?;
                 continue;
             }
             let kids = *self.children(n);
@@ -94,31 +94,10 @@ impl RegionQuadtree {
         ControlFlow::Continue(descend)
     }
 
-    /// [`visit_leaves_in`](Self::visit_leaves_in) below a block at `sq`: with the shape's
-    /// cell masks if it has them (leaves found by word operations, in Z order), else the
-    /// same walk as above the block, on its bits.
-    fn visit_in_block<S: Shape>(
-        &self,
-        shape: &S,
-        bits: u64,
-        sq: Square,
-        value: bool,
-        inside: bool,
-        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
-    ) -> ControlFlow<()> {
-        let hits = if inside {
-            Some(u64::MAX)
-        } else {
-            shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
-        };
-        match hits {
-            Some(hits) => self.visit_block(if value { bits } else { !bits }, sq, hits, visit),
-            None => self.visit_bits(shape, bits, sq, value, inside, visit),
-        }
-    }
-
-    /// The walk of [`visit_leaves_in`](Self::visit_leaves_in) below a mixed square `bits`
-    /// at `sq` (≤ [`BLOCK_LEVEL`]), in the same order (recursion visits subtrees in the
+    /// [`visit_leaves_in`](Self::visit_leaves_in) below a mixed square `bits` at `sq`
+    /// (≤ [`BLOCK_LEVEL`]). A whole block, with a shape that classifies its cells at once:
+    /// the leaves come from word operations, in Z order. Otherwise the walk above the
+    /// block goes on over its bits, in the same order (recursion visits subtrees in the
     /// order the stack pops them).
     fn visit_bits<S: Shape>(
         &self,
@@ -129,6 +108,16 @@ impl RegionQuadtree {
         inside: bool,
         visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
+        if sq.level == BLOCK_LEVEL {
+            let hits = if inside {
+                Some(u64::MAX)
+            } else {
+                shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
+            };
+            if let Some(hits) = hits {
+                return self.visit_block(if value { bits } else { !bits }, sq, hits, visit);
+            }
+        }
         let kids = block::kids(bits, sq.level);
         let leaves = kids.map(|k| if let Node::Leaf(v) = k { Some(v) } else { None });
         let descend = self.visit_step(shape, leaves, sq, value, inside, visit)?;
