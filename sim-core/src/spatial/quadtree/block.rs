@@ -61,6 +61,14 @@ pub(crate) fn child_bits(bits: u64, level: u8, i: usize) -> u64 {
     (bits >> (i as u32 * child_cells(level))) & low_bits(level - 1)
 }
 
+/// The cells of a square at `level` ≥ 1 from its children's: `kid(i)` gives child `i`'s
+/// cells (low bits), asked in order 0, 1, 2, 3.
+#[inline]
+pub(crate) fn join_kids(level: u8, mut kid: impl FnMut(usize) -> u64) -> u64 {
+    let shift = child_cells(level);
+    (0..4).fold(0, |acc, i| acc | kid(i) << (i as u32 * shift))
+}
+
 /// Child `i` of the mixed square `bits` at `level`.
 #[inline]
 pub(crate) fn kid(bits: u64, level: u8, i: usize) -> Node {

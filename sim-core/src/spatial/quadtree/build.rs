@@ -151,9 +151,6 @@ impl RegionQuadtree {
                 Region::Mixed => {}
             }
         }
-        let shift = block::child_cells(sq.level);
-        (0..4).fold(0, |acc, i| {
-            acc | self.build_bits(sq.child(i), padding, classify) << (i as u32 * shift)
-        })
+        block::join_kids(sq.level, |i| self.build_bits(sq.child(i), padding, classify))
     }
 }

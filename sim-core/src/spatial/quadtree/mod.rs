@@ -12,8 +12,10 @@
 //! instead of up to 21 groups of four references. The quadtree below a block is still
 //! there, implicit in the bits: a 4 × 4 or 2 × 2 run of equal bits is a leaf. Queries see
 //! it through [`Node`], so they walk one tree whatever its storage; updates and unions act
-//! on a block with a few word operations. The result is the same canonical tree, leaves and
-//! visiting order as before, in a fraction of the memory (a group is 16 bytes, a block 8).
+//! on a block with a few word operations. The result is the same canonical tree and leaves
+//! as before, in a fraction of the memory (a group is 16 bytes, a block 8); only the order
+//! in which a query reports a block's leaves may differ (see
+//! [`RegionQuadtree::visit_leaves_in`]).
 //!
 //! Split by operation: `build` (from rasters, predicates and region classifiers), `query`
 //! (shape visitors, ray casting, areas), `update` (fill, union), `validate`, `codec` (the
@@ -289,7 +291,7 @@ impl RegionQuadtree {
             return n;
         }
         if is_block(n) {
-            blocks.push(self.blocks[(n - BLOCK_TAG) as usize]);
+            blocks.push(self.block_bits(n));
             return BLOCK_TAG + (blocks.len() - 1) as NodeRef;
         }
         let c = self.groups[n as usize];
@@ -313,6 +315,12 @@ impl RegionQuadtree {
         }
     }
 
+    /// The cells of block `n`.
+    #[inline]
+    fn block_bits(&self, n: NodeRef) -> u64 {
+        self.blocks[(n - BLOCK_TAG) as usize]
+    }
+
     /// The cells of a node at [`BLOCK_LEVEL`] or below as bits (see [`block`]), whatever
     /// its storage: a leaf, a block, or (in unpacked trees) groups.
     pub(crate) fn bits_of(&self, n: NodeRef, level: u8) -> u64 {
@@ -320,11 +328,10 @@ impl RegionQuadtree {
         match n {
             EMPTY => 0,
             FULL => block::low_bits(level),
-            b if is_block(b) => self.blocks[(b - BLOCK_TAG) as usize],
+            b if is_block(b) => self.block_bits(b),
             g => {
                 let kids = self.groups[g as usize];
-                let shift = block::child_cells(level);
-                (0..4).fold(0, |acc, i| acc | self.bits_of(kids[i], level - 1) << (i as u32 * shift))
+                block::join_kids(level, |i| self.bits_of(kids[i], level - 1))
             }
         }
     }
@@ -378,7 +385,7 @@ impl RegionQuadtree {
             EMPTY => Node::Leaf(false),
             FULL => Node::Leaf(true),
             b if is_block(b) => Node::Bits {
-                bits: self.blocks[(b - BLOCK_TAG) as usize],
+                bits: self.block_bits(b),
                 level: BLOCK_LEVEL,
             },
             g => Node::Group(g),
@@ -411,9 +418,8 @@ impl RegionQuadtree {
             return;
         }
         if is_block(n) {
-            let i = n - BLOCK_TAG;
-            self.block_internal -= internal_nodes_in(self.blocks[i as usize]);
-            self.free_blocks.push(i);
+            self.block_internal -= internal_nodes_in(self.block_bits(n));
+            self.free_blocks.push(n - BLOCK_TAG);
             return;
         }
         let kids = self.groups[n as usize];

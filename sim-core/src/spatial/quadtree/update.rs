@@ -157,13 +157,10 @@ impl RegionQuadtree {
                 self.report_node(Node::from_bits(bits, sq.level), sq, value, changed);
                 target
             }
-            Overlap::Partial => {
-                let shift = block::child_cells(sq.level);
-                (0..4).fold(0, |acc, i| {
-                    let kid = block::child_bits(bits, sq.level, i);
-                    acc | self.fill_bits(kid, sq.child(i), shape, value, partial, changed) << (i as u32 * shift)
-                })
-            }
+            Overlap::Partial => block::join_kids(sq.level, |i| {
+                let kid = block::child_bits(bits, sq.level, i);
+                self.fill_bits(kid, sq.child(i), shape, value, partial, changed)
+            }),
         }
     }
 
