@@ -19,6 +19,8 @@ pub enum Retention {
 
 /// No slot (end of the list).
 const NIL: u32 = u32::MAX;
+/// The `older` link of a forgotten slot, so that a scan of the slab can skip it.
+const FREED: u32 = u32::MAX - 1;
 
 /// One remembered item, a link in the list from oldest to newest sighting.
 #[derive(Clone, Debug)]
@@ -93,6 +95,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
     pub fn forget(&mut self, key: K) {
         if let Some(i) = self.index.remove(&key) {
             self.unlink(i);
+            self.slots[i as usize].older = FREED;
             self.free.push(i);
         }
     }
@@ -163,6 +166,15 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         })
     }
 
+    /// Whether any remembered item satisfies `pred`, in no particular order.
+    ///
+    /// A scan of the slab, not a walk of the list: a few times faster on long lists (no
+    /// dependent loads), for checks that usually fail, such as "is any remembered treasure
+    /// in view" every round.
+    pub fn any(&self, mut pred: impl FnMut(&T) -> bool) -> bool {
+        self.slots.iter().any(|s| s.older != FREED && pred(&s.item))
+    }
+
     /// The live item of a key.
     pub fn get(&self, key: K) -> Option<&T> {
         self.index.get(&key).map(|&i| &self.slots[i as usize].item)
@@ -190,6 +202,9 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         assert_eq!(prev, self.newest, "newest end");
         assert_eq!(seen, self.index.len(), "listed vs indexed items");
         assert_eq!(self.slots.len(), seen + self.free.len(), "slots leaked");
+        for &f in &self.free {
+            assert_eq!(self.slots[f as usize].older, FREED, "free slot {f} not marked");
+        }
         if let Retention::LastN(n) = self.retention {
             assert!(self.index.len() <= n, "more than {n} kept");
         }
@@ -274,6 +289,8 @@ mod tests {
                 let want: Vec<_> = model.iter().map(|e| (e.1, e.2)).collect();
                 assert_eq!(got, want, "seed {seed}, step {step}");
                 assert_eq!(list.get(key).copied(), model.iter().find(|e| e.0 == key).map(|e| e.1));
+                let odd = |v: &u32| v % 2 == 1;
+                assert_eq!(list.any(odd), model.iter().any(|e| odd(&e.1)), "seed {seed}, step {step}");
             }
         }
     }

@@ -97,19 +97,25 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
         perception.treasures.sort_by_key(|t| t.id);
         // Remembered treasures that should be in view but are not have been emptied: record
         // that as a fresh sighting, so older hearsay cannot bring them back.
-        let emptied: Vec<Sighting> = data
-            .treasures
-            .iter()
-            .filter(|(s, _)| s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure))
-            .map(|(s, _)| Sighting {
-                buried: 0,
-                loose: 0,
-                round,
-                ..*s
-            })
-            .collect();
-        for s in emptied {
-            data.treasures.record(s.treasure, s, round);
+        // The first test scans the slab and usually fails; the walk keeps the list's order.
+        let emptied = |s: &Sighting| {
+            s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure)
+        };
+        if data.treasures.any(emptied) {
+            let emptied: Vec<Sighting> = data
+                .treasures
+                .iter()
+                .filter(|(s, _)| emptied(s))
+                .map(|(s, _)| Sighting {
+                    buried: 0,
+                    loose: 0,
+                    round,
+                    ..*s
+                })
+                .collect();
+            for s in emptied {
+                data.treasures.record(s.treasure, s, round);
+            }
         }
         for t in &perception.treasures {
             let s = Sighting {
