@@ -476,6 +476,40 @@ proptest! {
 }
 
 proptest! {
+    #![proptest_config(config(96))]
+
+    #[test]
+    fn squares_holding_a_value_cover_exactly_the_coarse_cells_that_hold_it(w in world_strategy()) {
+        let tree = RegionQuadtree::from_bitgrid(w.grid, &w.bits, true).unwrap();
+        let n = w.grid.side_cells();
+        for value in [false, true] {
+            for min_level in 0..=w.grid.depth() {
+                let side = 1u32 << min_level;
+                let mut covered = BTreeSet::new();
+                tree.for_each_square_holding(value, min_level, |sq| {
+                    assert!(sq.level >= min_level, "{sq:?} finer than level {min_level}");
+                    let k = 1u32 << (sq.level - min_level);
+                    for y in 0..k {
+                        for x in 0..k {
+                            assert!(covered.insert(((sq.x >> min_level) + x, (sq.y >> min_level) + y)), "overlap at {sq:?}");
+                        }
+                    }
+                });
+                let mut want = BTreeSet::new();
+                for cy in 0..n {
+                    for cx in 0..n {
+                        if w.blocked(cx, cy) == value {
+                            want.insert((cx / side, cy / side));
+                        }
+                    }
+                }
+                prop_assert_eq!(&covered, &want, "value {} level {}", value, min_level);
+            }
+        }
+    }
+}
+
+proptest! {
     #![proptest_config(config(512))]
 
     /// Issue 11: the packed bottom trusts `classify_cells` to agree with `classify` on

@@ -123,6 +123,10 @@ pub struct RunArgs {
     /// 0 turns it off.
     #[arg(long, value_name = "K", default_value_t = 20)]
     pub known_every: u64,
+    /// Swarms of at most N robots get one known-region entity per robot; larger ones one per
+    /// robot type (each box carrying its robot's id).
+    #[arg(long, value_name = "N", default_value_t = crate::rerun_observer::DEFAULT_KNOWN_PER_ROBOT_MAX)]
+    pub known_per_robot_max: usize,
     /// Re-log the collective explored region every K rounds.
     #[arg(long, value_name = "K", default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
     pub explored_every: u64,
@@ -167,6 +171,7 @@ impl RunArgs {
                 explored_every: self.explored_every.max(1),
                 known_every: (self.known_every > 0).then_some(self.known_every),
                 max_links: self.max_links,
+                known_per_robot_max: self.known_per_robot_max,
             },
             progress: !self.quiet && std::io::stderr().is_terminal(),
         })

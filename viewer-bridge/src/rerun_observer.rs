@@ -11,7 +11,8 @@
 //! | `world/robots` | robots (class id = type) + detail columns `type`, `energy`, `alive`, `action`, `outcome`, `goal_x`/`goal_y`, `load`, `x`/`y` (world coordinates) | logged rounds |
 //! | `world/paths`, `world/links` | planned paths; message links of the round (an even sample of at most `max_links`) | logged rounds |
 //! | `world/explored` | collective explored region (raster) | every `explored_every` logged rounds |
-//! | `world/known/<id>` | one robot's known region, coarse | every `known_every` rounds, if its coarse region changed |
+//! | `world/known/<id>` | one robot's known region, coarse (swarms of at most `known_per_robot_max` robots) | every `known_every` rounds, if its coarse region changed |
+//! | `world/known/<type>` | the known regions of all robots of a type, each box with its `robot` (larger swarms) | every `known_every` rounds, if one of them changed |
 //! | `world3d/…` | ground, obstacle boxes with heights, robots on the plane | static / logged rounds |
 //! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`metric_entities`]) | every round |
 //! | `events` | `TextLog` of the round's events | every round with events |
@@ -46,6 +47,12 @@ const CHARTED: usize = METRICS_COUNT - 1;
 /// recording grows by ~20 bytes a line (20,000 links were half of a 1,000-robot recording).
 pub const DEFAULT_MAX_LINKS: usize = 5_000;
 
+/// Default of [`LogOptions::known_per_robot_max`]. Beyond a hundred robots a list of
+/// per-robot entities is no longer something to click through, and each entity costs Rerun a
+/// chunk with its own schema (≈ 2 KB) whenever it is logged: 10,000 per-robot regions made a
+/// recording 2.6 times larger and its writer thread the largest cost of the run.
+pub const DEFAULT_KNOWN_PER_ROBOT_MAX: usize = 100;
+
 /// World frames that may wait for the logging thread before the simulation waits (or, for a
 /// live viewer, skips a round's world).
 pub const QUEUE_ROUNDS: usize = 4;
@@ -65,6 +72,10 @@ pub struct LogOptions {
     /// Most communication links drawn a round: an even sample of the round's distinct
     /// sender–receiver pairs (the `messages` chart keeps the full count).
     pub max_links: usize,
+    /// Swarms of at most this many robots log each robot's known region as its own entity
+    /// (`world/known/<id>`, to toggle one by one); larger ones log one entity per robot type
+    /// (`world/known/<type>`), whose boxes carry the robot's id in a `robot` column.
+    pub known_per_robot_max: usize,
 }
 
 impl Default for LogOptions {
@@ -74,6 +85,7 @@ impl Default for LogOptions {
             explored_every: 10,
             known_every: Some(20),
             max_links: DEFAULT_MAX_LINKS,
+            known_per_robot_max: DEFAULT_KNOWN_PER_ROBOT_MAX,
         }
     }
 }
@@ -164,6 +176,7 @@ impl RerunObserver {
                 explored_every: opts.explored_every.max(1),
                 known_every: opts.known_every.map(|k| k.max(1)),
                 max_links: opts.max_links,
+                known_per_robot_max: opts.known_per_robot_max,
             },
             when_behind: WhenBehind::Wait,
             frames: None,
@@ -285,30 +298,13 @@ impl RerunObserver {
         } else {
             None
         };
-        let mut known = Vec::new();
-        if let Some(every) = self.opts.known_every
-            && (final_round || self.last_known_round.is_none_or(|r| round >= r + every))
-        {
-            self.last_known_round = Some(round);
-            for robot in sim.robots() {
-                let i = robot.id.index();
-                if !self.known_dirty.get(i).copied().unwrap_or(false) {
-                    continue;
-                }
-                self.known_dirty[i] = false;
-                if let Some(map) = sim.known_map(robot.id) {
-                    let boxes = layers::coarse_known_boxes(map.tree());
-                    if self.known_logged[i] != boxes {
-                        self.known_logged[i].clone_from(&boxes);
-                        known.push(KnownRegion {
-                            robot: robot.id.get(),
-                            class: class_of(sim, robot.type_index, true),
-                            boxes,
-                        });
-                    }
-                }
+        let known = match self.opts.known_every {
+            Some(every) if final_round || self.last_known_round.is_none_or(|r| round >= r + every) => {
+                self.last_known_round = Some(round);
+                self.changed_known_regions(sim)
             }
-        }
+            _ => Vec::new(),
+        };
         World {
             robots,
             treasures,
@@ -318,6 +314,53 @@ impl RerunObserver {
             known,
             cell_m: sim.obstacles().grid().cell_m(),
         }
+    }
+
+    /// The known regions to log: those of dirty robots whose coarse region changed, as an
+    /// entity each or, in large swarms, as the whole region set of each type with a change.
+    fn changed_known_regions(&mut self, sim: &Simulation) -> Vec<KnownRegion> {
+        let per_robot = sim.robots().len() <= self.opts.known_per_robot_max;
+        let mut known = Vec::new();
+        let mut type_changed = vec![false; sim.types().len()];
+        for robot in sim.robots() {
+            let i = robot.id.index();
+            if !self.known_dirty.get(i).copied().unwrap_or(false) {
+                continue;
+            }
+            self.known_dirty[i] = false;
+            let Some(map) = sim.known_map(robot.id) else { continue };
+            let boxes = layers::coarse_known_boxes(map.tree());
+            if self.known_logged[i] == boxes {
+                continue;
+            }
+            self.known_logged[i].clone_from(&boxes);
+            if per_robot {
+                known.push(KnownRegion {
+                    entity: format!("world/known/{}", robot.id.get()).into(),
+                    class: class_of(sim, robot.type_index, true),
+                    boxes,
+                    robots: Vec::new(),
+                });
+            } else {
+                type_changed[robot.type_index] = true;
+            }
+        }
+        for (t, kind) in sim.types().iter().enumerate().filter(|&(t, _)| type_changed[t]) {
+            let mut boxes = Vec::new();
+            let mut robots = Vec::new();
+            for robot in sim.robots().iter().filter(|r| r.type_index == t) {
+                let region = &self.known_logged[robot.id.index()];
+                boxes.extend_from_slice(region);
+                robots.extend(std::iter::repeat_n(robot.id.get(), region.len()));
+            }
+            known.push(KnownRegion {
+                entity: rerun::EntityPath::new(vec!["world".into(), "known".into(), kind.name.as_str().into()]),
+                class: class_of(sim, t, true),
+                boxes,
+                robots,
+            });
+        }
+        known
     }
 
     /// Hand `frame` to the logging thread, waiting or leaving its world out when the thread
@@ -415,9 +458,11 @@ struct TreasureRow {
 }
 
 struct KnownRegion {
-    robot: u32,
+    entity: rerun::EntityPath,
     class: u16,
     boxes: Vec<Aabb>,
+    /// The robot of each box (empty for a per-robot entity).
+    robots: Vec<u32>,
 }
 
 /// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
@@ -518,13 +563,7 @@ fn log_frames(
                 )?;
             }
             for region in &world.known {
-                rec.log(
-                    format!("world/known/{}", region.robot),
-                    &layers::boxes_2d(&region.boxes)
-                        .with_class_ids([region.class])
-                        .with_show_labels(false)
-                        .with_draw_order(draw_order::KNOWN),
-                )?;
+                log_known_region(rec, region)?;
             }
         }
         busy += t0.elapsed();
@@ -619,6 +658,23 @@ fn log_robots(
             .with_class_ids(classes)
             .with_show_labels(false),
     )
+}
+
+fn log_known_region(rec: &rerun::RecordingStream, region: &KnownRegion) -> rerun::RecordingStreamResult<()> {
+    use rerun::external::arrow::array::{ArrayRef, UInt32Array};
+
+    let boxes = layers::boxes_2d(&region.boxes)
+        .with_class_ids([region.class])
+        .with_show_labels(false)
+        .with_draw_order(draw_order::KNOWN);
+    if region.robots.is_empty() {
+        return rec.log(region.entity.clone(), &boxes);
+    }
+    let owners = rerun::AnyValues::default().with_component_from_data(
+        "robot",
+        std::sync::Arc::new(UInt32Array::from(region.robots.clone())) as ArrayRef,
+    );
+    rec.log(region.entity.clone(), &[&boxes as &dyn rerun::AsComponents, &owners])
 }
 
 fn log_treasures(

@@ -138,6 +138,57 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
     rrd_verify(&python, &rrd);
 }
 
+/// Beyond `--known-per-robot-max` robots, known regions are one entity per robot type, each
+/// box tagged with its robot: the demo's 12 scouts (ids 0–11), 4 excavators, 4 transporters.
+#[test]
+fn known_regions_of_a_large_swarm_are_one_entity_per_type() {
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("demo.rrd");
+    let rounds = 20;
+    run_demo(
+        dir.path(),
+        rounds,
+        &[
+            "--known-every",
+            "10",
+            "--known-per-robot-max",
+            "5",
+            "--rrd",
+            rrd.to_str().unwrap(),
+        ],
+    );
+    let s = summarise(&python, &rrd);
+    let known: Vec<&str> = s["rounds"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .filter(|k| k.starts_with("/world/known/"))
+        .map(String::as_str)
+        .collect();
+    assert_eq!(
+        known,
+        [
+            "/world/known/excavator",
+            "/world/known/scout",
+            "/world/known/transporter"
+        ],
+        "one entity per type"
+    );
+    let owners = |entity: &str| -> Vec<u64> {
+        s["owners"][entity]
+            .as_array()
+            .unwrap_or_else(|| panic!("no robot column on {entity}"))
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect()
+    };
+    assert_eq!(owners("/world/known/scout"), (0..12).collect::<Vec<_>>());
+    assert_eq!(owners("/world/known/excavator"), (12..16).collect::<Vec<_>>());
+    assert_eq!(owners("/world/known/transporter"), (16..20).collect::<Vec<_>>());
+    rrd_verify(&python, &rrd);
+}
+
 /// The static layers once each; the world state at round 0 and every 4th round up to the last;
 /// the explored layer thinned; one known-region entity per robot.
 fn check_layers(s: &Value, rounds: u64) {

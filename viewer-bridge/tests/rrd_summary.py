@@ -7,6 +7,7 @@ Used by viewer-bridge/tests/rerun_rrd.rs. Output:
   instances: {"<entity>": {"<round>": instances}}      (world/robots, world/treasures)
   robots:  {"round": last round, "<column>": values}    (/world/robots detail columns and
                                                         2D positions at its last round)
+  owners:  {"<entity>": sorted distinct `robot` values}  (entities with a `robot` column)
 """
 
 import json
@@ -22,6 +23,7 @@ def main(path: str) -> None:
     scalars: dict[str, dict[str, float]] = defaultdict(dict)
     instances: dict[str, dict[str, int]] = defaultdict(dict)
     robots: dict = {"round": -1}
+    owners: dict[str, set[int]] = defaultdict(set)
     for chunk in RrdReader(path).stream():
         entity = str(chunk.entity_path)
         static = bool(chunk.is_static)
@@ -45,6 +47,9 @@ def main(path: str) -> None:
             values = batch.column(names.index(pos_cols[0])).to_pylist()
             for r, v in zip(rs, values):
                 instances[entity][str(r)] = len(v or [])
+        if "robot" in names:
+            for v in batch.column(names.index("robot")).to_pylist():
+                owners[entity].update(int(x) for x in (v or []))
         if entity == "/world/robots":
             for i, r in enumerate(rs):
                 if r > robots["round"]:
@@ -59,6 +64,7 @@ def main(path: str) -> None:
             "scalars": scalars,
             "instances": instances,
             "robots": robots,
+            "owners": {e: sorted(o) for e, o in owners.items()},
         },
         sys.stdout,
     )

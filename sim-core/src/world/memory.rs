@@ -290,7 +290,11 @@ mod tests {
                 assert_eq!(got, want, "seed {seed}, step {step}");
                 assert_eq!(list.get(key).copied(), model.iter().find(|e| e.0 == key).map(|e| e.1));
                 let odd = |v: &u32| v % 2 == 1;
-                assert_eq!(list.any(odd), model.iter().any(|e| odd(&e.1)), "seed {seed}, step {step}");
+                assert_eq!(
+                    list.any(odd),
+                    model.iter().any(|e| odd(&e.1)),
+                    "seed {seed}, step {step}"
+                );
             }
         }
     }

@@ -98,9 +98,8 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
         // Remembered treasures that should be in view but are not have been emptied: record
         // that as a fresh sighting, so older hearsay cannot bring them back.
         // The first test scans the slab and usually fails; the walk keeps the list's order.
-        let emptied = |s: &Sighting| {
-            s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure)
-        };
+        let emptied =
+            |s: &Sighting| s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure);
         if data.treasures.any(emptied) {
             let emptied: Vec<Sighting> = data
                 .treasures

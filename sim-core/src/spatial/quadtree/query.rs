@@ -250,6 +250,31 @@ impl RegionQuadtree {
         }
     }
 
+    /// Visit the squares holding any cell of `value`, looking no finer than `min_level`:
+    /// leaves of that value above `min_level`, and each square at `min_level` that holds it at
+    /// least once. Disjoint squares, in Z order; the cost is the nodes above `min_level`, so
+    /// a coarse view of a fine tree (a viewer's overview of a known map) skips its detail.
+    pub fn for_each_square_holding(&self, value: bool, min_level: u8, mut visit: impl FnMut(Square)) {
+        let mut stack = Stack::new(Node::Leaf(false), self.node(self.root), self.grid.depth());
+        while let Some((n, sq)) = stack.pop() {
+            match n {
+                Node::Leaf(v) => {
+                    if v == value {
+                        visit(sq);
+                    }
+                }
+                // An internal node is mixed: it holds both values.
+                _ if sq.level <= min_level => visit(sq),
+                _ => {
+                    let kids = self.kids(n);
+                    for i in (0..4).rev() {
+                        stack.push(kids[i], sq.child(i));
+                    }
+                }
+            }
+        }
+    }
+
     /// Number of leaves holding `value`.
     pub fn count_leaves(&self, value: bool) -> usize {
         let mut count = 0;
