@@ -234,6 +234,11 @@ fn check_layers(s: &Value, rounds: u64) {
             "robots at {r}"
         );
     }
+    // Columns are logged again only when they change: positions every logged round, the
+    // robots' types (fixed) once.
+    let column_rows = |name: &str| s["robot_column_rows"][name].as_u64();
+    assert_eq!(column_rows("x"), Some(logged.len() as u64));
+    assert_eq!(column_rows("type"), Some(1));
     let explored = rounds_of(s, "world/explored");
     assert_eq!(explored.first(), Some(&0));
     assert_eq!(explored.last(), Some(&rounds));

@@ -6,8 +6,10 @@ Used by viewer-bridge/tests/rerun_rrd.rs. Output:
   scalars: {"<entity>": {"<round>": value}}             (entities with a Scalars column)
   instances: {"<entity>": {"<round>": instances}}      (world/robots, world/treasures)
   robots:  {"round": last round, "<column>": values}    (/world/robots detail columns and
-                                                        2D positions at its last round)
+                                                        2D positions at its last round,
+                                                        each at its latest value)
   owners:  {"<entity>": sorted distinct `robot` values}  (entities with a `robot` column)
+  robot_column_rows: {"<column>": rows of /world/robots that log it}
 """
 
 import json
@@ -24,6 +26,8 @@ def main(path: str) -> None:
     instances: dict[str, dict[str, int]] = defaultdict(dict)
     robots: dict = {"round": -1}
     owners: dict[str, set[int]] = defaultdict(set)
+    latest: dict[str, tuple[int, object]] = {}
+    logged_rows: dict[str, int] = defaultdict(int)
     for chunk in RrdReader(path).stream():
         entity = str(chunk.entity_path)
         static = bool(chunk.is_static)
@@ -51,12 +55,16 @@ def main(path: str) -> None:
             for v in batch.column(names.index("robot")).to_pylist():
                 owners[entity].update(int(x) for x in (v or []))
         if entity == "/world/robots":
-            for i, r in enumerate(rs):
-                if r > robots["round"]:
-                    robots = {"round": int(r)}
-                    for name in names:
-                        if name not in ("rerun.controls.RowId", "round"):
-                            robots[name] = batch.column(names.index(name))[i].as_py()
+            # Latest-at, as the viewer shows it: columns that did not change are not re-logged.
+            for name in names:
+                if name in ("rerun.controls.RowId", "round"):
+                    continue
+                for r, v in zip(rs, batch.column(names.index(name)).to_pylist()):
+                    logged_rows[name] += v is not None
+                    if v is not None and r >= latest.get(name, (-1, None))[0]:
+                        latest[name] = (int(r), v)
+                robots["round"] = max(robots["round"], max(int(r) for r in rs))
+    robots.update({name: v for name, (_, v) in latest.items()})
     json.dump(
         {
             "rows": rows,
@@ -65,6 +73,7 @@ def main(path: str) -> None:
             "instances": instances,
             "robots": robots,
             "owners": {e: sorted(o) for e, o in owners.items()},
+            "robot_column_rows": logged_rows,
         },
         sys.stdout,
     )
