@@ -444,3 +444,52 @@ fn team_groups_form_and_follow_their_leader() {
     );
     assert!(sim.report().metrics.explored_fraction > 0.1);
 }
+
+/// Issue 11: the collective explored map is marked on another thread while step 3 runs.
+/// The round that completes the map still reports `MapExplored` once, and the free area
+/// the robots are credited with adds up to the map's (every free cell credited once).
+#[test]
+fn issue11_map_explored_once_and_every_free_cell_credited_once() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 24, 24).unwrap();
+    let obstacles = ObstacleMap::from_fn(grid, |x, y| x == 12 && y < 18);
+    let free_m2 = (24 * 24 - 18) as f64;
+    let map = Arc::new(MapData {
+        obstacles,
+        home: HomeBase::Disc {
+            center: DVec2::new(3.5, 3.5),
+            radius_m: 2.0,
+        },
+        treasures: Vec::new(),
+    });
+    let registry = StrategyRegistry::with_builtins();
+    let mut sim = new_sim(
+        scenario(
+            map,
+            5,
+            400,
+            vec![
+                (3, RobotType::explorer(), "cooperative"),
+                (2, RobotType::explorer(), "random_walk"),
+            ],
+        ),
+        &registry,
+    )
+    .unwrap();
+    let mut explored_in = Vec::new();
+    while sim.round() < 400 {
+        let report = sim.step();
+        let n = report
+            .events
+            .iter()
+            .filter(|e| matches!(e, sim_core::world::Event::MapExplored))
+            .count();
+        if n > 0 {
+            assert_eq!(n, 1);
+            assert_eq!(report.metrics.explored_fraction, 1.0, "round {}", report.round);
+            explored_in.push(report.round);
+        }
+    }
+    assert_eq!(explored_in.len(), 1, "MapExplored in rounds {explored_in:?}");
+    let credited: f64 = sim.robots().iter().map(|r| r.stats.explored_m2).sum();
+    assert!((credited - free_m2).abs() < 1e-6, "credited {credited} m² of {free_m2}");
+}

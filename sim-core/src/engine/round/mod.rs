@@ -7,6 +7,7 @@
 //! 3. **Resolve** (sequential, by robot id): the physical unit charges energy and refuses or
 //!    trims what is illegal (speed, energy, obstacles, other robots, abilities, capacity),
 //!    then applies the rest; messages are addressed to whoever was in range at send time.
+//!    Meanwhile another thread marks the views of step 1 in the collective explored map.
 //! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
 //!
 //! Randomness comes from generators seeded by (run seed, robot, round), and every shared
@@ -16,6 +17,8 @@ mod decide;
 mod explored;
 mod perceive;
 mod resolve;
+
+use explored::ExploredUpdate;
 
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
 
@@ -38,11 +41,15 @@ impl Simulation {
         self.deliver_messages();
         self.perceive_and_decide(round);
         self.record_discoveries(round);
-        self.update_explored();
-        // 3: resolve, in id order.
+        // 3: resolve, in id order, while another thread marks the collective explored map
+        // (it reads only the start of the round).
         self.start_positions.clear();
         self.start_positions.extend(self.robots.iter().map(|r| r.position));
-        let (messages, bytes) = self.resolve(round);
+        let mut explored = ExploredUpdate::take(self);
+        let event_at = self.report.events.len();
+        let map = std::sync::Arc::clone(&self.map);
+        let ((), (messages, bytes)) = rayon::join(|| explored.run(&map.obstacles), || self.resolve(round));
+        explored.finish(self, event_at);
         if self.radio_limited {
             self.deliver_within_budget();
         }
