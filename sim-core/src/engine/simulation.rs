@@ -31,6 +31,30 @@ pub(super) struct Agent {
     /// first to explore (what it knew before was seen, by it or another, in an earlier
     /// round), so the collective map is updated from these instead of from its view disc.
     pub(super) new_squares: Vec<Square>,
+    /// This round's move with obstacles already accounted for, worked out in parallel in
+    /// step 2 (see [`PlannedMove`]).
+    pub(super) planned_move: Option<PlannedMove>,
+}
+
+/// A move's obstacle test done ahead of step 3: the robot standing at `from` moving by `d`
+/// (already trimmed to speed and energy) with a body of `radius_m` gets as far as `free`
+/// before an obstacle. It depends on nothing another robot does, so step 2 works it out in
+/// parallel; step 3 uses it only if its own `from`, `d` and radius are exactly these.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct PlannedMove {
+    pub(super) from: DVec2,
+    pub(super) d: DVec2,
+    pub(super) radius_m: f64,
+    pub(super) free: DVec2,
+}
+
+impl PlannedMove {
+    /// Whether this plan was made for exactly these inputs (bit for bit, so that using it
+    /// can never change a result).
+    pub(super) fn is_for(&self, from: DVec2, d: DVec2, radius_m: f64) -> bool {
+        let bits = |v: DVec2| (v.x.to_bits(), v.y.to_bits());
+        bits(self.from) == bits(from) && bits(self.d) == bits(d) && self.radius_m.to_bits() == radius_m.to_bits()
+    }
 }
 
 /// A message sent this round, before budgeted delivery.
@@ -142,6 +166,7 @@ impl Simulation {
                     known_changed: false,
                     merged_from: HashMap::default(),
                     new_squares: Vec::new(),
+                    planned_move: None,
                 });
             }
         }

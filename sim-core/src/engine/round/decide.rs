@@ -4,9 +4,11 @@
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
+use super::resolve::{move_within_means, trim_to_obstacles};
 use crate::agent::{Ctx, WorldView};
-use crate::engine::simulation::Simulation;
-use crate::world::Action;
+use crate::engine::simulation::{Agent, PlannedMove, Simulation};
+use crate::spatial::ObstacleMap;
+use crate::world::{Action, Robot, RobotType};
 
 impl Simulation {
     /// Steps 1 and 2, in parallel over robots.
@@ -20,12 +22,14 @@ impl Simulation {
         };
         let seed = self.seed;
         let types = &self.types;
+        let obstacles = &self.map.obstacles;
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter())
             .for_each(|(agent, robot)| {
                 agent.mind.output.begin_round();
                 agent.known_changed = false;
+                agent.planned_move = None;
                 if !robot.alive {
                     agent.action = Action::Idle;
                     return;
@@ -35,6 +39,37 @@ impl Simulation {
                 let rng = Simulation::rng_for(seed, robot.id, round);
                 let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
                 agent.action = agent.strategy.decide(&mut ctx);
+                agent.planned_move = plan_move(agent, robot, kind, obstacles);
             });
     }
+}
+
+/// The obstacle test of this round's move, if it is one, done here in parallel rather than
+/// in the sequential step 3: with the energy step 3 will leave the robot before it moves
+/// (upkeep is charged first), the same trim to speed and energy, the same bisection.
+fn plan_move(agent: &Agent, robot: &Robot, kind: &RobotType, obstacles: &ObstacleMap) -> Option<PlannedMove> {
+    let Action::MoveTo { to } = agent.action else {
+        return None;
+    };
+    let from = robot.position;
+    let wanted = (to - from).length();
+    if !wanted.is_finite() || wanted == 0.0 {
+        return None;
+    }
+    let sense = if agent.needs.senses() {
+        kind.energy_per_sense
+    } else {
+        0.0
+    };
+    let energy = robot.energy - (kind.energy_idle + sense).min(robot.energy);
+    if energy <= 1e-12 {
+        return None;
+    }
+    let d = move_within_means(from, to, kind, energy);
+    Some(PlannedMove {
+        from,
+        d,
+        radius_m: kind.radius_m,
+        free: trim_to_obstacles(obstacles, from, d, kind.radius_m),
+    })
 }

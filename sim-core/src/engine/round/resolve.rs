@@ -9,7 +9,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::engine::simulation::{Outgoing, Simulation};
-use crate::spatial::{RobotId, RobotIndex, TreasureId};
+use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId};
 use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
 
 impl Simulation {
@@ -154,33 +154,18 @@ impl Simulation {
     /// A move, trimmed to speed, energy, obstacles and other robots, in that order.
     fn apply_move(&mut self, i: usize, kind: &RobotType, to: DVec2) -> Outcome {
         let from = self.robots[i].position;
-        let mut d = to - from;
-        let wanted = d.length();
+        let wanted = (to - from).length();
         if !wanted.is_finite() {
             return Outcome::Refused;
         }
         if wanted == 0.0 {
             return Outcome::Done;
         }
-        let mut len = wanted.min(kind.speed_m_per_round);
-        if kind.energy_per_m > 0.0 {
-            len = len.min(self.robots[i].energy / kind.energy_per_m);
-        }
-        d *= len / wanted;
-        let obstacles = &self.map.obstacles;
-        if !obstacles.is_swept_disc_free(from, from + d, kind.radius_m) {
-            // Largest free fraction of the segment, by bisection.
-            let (mut lo, mut hi) = (0.0, 1.0);
-            for _ in 0..24 {
-                let mid = 0.5 * (lo + hi);
-                if obstacles.is_swept_disc_free(from, from + d * mid, kind.radius_m) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            d *= lo;
-        }
+        let d = move_within_means(from, to, kind, self.robots[i].energy);
+        let d = match self.agents[i].planned_move.take() {
+            Some(p) if p.is_for(from, d, kind.radius_m) => p.free,
+            _ => trim_to_obstacles(&self.map.obstacles, from, d, kind.radius_m),
+        };
         // Other robots: halve the move until the end position overlaps nobody. Who could be
         // in the way is asked of the index once for the whole move, not once per halving.
         let mut near = std::mem::take(&mut self.near_scratch);
@@ -383,4 +368,35 @@ impl Simulation {
         self.outgoing = outgoing;
         self.outgoing.clear();
     }
+}
+
+/// The move from `from` towards `to` trimmed to the robot's speed and to what `energy`
+/// pays for. `to` must differ from `from` and be finite.
+pub(super) fn move_within_means(from: DVec2, to: DVec2, kind: &RobotType, energy: f64) -> DVec2 {
+    let mut d = to - from;
+    let wanted = d.length();
+    let mut len = wanted.min(kind.speed_m_per_round);
+    if kind.energy_per_m > 0.0 {
+        len = len.min(energy / kind.energy_per_m);
+    }
+    d *= len / wanted;
+    d
+}
+
+/// The part of move `d` from `from` that a disc of `radius_m` sweeps free of obstacles: all
+/// of it, or the largest free fraction found by bisection.
+pub(super) fn trim_to_obstacles(obstacles: &ObstacleMap, from: DVec2, d: DVec2, radius_m: f64) -> DVec2 {
+    if obstacles.is_swept_disc_free(from, from + d, radius_m) {
+        return d;
+    }
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if obstacles.is_swept_disc_free(from, from + d * mid, radius_m) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    d * lo
 }
