@@ -223,6 +223,33 @@ proptest! {
         }
     }
 
+    /// Issue 11: the free fraction of a blocked move is exactly what a 24-step bisection on
+    /// the swept-disc test finds (robots' moves are trimmed with it).
+    #[test]
+    fn swept_disc_free_fraction_is_the_bisections(w in world_strategy(), seed in any::<u64>()) {
+        let map = w.map();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for _ in 0..20 {
+            let a = w.random_point(&mut rng);
+            let d = match rng.random_range(0..3) {
+                0 => w.random_point(&mut rng) - a,
+                1 => DVec2::new(rng.random_range(-2.0..2.0), 0.0) * w.grid.cell_m(),
+                _ => DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * w.grid.cell_m(),
+            };
+            let r = if rng.random_bool(0.2) { 0.0 } else { rng.random_range(0.0..0.6) * w.grid.cell_m() };
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..24 {
+                let mid = 0.5 * (lo + hi);
+                if map.is_swept_disc_free(a, a + d * mid, r) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            prop_assert_eq!(map.swept_disc_free_fraction(a, d, r).to_bits(), f64::to_bits(lo), "from {:?} by {:?} r {}", a, d, r);
+        }
+    }
+
     #[test]
     fn fill_matches_a_raster_and_stays_canonical(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -518,7 +545,7 @@ proptest! {
     fn classify_cells_agrees_with_classify_cell_by_cell(
         seed in any::<u64>(),
         cell_m in 0.05f64..5.0,
-        kind in 0usize..5,
+        kind in 0usize..7,
     ) {
         use sim_core::spatial::{BlockCells, CellMasks, Clipped, DiscBeyond};
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -540,6 +567,9 @@ proptest! {
             0 | 4 => Box::new(disc),
             1 => Box::new(Aabb { min: p.min(q), max: p.max(q) }),
             2 => Box::new(DiscBeyond { disc, seen: Some(Disc { center: q, radius: r }) }),
+            // A robot's move (short, a small radius) and a segment.
+            5 => Box::new(Capsule { a: p, b: p + (q - p) * 0.1, radius: r * 0.2 }),
+            6 => Box::new(Capsule { a: snapped, b: q, radius: 0.0 }),
             _ => Box::new(Clipped { shape: disc, clip: Aabb { min: p.min(q), max: p.max(q) } }),
         };
         let got = shape.classify_cells(&cells).expect("this shape classifies cells at once");

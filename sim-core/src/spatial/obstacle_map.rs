@@ -9,7 +9,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use crate::Result;
-use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line};
+use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_box_distance_squared};
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
@@ -122,6 +122,66 @@ impl ObstacleMap {
     /// overlapping an obstacle or leaving the map (the test behind every robot move).
     pub fn is_swept_disc_free(&self, a: DVec2, b: DVec2, radius_m: f64) -> bool {
         self.shape_free(&Capsule { a, b, radius: radius_m })
+    }
+
+    /// How far along move `d` from `from` a disc of `radius_m` gets before an obstacle or the
+    /// map's edge, as a fraction of `d`: the value a 24-step bisection on
+    /// [`is_swept_disc_free`](Self::is_swept_disc_free) finds (the largest fraction it proved
+    /// free), for a move that is not free as a whole.
+    ///
+    /// The result is exactly that bisection's, but faster: the blocked leaves near the whole
+    /// move are gathered once, each step is decided against them, and a step whose nearest
+    /// leaf is too close to call either way is decided by the exact test. A robot walking into
+    /// a wall used to pay for 25 quadtree walks (a third of the dense random walk's time).
+    pub fn swept_disc_free_fraction(&self, from: DVec2, d: DVec2, radius_m: f64) -> f64 {
+        let exact = |t: f64| self.is_swept_disc_free(from, from + d * t, radius_m);
+        let mut near: Vec<Aabb> = Vec::new();
+        let quick = radius_m > 0.0 && {
+            // Slightly wider than any step's capsule, so no leaf a step could meet is missed
+            // (a step's capsule lies inside the whole move's).
+            let reach = Capsule {
+                a: from,
+                b: from + d,
+                radius: radius_m * (1.0 + 1e-6) + 1e-9,
+            };
+            let _ = self.tree.visit_leaves_in(&reach, true, |_, b| {
+                near.push(b);
+                ControlFlow::Continue(())
+            });
+            true
+        };
+        let r2 = radius_m * radius_m;
+        // Distances this far from the radius decide a step whatever rounding the exact test's
+        // own box and distance arithmetic does.
+        let (clearly_hit, clearly_clear) = (r2 * (1.0 - 1e-7), r2 * (1.0 + 1e-7));
+        let free = |t: f64| {
+            if !quick {
+                return exact(t);
+            }
+            let b = from + d * t;
+            let capsule = Capsule { a: from, b, radius: radius_m };
+            if !self.grid().extent().contains_box(&capsule.bounds()) {
+                return false;
+            }
+            let mut nearest = f64::INFINITY;
+            for bx in &near {
+                nearest = nearest.min(segment_box_distance_squared(from, b, bx));
+                if nearest < clearly_hit {
+                    return false;
+                }
+            }
+            nearest > clearly_clear || exact(t)
+        };
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..24 {
+            let mid = 0.5 * (lo + hi);
+            if free(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
     }
 
     fn shape_free<S: Shape>(&self, shape: &S) -> bool {

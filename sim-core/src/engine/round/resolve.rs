@@ -389,14 +389,5 @@ pub(super) fn trim_to_obstacles(obstacles: &ObstacleMap, from: DVec2, d: DVec2, 
     if obstacles.is_swept_disc_free(from, from + d, radius_m) {
         return d;
     }
-    let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..24 {
-        let mid = 0.5 * (lo + hi);
-        if obstacles.is_swept_disc_free(from, from + d * mid, radius_m) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    d * lo
+    d * obstacles.swept_disc_free_fraction(from, d, radius_m)
 }

@@ -165,18 +165,25 @@ impl<T: Copy> Stack<T> {
     /// unused slots.
     #[inline]
     pub(crate) fn new(zero: T, root: T, depth: u8) -> Self {
-        let mut s = Self {
-            items: [(zero, Square { x: 0, y: 0, level: 0 }); 4 * MAX_DEPTH as usize + 4],
-            len: 0,
-        };
-        s.push(
+        Self::starting_at(
+            zero,
             root,
             Square {
                 x: 0,
                 y: 0,
                 level: depth,
             },
-        );
+        )
+    }
+
+    /// A stack holding node `n` of square `sq` (a walk that starts below the root).
+    #[inline]
+    pub(crate) fn starting_at(zero: T, n: T, sq: Square) -> Self {
+        let mut s = Self {
+            items: [(zero, Square { x: 0, y: 0, level: 0 }); 4 * MAX_DEPTH as usize + 4],
+            len: 0,
+        };
+        s.push(n, sq);
         s
     }
     #[inline]

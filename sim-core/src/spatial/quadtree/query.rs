@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use super::block::{self, BLOCK_LEVEL, Node};
-use super::{RegionQuadtree, Square, Stack, is_block, is_leaf, tag, tag_square, untag};
+use super::{NodeRef, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Overlap, Shape, clip_line};
 
 impl RegionQuadtree {
@@ -24,13 +24,13 @@ impl RegionQuadtree {
         value: bool,
         mut visit: impl FnMut(Square, Aabb) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
-        let root = self.root_square();
-        let Some(inside) = self.classify_node(shape, self.node(self.root), value, root) else {
+        let (start, root) = self.start_node(&shape.bounds());
+        let Some(inside) = self.classify_node(shape, self.node(start), value, root) else {
             return ControlFlow::Continue(());
         };
         // Stack entries carry "wholly inside the shape" in the level's top bit: below such a
         // node every wanted leaf is reported without further tests.
-        let mut stack = Stack::new(super::EMPTY, self.root, tag(root.level, inside));
+        let mut stack = Stack::starting_at(super::EMPTY, start, tag_square(root, inside));
         while let Some((n, tagged)) = stack.pop() {
             let (sq, inside) = untag(tagged);
             if is_leaf(n) {
@@ -156,6 +156,39 @@ impl RegionQuadtree {
             visit(leaf, self.grid.square(leaf.x, leaf.y, level))?;
         }
         ControlFlow::Continue(())
+    }
+
+    /// The deepest node (and its square) whose square holds `bounds` with room to spare, so
+    /// that no square outside it can meet a shape within those bounds: a walk for the shape
+    /// starts there, with the same leaves in the same order as from the root (every other
+    /// branch would be found disjoint), without classifying the levels above (issue 11: a
+    /// robot's move test classified ≈ 40 squares on its way down a 10-level tree). Stops at
+    /// leaves and blocks.
+    #[inline]
+    fn start_node(&self, bounds: &Aabb) -> (NodeRef, Square) {
+        let (mut n, mut sq) = (self.root, self.root_square());
+        let scale = bounds.min.abs().max_element().max(bounds.max.abs().max_element());
+        if !scale.is_finite() {
+            return (n, sq);
+        }
+        // Far more than any rounding in the shapes' box tests at these coordinates.
+        let eps = 1e-9 * (1.0 + scale);
+        while !is_leaf(n) && !is_block(n) {
+            let kids = self.children(n);
+            let holds = |c: Square| {
+                let b = self.grid.square(c.x, c.y, c.level);
+                b.min.x + eps < bounds.min.x
+                    && bounds.max.x < b.max.x - eps
+                    && b.min.y + eps < bounds.min.y
+                    && bounds.max.y < b.max.y - eps
+            };
+            let Some(i) = (0..4).find(|&i| holds(sq.child(i))) else {
+                break;
+            };
+            n = kids[i];
+            sq = sq.child(i);
+        }
+        (n, sq)
     }
 
     /// `None` if the node cannot hold a wanted leaf overlapping the shape, else whether it
