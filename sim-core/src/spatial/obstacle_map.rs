@@ -159,7 +159,11 @@ impl ObstacleMap {
                 return exact(t);
             }
             let b = from + d * t;
-            let capsule = Capsule { a: from, b, radius: radius_m };
+            let capsule = Capsule {
+                a: from,
+                b,
+                radius: radius_m,
+            };
             if !self.grid().extent().contains_box(&capsule.bounds()) {
                 return false;
             }

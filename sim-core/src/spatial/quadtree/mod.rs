@@ -36,7 +36,7 @@ pub use build::{BitGrid, Region};
 pub use components::Components;
 pub use update::PartialCells;
 
-use crate::spatial::geometry::BlockCells;
+use crate::spatial::geometry::{Aabb, BlockCells};
 use crate::spatial::grid::{Grid, MAX_DEPTH};
 use block::{BLOCK_LEVEL, Node, internal_nodes_in};
 
@@ -150,6 +150,59 @@ pub(crate) fn untag(sq: Square) -> (Square, bool) {
         },
         sq.level & FLAG != 0,
     )
+}
+
+/// A shape's bounds, for skipping the squares a shape cannot meet: a child square holding
+/// the bounds with room to spare is the only child the shape can overlap, its siblings being
+/// disjoint from it whatever the rounding of the shapes' box tests.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach {
+    bounds: Aabb,
+    /// The room to spare: far more than any rounding at these coordinates (infinite bounds
+    /// give NaN, and no square holds them).
+    eps: f64,
+}
+
+impl Reach {
+    pub(crate) fn new(bounds: Aabb) -> Self {
+        let scale = bounds.min.abs().max_element().max(bounds.max.abs().max_element());
+        Self {
+            bounds,
+            eps: 1e-9 * (1.0 + scale),
+        }
+    }
+
+    /// The child of `sq` that holds the bounds with room to spare, if one does.
+    #[inline]
+    pub(crate) fn child_holding(&self, grid: &Grid, sq: Square) -> Option<usize> {
+        if sq.level == 0 {
+            return None;
+        }
+        let (b, e) = (&self.bounds, self.eps);
+        let box_of = grid.square(sq.x, sq.y, sq.level);
+        let mid = (box_of.min + box_of.max) * 0.5;
+        // The child on the bounds' side of the middle, if they lie wholly on one side.
+        let east = if b.min.x > mid.x {
+            1
+        } else if b.max.x < mid.x {
+            0
+        } else {
+            return None;
+        };
+        let north = if b.min.y > mid.y {
+            2
+        } else if b.max.y < mid.y {
+            0
+        } else {
+            return None;
+        };
+        let i = east | north;
+        let c = sq.child(i);
+        let cb = grid.square(c.x, c.y, c.level);
+        let holds =
+            cb.min.x + e < b.min.x && b.max.x < cb.max.x - e && cb.min.y + e < b.min.y && b.max.y < cb.max.y - e;
+        holds.then_some(i)
+    }
 }
 
 /// Fixed-capacity traversal stack: a depth-first walk never holds more than three pending

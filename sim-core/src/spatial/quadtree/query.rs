@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use super::block::{self, BLOCK_LEVEL, Node};
-use super::{NodeRef, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
+use super::{NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Overlap, Shape, clip_line};
 
 impl RegionQuadtree {
@@ -158,34 +158,20 @@ impl RegionQuadtree {
         ControlFlow::Continue(())
     }
 
-    /// The deepest node (and its square) whose square holds `bounds` with room to spare, so
-    /// that no square outside it can meet a shape within those bounds: a walk for the shape
-    /// starts there, with the same leaves in the same order as from the root (every other
-    /// branch would be found disjoint), without classifying the levels above (issue 11: a
-    /// robot's move test classified ≈ 40 squares on its way down a 10-level tree). Stops at
-    /// leaves and blocks.
+    /// The deepest node (and its square) whose square holds `bounds` with room to spare (see
+    /// [`Reach`]): a walk for the shape starts there, with the same leaves in the same order
+    /// as from the root (every other branch would be found disjoint), without classifying
+    /// the levels above (issue 11: a robot's move test classified ≈ 40 squares on its way
+    /// down a 10-level tree). Stops at leaves and blocks.
     #[inline]
     fn start_node(&self, bounds: &Aabb) -> (NodeRef, Square) {
         let (mut n, mut sq) = (self.root, self.root_square());
-        let scale = bounds.min.abs().max_element().max(bounds.max.abs().max_element());
-        if !scale.is_finite() {
-            return (n, sq);
-        }
-        // Far more than any rounding in the shapes' box tests at these coordinates.
-        let eps = 1e-9 * (1.0 + scale);
+        let reach = Reach::new(*bounds);
         while !is_leaf(n) && !is_block(n) {
-            let kids = self.children(n);
-            let holds = |c: Square| {
-                let b = self.grid.square(c.x, c.y, c.level);
-                b.min.x + eps < bounds.min.x
-                    && bounds.max.x < b.max.x - eps
-                    && b.min.y + eps < bounds.min.y
-                    && bounds.max.y < b.max.y - eps
-            };
-            let Some(i) = (0..4).find(|&i| holds(sq.child(i))) else {
+            let Some(i) = reach.child_holding(&self.grid, sq) else {
                 break;
             };
-            n = kids[i];
+            n = self.children(n)[i];
             sq = sq.child(i);
         }
         (n, sq)
