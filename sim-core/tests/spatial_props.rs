@@ -67,6 +67,17 @@ impl World {
         ObstacleMap::from_bitgrid(self.grid, &self.bits).unwrap()
     }
 
+    /// A move between two points: long, short, or along a cell edge.
+    fn random_move(&self, rng: &mut ChaCha8Rng) -> (DVec2, DVec2) {
+        let a = self.random_point(rng);
+        let b = match rng.random_range(0..3) {
+            0 => self.random_point(rng),
+            1 => a + DVec2::new(rng.random_range(-2.0..2.0), 0.0) * self.grid.cell_m(),
+            _ => a + DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
+        };
+        (a, b)
+    }
+
     fn random_point(&self, rng: &mut ChaCha8Rng) -> DVec2 {
         let e = self.grid.extent();
         let pad = DVec2::splat(3.0 * self.grid.cell_m());
@@ -198,13 +209,7 @@ proptest! {
         let map = w.map();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         for _ in 0..20 {
-            let a = w.random_point(&mut rng);
-            // Short and long moves, axis-aligned ones along cell edges included.
-            let b = match rng.random_range(0..3) {
-                0 => w.random_point(&mut rng),
-                1 => a + DVec2::new(rng.random_range(-2.0..2.0), 0.0) * w.grid.cell_m(),
-                _ => a + DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)),
-            };
+            let (a, b) = w.random_move(&mut rng);
             let r = if rng.random_bool(0.3) { 0.0 } else { rng.random_range(0.0..2.0) * w.grid.cell_m() };
             let cap = Capsule { a, b, radius: r };
             prop_assert_eq!(cells_from_leaves(&map, &cap), brute_cells(&w, &cap));
@@ -230,12 +235,8 @@ proptest! {
         let map = w.map();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         for _ in 0..20 {
-            let a = w.random_point(&mut rng);
-            let d = match rng.random_range(0..3) {
-                0 => w.random_point(&mut rng) - a,
-                1 => DVec2::new(rng.random_range(-2.0..2.0), 0.0) * w.grid.cell_m(),
-                _ => DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * w.grid.cell_m(),
-            };
+            let (a, b) = w.random_move(&mut rng);
+            let d = b - a;
             let r = if rng.random_bool(0.2) { 0.0 } else { rng.random_range(0.0..0.6) * w.grid.cell_m() };
             let (mut lo, mut hi) = (0.0, 1.0);
             for _ in 0..24 {
