@@ -52,8 +52,10 @@ impl Explorer {
         None
     }
 
-    /// One step of frontier exploration; `avoid` are goals taken by others.
-    pub(super) fn explore(&mut self, ctx: &mut Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Action {
+    /// One step of frontier exploration; `avoid` gives the goals taken by others, asked for
+    /// only when a new target is chosen (in crowds they are hundreds, and most rounds keep
+    /// the target).
+    pub(super) fn explore(&mut self, ctx: &mut Ctx, avoid: impl FnOnce() -> Vec<DVec2>, avoid_radius_m: f64) -> Action {
         // Keep walking to a frontier target even once it is seen: the way on reveals more in
         // the same direction, and a new search only every few metres keeps planning cheap.
         // Re-plan on arrival, when the route is gone, or when the target was revealed from
@@ -64,7 +66,7 @@ impl Explorer {
             .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            if let Some(route) = Navigator::frontier_route(ctx, avoid, avoid_radius_m)
+            if let Some(route) = Navigator::frontier_route(ctx, &avoid(), avoid_radius_m)
                 .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
             {
                 self.target = route.waypoints.last().copied();

@@ -45,7 +45,6 @@ impl Strategy for Frontier {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        let mut avoid = Vec::new();
         let mut radius = 0.0;
         if let Some(share) = self.sharing {
             share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
@@ -66,12 +65,14 @@ impl Strategy for Frontier {
                 self.claims
                     .retain(|_, (g, heard)| round <= *heard + 50 && g.distance(p) <= near);
             }
-            avoid.extend(self.claims.values().map(|c| c.0));
         }
         if let Some(a) = self.core.reflexes(ctx) {
             return a;
         }
-        let action = self.core.explore(ctx, &avoid, radius);
+        let claims = &self.claims;
+        let action = self
+            .core
+            .explore(ctx, || claims.values().map(|c| c.0).collect(), radius);
         // Announce a goal only when it changes: claims stay cheap in crowds.
         if self.sharing.is_some() && ctx.goal() != self.announced {
             self.announced = ctx.goal();

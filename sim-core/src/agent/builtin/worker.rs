@@ -34,7 +34,7 @@ impl Worker {
             if !self.explorer.nav.go_to(ctx, to) {
                 self.explorer.nav.clear();
                 self.heading_to = None;
-                return self.explorer.explore(ctx, &[], 0.0);
+                return self.explorer.explore(ctx, Vec::new, 0.0);
             }
         }
         ctx.set_goal(Some(to));
@@ -84,7 +84,7 @@ impl Strategy for Excavator {
             return a;
         }
         let Some(t) = Worker::nearest(ctx, |s| s.buried > 0) else {
-            return self.core.explorer.explore(ctx, &[], 0.0);
+            return self.core.explorer.explore(ctx, Vec::new, 0.0);
         };
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
@@ -118,7 +118,7 @@ impl Strategy for Transporter {
             if load > 0 {
                 return self.core.go(ctx, ctx.home().center());
             }
-            return self.core.explorer.explore(ctx, &[], 0.0);
+            return self.core.explorer.explore(ctx, Vec::new, 0.0);
         };
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
