@@ -164,9 +164,12 @@ fn axis_distances(edges: &[f64; 9], c: f64) -> ([f64; 8], [f64; 8]) {
 fn cell_mask(along_x: &[f64; 8], along_y: &[f64; 8], test: impl Fn(f64, f64) -> bool) -> u64 {
     let mut mask = 0u64;
     for (j, &y) in along_y.iter().enumerate() {
+        // A row's eight tests into a byte first: the compiler makes them vector compares.
+        let mut row = 0u64;
         for (i, &x) in along_x.iter().enumerate() {
-            mask |= u64::from(test(x, y)) << (8 * j + i);
+            row |= u64::from(test(x, y)) << i;
         }
+        mask |= row << (8 * j);
     }
     mask
 }
