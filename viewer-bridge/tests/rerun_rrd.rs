@@ -98,6 +98,17 @@ fn rounds_of(summary: &Value, entity: &str) -> Vec<u64> {
         .collect()
 }
 
+/// The known-region entities of a summary, sorted.
+fn known_entities(summary: &Value) -> Vec<&str> {
+    summary["rounds"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .filter(|k| k.starts_with("/world/known/"))
+        .map(String::as_str)
+        .collect()
+}
+
 /// Metrics CSV → column → round → value.
 fn read_metrics(path: &Path) -> BTreeMap<String, BTreeMap<u64, f64>> {
     let mut r = csv::Reader::from_path(path).unwrap();
@@ -159,15 +170,8 @@ fn known_regions_of_a_large_swarm_are_one_entity_per_type() {
         ],
     );
     let s = summarise(&python, &rrd);
-    let known: Vec<&str> = s["rounds"]
-        .as_object()
-        .unwrap()
-        .keys()
-        .filter(|k| k.starts_with("/world/known/"))
-        .map(String::as_str)
-        .collect();
     assert_eq!(
-        known,
+        known_entities(&s),
         [
             "/world/known/excavator",
             "/world/known/scout",
@@ -243,12 +247,7 @@ fn check_layers(s: &Value, rounds: u64) {
     assert_eq!(explored.first(), Some(&0));
     assert_eq!(explored.last(), Some(&rounds));
     assert!(explored.len() < logged.len(), "explored is thinned: {explored:?}");
-    let known: Vec<&String> = s["rounds"]
-        .as_object()
-        .unwrap()
-        .keys()
-        .filter(|k| k.starts_with("/world/known/"))
-        .collect();
+    let known = known_entities(s);
     assert_eq!(known.len(), 20, "one known-region entity per robot: {known:?}");
 }
 
