@@ -48,6 +48,10 @@ impl RegionQuadtree {
         self.fill(&inner, value, PartialCells::Include)
     }
 
+    /// One node of a fill: the quick cases here, inlined into the parent's loop, so that
+    /// the children a shape misses (most of them on the way down) cost no call (issue 11:
+    /// the calls were most of marking a robot's view).
+    #[inline(always)]
     fn fill_node<S: Shape>(
         &mut self,
         n: NodeRef,
@@ -60,10 +64,27 @@ impl RegionQuadtree {
         if n == want {
             return n;
         }
-        if self.packs(sq.level) {
-            return self.fill_block(n, sq, shape, want == FULL, partial, changed);
-        }
         match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
+            Overlap::Disjoint => n,
+            overlap if self.packs(sq.level) => self.fill_block(n, sq, overlap, shape, want == FULL, partial, changed),
+            overlap => self.fill_overlapping(n, sq, overlap, shape, want, partial, changed),
+        }
+    }
+
+    /// [`fill_node`](Self::fill_node) on a node the shape overlaps (`overlap` is not
+    /// disjoint).
+    #[allow(clippy::too_many_arguments)] // one recursive step: the walk's state, not options
+    fn fill_overlapping<S: Shape>(
+        &mut self,
+        n: NodeRef,
+        sq: Square,
+        overlap: Overlap,
+        shape: &S,
+        want: NodeRef,
+        partial: PartialCells,
+        changed: &mut impl FnMut(Square),
+    ) -> NodeRef {
+        match overlap {
             Overlap::Disjoint => n,
             Overlap::Partial if sq.level == 0 => {
                 if partial == PartialCells::Include {
@@ -94,19 +115,22 @@ impl RegionQuadtree {
         }
     }
 
-    /// [`fill_node`](Self::fill_node) on node `n` at [`BLOCK_LEVEL`] (a leaf or a block):
-    /// one word operation when the shape classifies the 64 cells at once.
+    /// [`fill_node`](Self::fill_node) on node `n` at [`BLOCK_LEVEL`] (a leaf or a block)
+    /// that the shape overlaps as `overlap`: one word operation when the shape classifies
+    /// the 64 cells at once.
+    #[allow(clippy::too_many_arguments)] // one recursive step: the walk's state, not options
     fn fill_block<S: Shape>(
         &mut self,
         n: NodeRef,
         sq: Square,
+        overlap: Overlap,
         shape: &S,
         value: bool,
         partial: PartialCells,
         changed: &mut impl FnMut(Square),
     ) -> NodeRef {
         let bits = self.bits_of(n, BLOCK_LEVEL);
-        let filled = match shape.classify(&self.grid.square(sq.x, sq.y, sq.level)) {
+        let filled = match overlap {
             Overlap::Disjoint => return n,
             Overlap::Contains => {
                 self.report_node(self.node(n), sq, value, changed);
