@@ -251,6 +251,31 @@ proptest! {
         }
     }
 
+    /// Issue 11: setting a grid square by a descent along its coordinates is the fill of
+    /// its box: the same cells, the same canonical tree, the same changed cells reported.
+    #[test]
+    fn filling_a_square_is_filling_its_box(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut by_box = RegionQuadtree::from_bitgrid(w.grid, &w.bits, true).unwrap();
+        let mut by_square = by_box.clone();
+        let cells_of = |sq: Square| (0..1u32 << sq.level).flat_map(move |dy| (0..1u32 << sq.level).map(move |dx| (sq.x + dx, sq.y + dy)));
+        for step in 0..30 {
+            let level = rng.random_range(0..=w.grid.depth());
+            let side = 1u32 << level;
+            let n = w.grid.side_cells() / side;
+            let sq = Square { x: rng.random_range(0..n) * side, y: rng.random_range(0..n) * side, level };
+            let value = rng.random_bool(0.6);
+            let (mut a, mut b) = (BTreeSet::new(), BTreeSet::new());
+            by_box.fill_reporting(&w.grid.square(sq.x, sq.y, sq.level), value, PartialCells::Exclude, |r| a.extend(cells_of(r)));
+            by_square.fill_square_reporting(sq, value, |r| b.extend(cells_of(r)));
+            prop_assert_eq!(&a, &b, "step {} square {:?}", step, sq);
+            by_square.validate().unwrap();
+            prop_assert_eq!(by_box.leaf_count(), by_square.leaf_count());
+            let leaves = |t: &RegionQuadtree| { let mut v = Vec::new(); t.for_each_leaf(|q, x| v.push((q.x, q.y, q.level, x))); v };
+            prop_assert_eq!(leaves(&by_box), leaves(&by_square), "step {}", step);
+        }
+    }
+
     #[test]
     fn fill_matches_a_raster_and_stays_canonical(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

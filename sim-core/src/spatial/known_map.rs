@@ -99,6 +99,28 @@ impl KnownMap {
         self.known_cells > before
     }
 
+    /// Mark grid square `sq` known, reporting the squares that became known: what
+    /// [`mark_reporting`](Self::mark_reporting) does with the square's box, by one descent
+    /// along its coordinates (the square must lie inside the map; others take the general
+    /// path).
+    pub fn mark_square_reporting(
+        &mut self,
+        sq: crate::spatial::quadtree::Square,
+        mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
+    ) {
+        let square = self.grid().square(sq.x, sq.y, sq.level);
+        if !self.grid().extent().contains_box(&square) {
+            self.mark_reporting(&square, newly_known);
+            return;
+        }
+        let mut added = 0;
+        self.tree.fill_square_reporting(sq, true, |sq| {
+            added += sq.cells();
+            newly_known(sq);
+        });
+        self.known_cells += added;
+    }
+
     /// [`mark`](Self::mark), calling `newly_known` with the squares that became known.
     pub fn mark_reporting<S: Shape>(
         &mut self,

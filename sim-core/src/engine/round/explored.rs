@@ -80,8 +80,7 @@ impl ExploredUpdate {
                 // Only what its own map gained can be new to everyone (a descent per square
                 // instead of a walk along the view's rim).
                 for &sq in &self.new_squares[i] {
-                    let square = obstacles.grid().square(sq.x, sq.y, sq.level);
-                    self.explored.mark_reporting(&square, &mut count_free);
+                    self.explored.mark_square_reporting(sq, &mut count_free);
                 }
             } else {
                 // What lay wholly inside this robot's last view is explored already.
