@@ -16,6 +16,13 @@ pub struct Aabb {
 }
 
 impl Aabb {
+    /// A distance far larger than any rounding in box and distance arithmetic at this box's
+    /// coordinates: boxes farther apart than this are apart whatever the rounding.
+    pub(crate) fn rounding_margin(&self) -> f64 {
+        let scale = self.min.abs().max_element().max(self.max.abs().max_element());
+        1e-9 * (1.0 + scale)
+    }
+
     /// A box from its two corners (in any order).
     pub fn from_corners(a: DVec2, b: DVec2) -> Self {
         Self {
@@ -339,8 +346,7 @@ impl Shape for Capsule {
         let b = self.bounds();
         // A cell this far outside the bounds is farther than the radius from the axis
         // whatever the rounding, so `classify` would find it disjoint.
-        let scale = b.min.abs().max_element().max(b.max.abs().max_element());
-        let eps = 1e-9 * (1.0 + scale);
+        let eps = b.rounding_margin();
         let cols = axis_mask(&cells.xs, |lo, hi| hi >= b.min.x - eps && lo <= b.max.x + eps);
         let rows = axis_mask(&cells.ys, |lo, hi| hi >= b.min.y - eps && lo <= b.max.y + eps);
         let mut masks = CellMasks {

@@ -135,8 +135,10 @@ impl ObstacleMap {
     /// a wall used to pay for 25 quadtree walks (a third of the dense random walk's time).
     pub fn swept_disc_free_fraction(&self, from: DVec2, d: DVec2, radius_m: f64) -> f64 {
         let exact = |t: f64| self.is_swept_disc_free(from, from + d * t, radius_m);
+        // Segments (radius 0) are tested differently by the exact test: they take it always.
+        let quick = radius_m > 0.0;
         let mut near: Vec<Aabb> = Vec::new();
-        let quick = radius_m > 0.0 && {
+        if quick {
             // Slightly wider than any step's capsule, so no leaf a step could meet is missed
             // (a step's capsule lies inside the whole move's).
             let reach = Capsule {
@@ -148,8 +150,7 @@ impl ObstacleMap {
                 near.push(b);
                 ControlFlow::Continue(())
             });
-            true
-        };
+        }
         let r2 = radius_m * radius_m;
         // Distances this far from the radius decide a step whatever rounding the exact test's
         // own box and distance arithmetic does.
@@ -164,7 +165,7 @@ impl ObstacleMap {
                 b,
                 radius: radius_m,
             };
-            if !self.grid().extent().contains_box(&capsule.bounds()) {
+            if !self.inside_map(&capsule) {
                 return false;
             }
             let mut nearest = f64::INFINITY;
@@ -189,7 +190,13 @@ impl ObstacleMap {
     }
 
     fn shape_free<S: Shape>(&self, shape: &S) -> bool {
-        self.grid().extent().contains_box(&shape.bounds()) && !self.tree.any_leaf_in(shape, true)
+        self.inside_map(shape) && !self.tree.any_leaf_in(shape, true)
+    }
+
+    /// Whether `shape` stays inside the map's extent (the tree ends at its lower and left
+    /// edges, so this is tested apart from the blocked padding).
+    fn inside_map<S: Shape>(&self, shape: &S) -> bool {
+        self.grid().extent().contains_box(&shape.bounds())
     }
 
     /// Distance along the ray `origin + t·dir` (`dir` need not be normalised; distances are

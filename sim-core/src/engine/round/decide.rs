@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
-use super::resolve::{move_within_means, trim_to_obstacles};
+use super::resolve::{move_within_means, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::ObstacleMap;
@@ -56,12 +56,7 @@ fn plan_move(agent: &Agent, robot: &Robot, kind: &RobotType, obstacles: &Obstacl
     if !wanted.is_finite() || wanted == 0.0 {
         return None;
     }
-    let sense = if agent.needs.senses() {
-        kind.energy_per_sense
-    } else {
-        0.0
-    };
-    let energy = robot.energy - (kind.energy_idle + sense).min(robot.energy);
+    let energy = robot.energy - upkeep(kind, agent.needs).min(robot.energy);
     if energy <= 1e-12 {
         return None;
     }

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use glam::DVec2;
 use rayon::prelude::*;
 
+use crate::agent::Needs;
 use crate::engine::simulation::{Outgoing, Simulation};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId};
 use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
@@ -23,13 +24,7 @@ impl Simulation {
             let types = Arc::clone(&self.types);
             let kind = &types[self.robots[i].type_index];
             let action = self.agents[i].action;
-            // Living and sensing cost energy whatever the action.
-            let sense = if self.agents[i].needs.senses() {
-                kind.energy_per_sense
-            } else {
-                0.0
-            };
-            self.spend(i, kind.energy_idle + sense);
+            self.spend(i, upkeep(kind, self.agents[i].needs));
             let outcome = if self.robots[i].alive {
                 self.apply(i, kind, action)
             } else {
@@ -377,6 +372,13 @@ impl Simulation {
         self.outgoing = outgoing;
         self.outgoing.clear();
     }
+}
+
+/// Energy a live robot pays every round whatever it does: living, and sensing if its strategy
+/// perceives anything.
+pub(super) fn upkeep(kind: &RobotType, needs: Needs) -> f64 {
+    let sense = if needs.senses() { kind.energy_per_sense } else { 0.0 };
+    kind.energy_idle + sense
 }
 
 /// The move from `from` towards `to` trimmed to the robot's speed and to what `energy`

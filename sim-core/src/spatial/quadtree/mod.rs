@@ -165,10 +165,9 @@ pub(crate) struct Reach {
 
 impl Reach {
     pub(crate) fn new(bounds: Aabb) -> Self {
-        let scale = bounds.min.abs().max_element().max(bounds.max.abs().max_element());
         Self {
             bounds,
-            eps: 1e-9 * (1.0 + scale),
+            eps: bounds.rounding_margin(),
         }
     }
 

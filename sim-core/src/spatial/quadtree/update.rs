@@ -61,9 +61,7 @@ impl RegionQuadtree {
             return n;
         }
         if at.level == target.level {
-            self.report_leaves(n, at, want, changed);
-            self.release(n);
-            return want;
+            return self.replace_with_leaf(n, at, want, changed);
         }
         if self.packs(at.level) {
             // An aligned square's cells are consecutive in Z order.
@@ -146,11 +144,7 @@ impl RegionQuadtree {
                     n
                 }
             }
-            Overlap::Contains => {
-                self.report_leaves(n, sq, want, changed);
-                self.release(n);
-                want
-            }
+            Overlap::Contains => self.replace_with_leaf(n, sq, want, changed),
             Overlap::Partial => {
                 if is_leaf(n) {
                     let kids = [0, 1, 2, 3].map(|i| self.fill_node(n, sq.child(i), shape, want, partial, changed));
@@ -238,6 +232,19 @@ impl RegionQuadtree {
                 self.fill_bits(kid, sq.child(i), shape, value, partial, changed)
             }),
         }
+    }
+
+    /// Replace node `n` of square `sq` by leaf `want`, reporting the leaves that change.
+    fn replace_with_leaf(
+        &mut self,
+        n: NodeRef,
+        sq: Square,
+        want: NodeRef,
+        changed: &mut impl FnMut(Square),
+    ) -> NodeRef {
+        self.report_leaves(n, sq, want, changed);
+        self.release(n);
+        want
     }
 
     /// Report the leaves below `n` that differ from `want`.
