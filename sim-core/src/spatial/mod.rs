@@ -2,6 +2,7 @@
 //! known maps, the treasure PR-quadtree, the robot hash grid, the navigation graph, and the
 //! ids that key them. Imports nothing from the layers above.
 
+mod anyangle;
 mod geometry;
 mod grid;
 mod ids;
@@ -12,6 +13,7 @@ mod quadtree;
 mod robot_index;
 mod treasure_index;
 
+pub use anyangle::{AnyAnglePath, AnyAnglePlanner, MAX_RASTER_CELLS, MAX_VERTICES, NoPath, reference};
 pub use geometry::{
     Aabb, BlockCells, Capsule, CellMasks, Clipped, Disc, DiscBeyond, Overlap, Shape, clip_line, clip_segment,
     point_segment_distance_squared, segment_box_distance_squared, segment_enters_box_interior,

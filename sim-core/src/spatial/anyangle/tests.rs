@@ -1,0 +1,172 @@
+use glam::DVec2;
+use proptest::prelude::*;
+
+use super::reference::{segment_is_legal, shortest_length};
+use super::{AnyAnglePlanner, NoPath};
+use crate::spatial::{Grid, ObstacleMap};
+
+fn map_of(width: u32, height: u32, cells: &[bool]) -> ObstacleMap {
+    let grid = Grid::new(DVec2::ZERO, 1.0, width, height).unwrap();
+    ObstacleMap::from_fn(grid, |x, y| cells[(y * width + x) as usize])
+}
+
+fn blocked_fn(width: u32, height: u32, cells: &[bool]) -> impl Fn(i64, i64) -> bool + '_ {
+    move |x, y| {
+        x < 0 || y < 0 || x >= i64::from(width) || y >= i64::from(height) || cells[(y * i64::from(width) + x) as usize]
+    }
+}
+
+#[allow(clippy::cast_possible_truncation)] // Waypoints of a point robot are lattice points.
+fn lattice(p: DVec2) -> (i64, i64) {
+    assert_eq!(p, p.round(), "waypoint {p} is not a lattice point");
+    (p.x as i64, p.y as i64)
+}
+
+#[allow(clippy::cast_precision_loss)]
+fn point(p: (i64, i64)) -> DVec2 {
+    DVec2::new(p.0 as f64, p.1 as f64)
+}
+
+/// Width, height, blocked cells (row 0 at the bottom) and two lattice points.
+type SmallMap = (u32, u32, Vec<bool>, (i64, i64), (i64, i64));
+
+fn small_map() -> impl Strategy<Value = SmallMap> {
+    (2u32..=7, 2u32..=7, 0.0f64..0.45).prop_flat_map(|(w, h, density)| {
+        (
+            Just(w),
+            Just(h),
+            proptest::collection::vec(proptest::bool::weighted(density), (w * h) as usize),
+            (0..=i64::from(w), 0..=i64::from(h)),
+            (0..=i64::from(w), 0..=i64::from(h)),
+        )
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..ProptestConfig::default() })]
+
+    /// The planner's length equals the brute-force optimum over all lattice points (which
+    /// contains every shortest path, as those bend only at cell corners), and each leg is legal
+    /// by the reference's cell-by-cell test.
+    #[test]
+    fn point_paths_are_legal_and_as_short_as_brute_force((w, h, cells, s, g) in small_map()) {
+        let map = map_of(w, h, &cells);
+        let blocked = blocked_fn(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+        match planner.path(point(s), point(g)) {
+            Ok(path) => {
+                let best = best.expect("the planner found a path the brute force did not");
+                prop_assert!((path.length_m - best).abs() < 1e-9, "planner {} vs brute force {best}", path.length_m);
+                prop_assert_eq!(path.waypoints[0], point(s));
+                prop_assert_eq!(*path.waypoints.last().unwrap(), point(g));
+                for leg in path.waypoints.windows(2) {
+                    prop_assert!(segment_is_legal(&blocked, lattice(leg[0]), lattice(leg[1])), "illegal leg {leg:?}");
+                }
+            }
+            Err(e) => prop_assert!(best.is_none(), "planner says {e}, brute force finds {best:?}"),
+        }
+    }
+
+    /// The planner's own leg test agrees with the reference on every pair of lattice points.
+    #[test]
+    fn leg_tests_agree_with_the_reference((w, h, cells, a, b) in small_map()) {
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let blocked = blocked_fn(w, h, &cells);
+        prop_assert_eq!(planner.is_leg_clear(point(a), point(b)), segment_is_legal(&blocked, a, b));
+    }
+
+    /// A robot with a radius keeps it clear on every leg (by the map's exact swept-disc test)
+    /// and never beats the point robot's optimum.
+    #[test]
+    fn robots_keep_their_radius_clear((w, h, cells, _, _) in small_map(), r in 0.05f64..0.45, s in (0.0f64..1.0, 0.0f64..1.0), g in (0.0f64..1.0, 0.0f64..1.0)) {
+        let map = map_of(w, h, &cells);
+        let size = DVec2::new(f64::from(w), f64::from(h));
+        let (s, g) = (DVec2::new(s.0, s.1) * size, DVec2::new(g.0, g.1) * size);
+        let planner = AnyAnglePlanner::build(&map, r).unwrap();
+        if let Ok(path) = planner.path(s, g) {
+            for leg in path.waypoints.windows(2) {
+                prop_assert!(map.is_swept_disc_free(leg[0], leg[1], r), "leg {leg:?} comes closer than {r}");
+            }
+            let point_robot = AnyAnglePlanner::build(&map, 0.0).unwrap();
+            let best = point_robot.path(s, g).expect("a round robot's path is a point's path too");
+            prop_assert!(path.length_m >= best.length_m - 1e-9);
+        }
+    }
+}
+
+#[test]
+fn diagonal_touch_is_not_a_passage() {
+    // Blocked (0, 0) and (1, 1): the only way from the top-left to the bottom-right corner
+    // is through the point where they touch.
+    let cells = [true, false, false, true];
+    let planner = AnyAnglePlanner::build(&map_of(2, 2, &cells), 0.0).unwrap();
+    let (from, to) = (DVec2::new(0.0, 2.0), DVec2::new(2.0, 0.0));
+    assert_eq!(planner.path(from, to), Err(NoPath::Unreachable(from, to)));
+    // Along the free cell's outer edge to the corner of the blocked one is fine.
+    let p = planner.path(from, DVec2::new(1.0, 2.0)).unwrap();
+    assert!((p.length_m - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn an_edge_between_two_blocked_cells_is_not_a_passage() {
+    // A 3 × 2 map with its bottom row blocked: the line y = 1 runs along blocked cells'
+    // tops (allowed); the line x = 1 between (0, 0) and (1, 0) is shared by two blocked cells.
+    let cells = [true, true, true, false, false, false];
+    let planner = AnyAnglePlanner::build(&map_of(3, 2, &cells), 0.0).unwrap();
+    assert!(planner.is_leg_clear(DVec2::new(0.0, 1.0), DVec2::new(3.0, 1.0)));
+    assert!(!planner.is_leg_clear(DVec2::new(1.0, 0.0), DVec2::new(1.0, 1.0)));
+    assert_eq!(
+        planner.path(DVec2::new(1.0, 0.5), DVec2::new(1.0, 2.0)),
+        Err(NoPath::StartBlocked(DVec2::new(1.0, 0.5)))
+    );
+    let goal = DVec2::new(2.5, 0.5);
+    assert_eq!(planner.path(DVec2::new(0.5, 1.5), goal), Err(NoPath::GoalBlocked(goal)));
+}
+
+#[test]
+fn a_wall_across_the_map_leaves_the_far_side_unreachable() {
+    let grid = Grid::new(DVec2::ZERO, 0.5, 10, 10).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, _| x == 4);
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let (a, b) = (DVec2::new(0.5, 0.5), DVec2::new(4.5, 4.5));
+    assert_eq!(planner.path(a, b), Err(NoPath::Unreachable(a, b)));
+}
+
+#[test]
+fn a_gap_passes_robots_narrower_than_it() {
+    // A wall across a 5 × 7 map at row 3 with a one-cell gap at column 2 (cells of 1 m).
+    let grid = Grid::new(DVec2::ZERO, 1.0, 5, 7).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| y == 3 && x != 2);
+    let (a, b) = (DVec2::new(2.5, 1.0), DVec2::new(2.5, 6.0));
+    let thin = AnyAnglePlanner::build(&map, 0.3).unwrap().path(a, b).unwrap();
+    assert!(
+        (thin.length_m - 5.0).abs() < 1e-12,
+        "straight through the gap: {thin:?}"
+    );
+    let wide = AnyAnglePlanner::build(&map, 0.6).unwrap();
+    assert_eq!(wide.path(a, b), Err(NoPath::Unreachable(a, b)));
+    // Round a single block, a robot of radius 0.25 passes its corners 0.25 m out on each axis.
+    let grid = Grid::new(DVec2::ZERO, 1.0, 5, 3).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| x == 2 && y == 1);
+    let planner = AnyAnglePlanner::build(&map, 0.25).unwrap();
+    let p = planner.path(DVec2::new(0.5, 1.5), DVec2::new(4.5, 1.5)).unwrap();
+    assert_eq!(p.waypoints.len(), 4, "{p:?}");
+    assert!(
+        p.waypoints[1].distance(DVec2::new(1.75, 2.25)) < 1e-12
+            || p.waypoints[1].distance(DVec2::new(1.75, 0.75)) < 1e-12,
+        "{p:?}"
+    );
+    let expected = 2.0 * 1.25f64.hypot(0.75) + 1.5;
+    assert!((p.length_m - expected).abs() < 1e-12, "{} vs {expected}", p.length_m);
+}
+
+#[test]
+fn nonsense_radii_are_refused() {
+    let map = map_of(2, 2, &[false; 4]);
+    for r in [-1.0, f64::NAN, f64::INFINITY] {
+        let e = AnyAnglePlanner::build(&map, r).unwrap_err().to_string();
+        assert!(e.contains("radius"), "{e}");
+    }
+}
