@@ -12,6 +12,7 @@ pub mod compose;
 pub mod error;
 pub mod generate;
 pub mod import;
+pub mod path;
 pub mod place;
 pub mod preview;
 pub mod progress;

@@ -256,3 +256,76 @@ fn import_refuses_grids_it_cannot_compute_with() {
             .arg(&out_map),
     );
 }
+
+/// Issue 12: `path` prints the length and waypoints (text and JSON), exits with status 1 and
+/// a message when the goal is unreachable or inside an obstacle, and refuses a nonsense
+/// radius. The map: 6 × 4 cells of 1 m, a wall at column 2 from the bottom up to y = 2, and
+/// a closed pocket at the top right.
+#[test]
+fn path_prints_the_shortest_route_and_exits_1_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("wall.map");
+    std::fs::write(
+        &file,
+        "type octile\nheight 4\nwidth 6\nmap\n....@.\n....@@\n..@...\n..@...\n",
+    )
+    .unwrap();
+    let map = dir.path().join("wall.stmap");
+    run_ok(editor().arg("import").arg(&file).arg("-o").arg(&map));
+    let path = |args: &[&str]| editor().arg("path").arg(&map).args(args).output().unwrap();
+
+    // Round the top of the wall: (0, 0) -> (2, 2) -> (3, 2) -> (4, 0), by hand √8 + 1 + √5.
+    let out = path(&["--from", "0,0", "--to", "4,0", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let expected = 8f64.sqrt() + 1.0 + 5f64.sqrt();
+    assert!((v["length_m"].as_f64().unwrap() - expected).abs() < 1e-12, "{v}");
+    assert_eq!(
+        v["waypoints"],
+        serde_json::json!([[0.0, 0.0], [2.0, 2.0], [3.0, 2.0], [4.0, 0.0]])
+    );
+
+    let text = String::from_utf8(path(&["--from", "0,0", "--to", "4,0"]).stdout).unwrap();
+    assert_eq!(text, format!("length_m {expected}\n0 0\n2 2\n3 2\n4 0\n"));
+
+    // A robot of radius 0.25 m keeps clear: longer, and bends 0.25 m off the corners.
+    let out = path(&[
+        "--from",
+        "0.5,0.5",
+        "--to",
+        "3.5,0.5",
+        "--robot-radius-m",
+        "0.25",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["waypoints"][1], serde_json::json!([1.75, 2.25]), "{v}");
+
+    for (args, says) in [
+        (&["--from", "0,0", "--to", "5.5,3.5"][..], "cannot be reached"),
+        (
+            &["--from", "0,0", "--to", "2.5,0.5"],
+            "goal (2.5, 0.5) is inside an obstacle",
+        ),
+        (
+            &["--from", "-1,0", "--to", "1,1"],
+            "start (-1, 0) is inside an obstacle, outside the map",
+        ),
+    ] {
+        let out = path(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("wall.stmap: no path") && err.contains(says),
+            "{args:?}: {err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    let out = path(&["--from", "0,0", "--to", "1,1", "--robot-radius-m", "-1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("robot radius must be a non-negative number of metres, got -1"),
+        "{err}"
+    );
+}

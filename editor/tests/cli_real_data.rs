@@ -497,3 +497,191 @@ fn real_cli_stage_cave() {
     assert_eq!(raw.flags, ["--resolution-m", "0.032"]);
     check_all(&raw);
 }
+
+/// A query of a Moving AI scenario: start and goal corners (`x` right, `y` down), the octile
+/// optimum, and the any-angle optimum where the file has that column.
+struct Query {
+    start: (i64, i64),
+    goal: (i64, i64),
+    octile: f64,
+    anyangle: Option<f64>,
+}
+
+fn read_queries(path: &Path) -> Vec<Query> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .filter(|l| !l.starts_with("version") && !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            let int = |i: usize| f[i].parse::<i64>().unwrap();
+            Query {
+                start: (int(4), int(5)),
+                goal: (int(6), int(7)),
+                octile: f[8].parse().unwrap(),
+                anyangle: f.get(9).map(|v| v.parse().unwrap()),
+            }
+        })
+        .collect()
+}
+
+/// The raw file's cells for the reference, in world cells (row 0 at the bottom; 1 m cells at
+/// the origin, as `import` lays out a Moving AI map), blocked outside.
+fn world_blocked(raw: &Raw) -> impl Fn(i64, i64) -> bool + '_ {
+    let (w, h) = (i64::from(raw.width), i64::from(raw.height));
+    move |x, y| x < 0 || y < 0 || x >= w || y >= h || raw.blocked[usize::try_from((h - 1 - y) * w + x).unwrap()]
+}
+
+/// A Moving AI corner as a world lattice point.
+fn world_corner(raw: &Raw, (x, y): (i64, i64)) -> (i64, i64) {
+    (x, i64::from(raw.height) - y)
+}
+
+#[allow(clippy::cast_precision_loss)] // Small lattice coordinates.
+fn as_point((x, y): (i64, i64)) -> DVec2 {
+    DVec2::new(x as f64, y as f64)
+}
+
+#[allow(clippy::cast_possible_truncation)]
+fn as_lattice(p: [f64; 2]) -> (i64, i64) {
+    assert_eq!(
+        p,
+        [p[0].round(), p[1].round()],
+        "a point robot's waypoint off the lattice"
+    );
+    (p[0] as i64, p[1] as i64)
+}
+
+/// `path --json` through the binary: `Some((length, waypoints))`, or `None` on exit status 1
+/// (no path), which must come with a message.
+fn cli_path(map: &Path, from: (i64, i64), to: (i64, i64)) -> Option<(f64, Vec<[f64; 2]>)> {
+    let out = editor()
+        .arg("path")
+        .arg(map)
+        .arg(format!("--from={},{}", from.0, from.1))
+        .arg(format!("--to={},{}", to.0, to.1))
+        .arg("--json")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    match out.status.code() {
+        Some(0) => {
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            let length = v["length_m"].as_f64().unwrap();
+            let waypoints = v["waypoints"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|p| [p[0].as_f64().unwrap(), p[1].as_f64().unwrap()])
+                .collect();
+            Some((length, waypoints))
+        }
+        Some(1) => {
+            assert!(err.contains("no path"), "{err}");
+            None
+        }
+        other => panic!("path exited with {other:?}: {err}"),
+    }
+}
+
+/// Checks a path against the raw file with the reference (independent of the planner): it
+/// joins the query's corners and every leg is legal; returns its length recomputed.
+fn check_legs(raw: &Raw, q: &Query, waypoints: &[[f64; 2]]) -> f64 {
+    let blocked = world_blocked(raw);
+    let pts: Vec<(i64, i64)> = waypoints.iter().map(|&p| as_lattice(p)).collect();
+    assert_eq!(pts[0], world_corner(raw, q.start));
+    assert_eq!(*pts.last().unwrap(), world_corner(raw, q.goal));
+    for leg in pts.windows(2) {
+        assert!(
+            sim_core::spatial::reference::segment_is_legal(&blocked, leg[0], leg[1]),
+            "illegal leg {leg:?} on the way {:?} -> {:?}",
+            q.start,
+            q.goal
+        );
+    }
+    pts.windows(2).map(|l| as_point(l[0]).distance(as_point(l[1]))).sum()
+}
+
+fn import_to(raw: &Raw, dir: &Path) -> PathBuf {
+    let map = dir.join("map.stmap");
+    run_ok(editor().arg("import").arg(&raw.file).arg("-o").arg(&map));
+    map
+}
+
+/// Issue 12: `path` through the binary on all 160 legacy arena queries equals the any-angle
+/// optimum the Polyanya reference implementation published (six significant digits), and
+/// every leg is legal by the reference's cell-by-cell test on the raw file.
+#[test]
+fn real_cli_path_arena_equals_published_anyangle_optima() {
+    let Some(data) = common::data_dir("real_cli_path_arena_equals_published_anyangle_optima") else {
+        return;
+    };
+    let raw = movingai(&data, "movingai/arena.map");
+    let dir = tempfile::tempdir().unwrap();
+    let map = import_to(&raw, dir.path());
+    let queries = read_queries(&data.join("movingai/arena.legacy.anyangle.tsv"));
+    assert_eq!(queries.len(), 160);
+    for q in &queries {
+        let best = q.anyangle.unwrap();
+        let (from, to) = (world_corner(&raw, q.start), world_corner(&raw, q.goal));
+        let (length, waypoints) = cli_path(&map, from, to).expect("every arena query is reachable");
+        assert!(
+            (length - best).abs() <= 1e-5 * best.max(1.0),
+            "{:?} -> {:?}: {length} vs published {best}",
+            q.start,
+            q.goal
+        );
+        assert!((check_legs(&raw, q, &waypoints) - length).abs() < 1e-9);
+    }
+}
+
+/// Issue 12: on the Berlin street map's 930 octile queries (no any-angle optima published),
+/// every path is legal, no shorter than the straight line and no longer than the octile
+/// optimum, and a query is unreachable exactly when its octile length says so. All through
+/// the library; every 93rd query also through the binary, which must print the same path.
+#[test]
+fn real_path_berlin_between_straight_line_and_octile() {
+    let Some(data) = common::data_dir("real_path_berlin_between_straight_line_and_octile") else {
+        return;
+    };
+    let raw = movingai(&data, "movingai/street/Berlin_0_256.map");
+    let dir = tempfile::tempdir().unwrap();
+    let map = import_to(&raw, dir.path());
+    let loaded = MapData::load(&map).unwrap();
+    let planner = sim_core::spatial::AnyAnglePlanner::build(&loaded.obstacles, 0.0).unwrap();
+    let queries = read_queries(&data.join("movingai/street/Berlin_0_256.map.scen"));
+    assert_eq!(queries.len(), 930);
+    let mut reachable = 0;
+    for (i, q) in queries.iter().enumerate() {
+        let (from, to) = (world_corner(&raw, q.start), world_corner(&raw, q.goal));
+        let found = planner.path(as_point(from), as_point(to));
+        let unreachable = q.octile == 0.0 && q.start != q.goal;
+        match &found {
+            Ok(p) => {
+                assert!(
+                    !unreachable,
+                    "{:?} -> {:?} is unreachable by the scenario",
+                    q.start, q.goal
+                );
+                let ways: Vec<[f64; 2]> = p.waypoints.iter().map(|w| [w.x, w.y]).collect();
+                assert!((check_legs(&raw, q, &ways) - p.length_m).abs() < 1e-9);
+                let straight = as_point(from).distance(as_point(to));
+                assert!(
+                    p.length_m >= straight - 1e-9 && p.length_m <= q.octile + 1e-4,
+                    "{:?} -> {:?}: {} outside [{straight}, {}]",
+                    q.start,
+                    q.goal,
+                    p.length_m,
+                    q.octile
+                );
+                reachable += 1;
+            }
+            Err(e) => assert!(unreachable, "{:?} -> {:?}: {e}, octile {}", q.start, q.goal, q.octile),
+        }
+        if i % 93 == 0 {
+            let cli = cli_path(&map, from, to);
+            assert_eq!(cli.map(|c| c.0), found.as_ref().ok().map(|p| p.length_m));
+        }
+    }
+    assert!(reachable > 900, "{reachable}");
+}

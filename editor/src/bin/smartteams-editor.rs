@@ -59,6 +59,25 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// The shortest any-angle path between two points: its length in metres and waypoints
+    /// in world coordinates. Exit status 1 when there is none.
+    Path {
+        /// The map file.
+        map: PathBuf,
+        /// Start `X,Y` in metres.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+        from: DVec2,
+        /// Goal `X,Y` in metres.
+        #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+        to: DVec2,
+        /// Robot radius in metres; the path keeps it clear of obstacles. With 0 the path
+        /// follows the Moving AI any-angle rules (it may touch obstacles).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        robot_radius_m: f64,
+        /// Print JSON: `{"length_m": L, "waypoints": [[x, y], ...]}`.
+        #[arg(long)]
+        json: bool,
+    },
     /// Draw a map as PNG.
     Preview {
         /// The map file.
@@ -325,6 +344,23 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 println!("{}", serde_json::to_string_pretty(&s)?);
             } else {
                 println!("{s}");
+            }
+        }
+        Command::Path {
+            map: path,
+            from,
+            to,
+            robot_radius_m,
+            json,
+        } => {
+            let map = load(&path)?;
+            match editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)? {
+                Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
+                Ok(report) => print!("{report}"),
+                Err(no_path) => {
+                    eprintln!("{}: no path: {no_path}", path.display());
+                    return Ok(ExitCode::from(1));
+                }
             }
         }
         Command::Preview {
