@@ -541,7 +541,7 @@ fn as_point((x, y): (i64, i64)) -> DVec2 {
     DVec2::new(x as f64, y as f64)
 }
 
-#[allow(clippy::cast_possible_truncation)]
+#[allow(clippy::cast_possible_truncation, clippy::float_cmp)] // Exactly on the lattice.
 fn as_lattice(p: [f64; 2]) -> (i64, i64) {
     assert_eq!(
         p,
