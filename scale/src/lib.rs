@@ -14,6 +14,7 @@
 //! ```
 
 pub mod fig4;
+pub mod paths;
 pub mod plot;
 
 use std::sync::Arc;
@@ -51,6 +52,24 @@ pub enum Error {
     /// An output file could not be written.
     #[error("{path}: {cause}")]
     Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        cause: std::io::Error,
+    },
+    /// An input file that makes no sense: where and what.
+    #[error("{}:{line}: {problem}", path.display())]
+    BadInput {
+        /// The file.
+        path: std::path::PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// An input file that cannot be read.
+    #[error("{}: {cause}", path.display())]
+    Read {
         /// The file.
         path: std::path::PathBuf,
         /// Why.

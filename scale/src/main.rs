@@ -82,6 +82,26 @@ enum Scenario {
         #[arg(long)]
         no_plots: bool,
     },
+    /// Any-angle paths (issue 12): the visibility graph's size and build time on a map, then
+    /// the mean query time and, against published optima, the mean and worst excess.
+    AnyAngle {
+        /// A Moving AI `.map` or a Smart Teams map file.
+        #[arg(long)]
+        map: std::path::PathBuf,
+        /// A Moving AI scenario (`.scen`, or with an any-angle optimum in a 10th column);
+        /// without one, `--queries` random pairs of free cell centres.
+        #[arg(long)]
+        scen: Option<std::path::PathBuf>,
+        /// Random queries when there is no scenario.
+        #[arg(long, default_value_t = 1_000)]
+        queries: usize,
+        /// Robot radius, metres.
+        #[arg(long, default_value_t = 0.0)]
+        robot_radius_m: f64,
+        /// Seed of the random queries.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
     Fig4 {
@@ -117,6 +137,13 @@ fn run(cli: &Cli) -> Result<()> {
             max_robots,
             no_plots,
         } => return curves::run(out, max_robots, !no_plots),
+        Scenario::AnyAngle {
+            ref map,
+            ref scen,
+            queries,
+            robot_radius_m,
+            seed,
+        } => return any_angle(map, scen.as_deref(), queries, robot_radius_m, seed),
         Scenario::RandomWalk {
             robots,
             side_m,
@@ -177,6 +204,44 @@ fn run(cli: &Cli) -> Result<()> {
         m.robot_memory_bytes as f64 / 1e6,
         m.explored_fraction,
         m.digest
+    );
+    Ok(())
+}
+
+fn any_angle(
+    map: &std::path::Path,
+    scen: Option<&std::path::Path>,
+    queries: usize,
+    radius_m: f64,
+    seed: u64,
+) -> Result<()> {
+    let obstacles = scale::paths::load_map(map)?;
+    let queries = match scen {
+        Some(s) => scale::paths::read_scenario(s, &obstacles)?,
+        None => scale::paths::random_queries(&obstacles, queries, seed),
+    };
+    let b = scale::paths::bench(&obstacles, &queries, radius_m)?;
+    let excess = b.excess.map_or(String::new(), |(mean, worst)| {
+        format!(
+            " | excess over published optima: mean {:.2e} %, worst {:.2e} %",
+            mean * 100.0,
+            worst * 100.0
+        )
+    });
+    println!(
+        "any-angle: {} | {} cells, {} leaves | graph {} corners, {} edges, built in {:.3} s, {:.1} MB | {} queries ({} reachable, {} disagree with the octile column), mean {:.3} ms, slowest {:.3} ms{excess}",
+        map.display(),
+        u64::from(obstacles.grid().width_cells()) * u64::from(obstacles.grid().height_cells()),
+        obstacles.leaf_count(),
+        b.vertices,
+        b.edges,
+        b.build_s,
+        b.memory_bytes as f64 / 1e6,
+        b.queries,
+        b.reachable,
+        b.reachability_mismatches,
+        b.mean_query_ms,
+        b.max_query_ms,
     );
     Ok(())
 }

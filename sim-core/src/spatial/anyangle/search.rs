@@ -54,7 +54,8 @@ impl AnyAnglePlanner {
             let v = self.vertices[i];
             grazes(v.quadrant, p - v.pos) && self.clear(p, v.pos)
         };
-        let sees_goal: Vec<bool> = (0..n).map(|i| sees(g, i)).collect();
+        // Whether a corner sees the goal is asked only of corners the search expands.
+        let mut sees_goal = vec![None::<bool>; n];
         let mut dist = vec![f64::INFINITY; n + 1];
         let mut parent = vec![NONE; n + 1];
         let mut closed = vec![false; n + 1];
@@ -86,7 +87,7 @@ impl AnyAnglePlanner {
                 return Ok(self.trace(from, to, &parent));
             }
             let (pu, du) = (self.vertices[u].pos, dist[u]);
-            if sees_goal[u] {
+            if *sees_goal[u].get_or_insert_with(|| sees(g, u)) {
                 relax(&mut open, &mut dist, n, node, du + pu.distance(g));
             }
             for &v in &self.adjacent[self.starts[u] as usize..self.starts[u + 1] as usize] {

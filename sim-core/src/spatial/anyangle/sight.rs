@@ -18,11 +18,22 @@ pub(crate) fn corner_passable(around: u8) -> bool {
     !matches!(around, 0b1111 | 0b1001 | 0b0110)
 }
 
-/// Cell index of a coordinate known to lie within the map's range (or just outside it).
+/// Cell index of a coordinate: its floor where that is a cell of the map or beside it; any
+/// negative coordinate gives -1 (outside, like its floor). A truncating cast instead of
+/// `floor`, which is a library call on the baseline x86-64 target (20 % of a query's time).
 #[inline]
 #[allow(clippy::cast_possible_truncation)] // Saturating casts: far-away points read as outside.
 fn cell(v: f64) -> i64 {
-    v.floor() as i64
+    if v >= 0.0 { v as i64 } else { -1 }
+}
+
+/// `p` as a lattice point, if both coordinates are integers small enough for exact integer
+/// line walks.
+#[inline]
+#[allow(clippy::cast_possible_truncation)] // Checked: integral and below 2^31 in magnitude.
+fn as_lattice(p: DVec2) -> Option<(i64, i64)> {
+    let ok = |v: f64| v.abs() < 2_147_483_648.0 && v == v.trunc();
+    (ok(p.x) && ok(p.y)).then(|| (p.x as i64, p.y as i64))
 }
 
 /// Whether a path may touch point `p`: it lies in the closure of a free cell and is not a
@@ -93,6 +104,9 @@ pub(crate) fn segment_clear(r: &CellRaster, a: DVec2, b: DVec2) -> bool {
     if !point_clear(r, a) || !point_clear(r, b) {
         return false;
     }
+    if let (Some(a), Some(b)) = (as_lattice(a), as_lattice(b)) {
+        return lattice_segment_clear(r, a, b);
+    }
     let d = b - a;
     if d == DVec2::ZERO {
         return true;
@@ -141,5 +155,58 @@ pub(crate) fn segment_clear(r: &CellRaster, a: DVec2, b: DVec2) -> bool {
             ys.next += ys.step;
         }
         t_prev = t;
+    }
+}
+
+/// [`segment_clear`] between lattice points (ends already checked), in integers: the next
+/// grid line the segment meets is found by comparing `i / |dx|` with `j / |dy|` exactly.
+fn lattice_segment_clear(r: &CellRaster, a: (i64, i64), b: (i64, i64)) -> bool {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (nx, ny) = (dx.abs(), dy.abs());
+    let (sx, sy) = (dx.signum(), dy.signum());
+    let (mut i, mut j) = (0, 0);
+    if nx == 0 && ny == 0 {
+        return true;
+    }
+    loop {
+        // The piece after `i` vertical and `j` horizontal grid lines: the column and row it
+        // lies in (one side of the line it runs along, when it runs along one).
+        let col = if sx >= 0 { a.0 + i } else { a.0 - 1 - i };
+        let row = if sy >= 0 { a.1 + j } else { a.1 - 1 - j };
+        let piece_clear = match (sx, sy) {
+            (0, _) => !(r.blocked(a.0 - 1, row) && r.blocked(a.0, row)),
+            (_, 0) => !(r.blocked(col, a.1 - 1) && r.blocked(col, a.1)),
+            _ => !r.blocked(col, row),
+        };
+        if !piece_clear {
+            return false;
+        }
+        let next = if i == nx {
+            std::cmp::Ordering::Greater
+        } else if j == ny {
+            std::cmp::Ordering::Less
+        } else {
+            ((i + 1) * ny).cmp(&((j + 1) * nx))
+        };
+        match next {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                i += 1;
+                j += 1;
+            }
+        }
+        if i == nx && j == ny {
+            return true;
+        }
+        // A lattice point: both lines at once, or one line while running along the other.
+        let lattice = match next {
+            std::cmp::Ordering::Equal => true,
+            std::cmp::Ordering::Less => sy == 0,
+            std::cmp::Ordering::Greater => sx == 0,
+        };
+        if lattice && !corner_passable(r.around(a.0 + sx * i, a.1 + sy * j)) {
+            return false;
+        }
     }
 }

@@ -77,6 +77,21 @@ proptest! {
         prop_assert_eq!(planner.is_leg_clear(point(a), point(b)), segment_is_legal(&blocked, a, b));
     }
 
+    /// Between half-integer points too (the floating-point walk): a leg on the map equals
+    /// the reference's verdict on the map refined to half cells (each cell split in four),
+    /// which changes no rule's outcome.
+    #[test]
+    fn leg_tests_between_half_cells_agree_with_the_refined_reference((w, h, cells, a, b) in small_map(), odd in (0i64..2, 0i64..2, 0i64..2, 0i64..2)) {
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let blocked = blocked_fn(w, h, &cells);
+        let fine = |x: i64, y: i64| blocked(x.div_euclid(2), y.div_euclid(2));
+        // Points on the half-cell lattice, within the map.
+        let a2 = ((2 * a.0 + odd.0).min(2 * i64::from(w)), (2 * a.1 + odd.1).min(2 * i64::from(h)));
+        let b2 = ((2 * b.0 + odd.2).min(2 * i64::from(w)), (2 * b.1 + odd.3).min(2 * i64::from(h)));
+        prop_assert_eq!(planner.is_leg_clear(point(a2) / 2.0, point(b2) / 2.0), segment_is_legal(&fine, a2, b2), "{:?} -> {:?}", a2, b2);
+    }
+
     /// A robot with a radius keeps it clear on every leg (by the map's exact swept-disc test)
     /// and never beats the point robot's optimum.
     #[test]

@@ -1,0 +1,176 @@
+//! The any-angle path bench (issue 12): a map's visibility graph size and build time, then
+//! query times and, where the queries carry published optima, how far the paths are from
+//! them.
+
+use std::path::Path;
+use std::time::Instant;
+
+use editor::import::{ImportOptions, import};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use sim_core::glam::DVec2;
+use sim_core::spatial::{AnyAnglePlanner, ObstacleMap};
+use sim_core::world::MapData;
+
+use crate::{Error, Result};
+
+/// One query, in world coordinates, with the published lengths where known.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathQuery {
+    /// Start.
+    pub from: DVec2,
+    /// Goal.
+    pub to: DVec2,
+    /// The octile optimum (a Moving AI scenario's 9th column; 0 = unreachable).
+    pub octile: Option<f64>,
+    /// The any-angle optimum (a 10th column, where the file has one).
+    pub optimum: Option<f64>,
+}
+
+/// A map for the bench: a Moving AI `.map` (imported as `smartteams-editor import` does)
+/// or a Smart Teams map file.
+pub fn load_map(path: &Path) -> Result<ObstacleMap> {
+    if path.extension().is_some_and(|e| e == "map") {
+        Ok(import(path, &ImportOptions::default())?)
+    } else {
+        Ok(MapData::load(path)?.obstacles)
+    }
+}
+
+/// The queries of a Moving AI scenario file (`.scen`, or the same columns with an any-angle
+/// optimum in a 10th): corners `(x, y)` with `y` down, as world points of `map`.
+pub fn read_scenario(path: &Path, map: &ObstacleMap) -> Result<Vec<PathQuery>> {
+    let bad = |line: usize, problem: String| Error::BadInput {
+        path: path.to_path_buf(),
+        line,
+        problem,
+    };
+    let text = std::fs::read_to_string(path).map_err(|cause| Error::Read {
+        path: path.to_path_buf(),
+        cause,
+    })?;
+    let g = map.grid();
+    let top = f64::from(g.height_cells());
+    let mut queries = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.starts_with("version") || line.starts_with('#') || line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split('\t').collect();
+        if f.len() < 9 {
+            return Err(bad(
+                i + 1,
+                format!("expected at least 9 tab-separated columns, found {}", f.len()),
+            ));
+        }
+        let num = |c: usize| -> Result<f64> {
+            f[c].trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(i + 1, format!("column {}: expected a number, found {:?}", c + 1, f[c])))
+        };
+        let corner = |x: f64, y: f64| g.origin() + DVec2::new(x, top - y) * g.cell_m();
+        queries.push(PathQuery {
+            from: corner(num(4)?, num(5)?),
+            to: corner(num(6)?, num(7)?),
+            octile: Some(num(8)?),
+            optimum: if f.len() > 9 { Some(num(9)?) } else { None },
+        });
+    }
+    Ok(queries)
+}
+
+/// `count` queries between centres of free cells drawn with `seed`.
+pub fn random_queries(map: &ObstacleMap, count: usize, seed: u64) -> Vec<PathQuery> {
+    let g = map.grid();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut free_centre = || loop {
+        let c = g.cell_center(
+            rng.random_range(0..g.width_cells()),
+            rng.random_range(0..g.height_cells()),
+        );
+        if map.is_point_free(c) {
+            return c;
+        }
+    };
+    (0..count)
+        .map(|_| PathQuery {
+            from: free_centre(),
+            to: free_centre(),
+            octile: None,
+            optimum: None,
+        })
+        .collect()
+}
+
+/// What the bench measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathBench {
+    /// Corners in the visibility graph.
+    pub vertices: usize,
+    /// Its edges.
+    pub edges: usize,
+    /// Seconds to build the planner.
+    pub build_s: f64,
+    /// Heap bytes of the planner.
+    pub memory_bytes: usize,
+    /// Queries run.
+    pub queries: usize,
+    /// Queries with a path.
+    pub reachable: usize,
+    /// Mean and slowest query, milliseconds.
+    pub mean_query_ms: f64,
+    /// Slowest query, milliseconds.
+    pub max_query_ms: f64,
+    /// Over queries with a published any-angle optimum: mean and worst relative excess of
+    /// the path's length over it (negative = shorter, within the file's rounding).
+    pub excess: Option<(f64, f64)>,
+    /// Queries whose reachability disagrees with the octile column (0 = unreachable).
+    pub reachability_mismatches: usize,
+}
+
+/// Build the planner for `radius_m` and run every query once, one after another.
+pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<PathBench> {
+    let t = Instant::now();
+    let planner = AnyAnglePlanner::build(map, radius_m)?;
+    let build_s = t.elapsed().as_secs_f64();
+    let (mut total, mut max, mut reachable, mut mismatches) = (0.0, 0.0f64, 0, 0);
+    let mut excess = Vec::new();
+    for q in queries {
+        let t = Instant::now();
+        let found = planner.path(q.from, q.to);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        total += ms;
+        max = max.max(ms);
+        reachable += usize::from(found.is_ok());
+        if let Some(oct) = q.octile {
+            let says_reachable = oct > 0.0 || q.from == q.to;
+            mismatches += usize::from(says_reachable != found.is_ok());
+        }
+        if let (Some(best), Ok(p)) = (q.optimum, &found)
+            && best > 0.0
+        {
+            excess.push(p.length_m / best - 1.0);
+        }
+    }
+    #[allow(clippy::cast_precision_loss)] // Counts far below 2^52.
+    let mean = |v: f64, n: usize| if n == 0 { 0.0 } else { v / n as f64 };
+    Ok(PathBench {
+        vertices: planner.vertex_count(),
+        edges: planner.edge_count(),
+        build_s,
+        memory_bytes: planner.memory_bytes(),
+        queries: queries.len(),
+        reachable,
+        mean_query_ms: mean(total, queries.len()),
+        max_query_ms: max,
+        excess: (!excess.is_empty()).then(|| {
+            (
+                mean(excess.iter().sum(), excess.len()),
+                excess.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        }),
+        reachability_mismatches: mismatches,
+    })
+}
