@@ -33,7 +33,7 @@ fn cell(v: f64) -> i64 {
 #[allow(clippy::cast_possible_truncation)] // Checked: integral and below 2^31 in magnitude.
 fn as_lattice(p: DVec2) -> Option<(i64, i64)> {
     let ok = |v: f64| v.abs() < 2_147_483_648.0 && v == v.trunc();
-    (ok(p.x) && ok(p.y)).then(|| (p.x as i64, p.y as i64))
+    (ok(p.x) && ok(p.y)).then_some((p.x as i64, p.y as i64))
 }
 
 /// Whether a path may touch point `p`: it lies in the closure of a free cell and is not a
