@@ -229,13 +229,15 @@ fn any_angle(
         )
     });
     println!(
-        "any-angle: {} | {} cells, {} leaves | graph {} corners, {} edges, built in {:.3} s, {:.1} MB | {} queries ({} reachable, {} disagree with the octile column), mean {:.3} ms, slowest {:.3} ms{excess}",
+        "any-angle: {} | {} cells, {} leaves | {} corners found in {:.3} s, first query on a new planner {:.1} ms | all linked in {:.2} s: {} edges, {:.1} MB | {} queries ({} reachable, {} disagree with the octile column), mean {:.3} ms, slowest {:.3} ms{excess}",
         map.display(),
         u64::from(obstacles.grid().width_cells()) * u64::from(obstacles.grid().height_cells()),
         obstacles.leaf_count(),
         b.vertices,
-        b.edges,
         b.build_s,
+        b.cold_query_ms,
+        b.link_s,
+        b.edges,
         b.memory_bytes as f64 / 1e6,
         b.queries,
         b.reachable,

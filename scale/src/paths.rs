@@ -111,15 +111,20 @@ pub struct PathBench {
     pub vertices: usize,
     /// Its edges.
     pub edges: usize,
-    /// Seconds to build the planner.
+    /// Seconds to build the planner (find the corners).
     pub build_s: f64,
+    /// Seconds to link every corner (the whole visibility graph, on all threads).
+    pub link_s: f64,
+    /// Mean time of a query on a planner just built (what `smartteams-editor path` pays
+    /// beyond the build), over the first ten queries, milliseconds.
+    pub cold_query_ms: f64,
     /// Heap bytes of the planner.
     pub memory_bytes: usize,
     /// Queries run.
     pub queries: usize,
     /// Queries with a path.
     pub reachable: usize,
-    /// Mean and slowest query, milliseconds.
+    /// Mean query on the linked graph, milliseconds.
     pub mean_query_ms: f64,
     /// Slowest query, milliseconds.
     pub max_query_ms: f64,
@@ -130,11 +135,23 @@ pub struct PathBench {
     pub reachability_mismatches: usize,
 }
 
-/// Build the planner for `radius_m` and run every query once, one after another.
+/// Build the planner for `radius_m`; time the first ten queries each on a planner just
+/// built; link every corner; then run every query once, one after another.
 pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<PathBench> {
     let t = Instant::now();
     let planner = AnyAnglePlanner::build(map, radius_m)?;
     let build_s = t.elapsed().as_secs_f64();
+    let mut cold = 0.0;
+    let first = &queries[..queries.len().min(10)];
+    for q in first {
+        let fresh = AnyAnglePlanner::build(map, radius_m)?;
+        let t = Instant::now();
+        let _ = fresh.path(q.from, q.to);
+        cold += t.elapsed().as_secs_f64() * 1e3;
+    }
+    let t = Instant::now();
+    planner.link_all();
+    let link_s = t.elapsed().as_secs_f64();
     let (mut total, mut max, mut reachable, mut mismatches) = (0.0, 0.0f64, 0, 0);
     let mut excess = Vec::new();
     for q in queries {
@@ -160,6 +177,8 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
         vertices: planner.vertex_count(),
         edges: planner.edge_count(),
         build_s,
+        link_s,
+        cold_query_ms: mean(cold, first.len()),
         memory_bytes: planner.memory_bytes(),
         queries: queries.len(),
         reachable,

@@ -1,6 +1,8 @@
 //! The visibility graph: convex corners of the blocked cells, joined where they see each
 //! other along a line that grazes both corners.
 
+use std::sync::OnceLock;
+
 use glam::DVec2;
 use rayon::prelude::*;
 
@@ -10,9 +12,10 @@ use super::{AnyAnglePlanner, Vertex};
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::{Error, Result};
 
-/// Most corners the planner links all-pairs. Building costs one line-of-sight test per pair
-/// of corners, so a map with many more would take minutes; it is refused with its count.
-pub const MAX_VERTICES: usize = 60_000;
+/// Most corners the planner accepts. Linking a corner costs one line-of-sight test per corner
+/// of the map, so a search that expands `k` corners costs `k` times that the first time; a
+/// map with many more corners is refused rather than taking minutes a query.
+pub const MAX_VERTICES: usize = 250_000;
 
 /// Whether a line along `d` through a corner whose one blocked cell lies in `quadrant`
 /// (0 south-west, 1 south-east, 2 north-west, 3 north-east) only grazes that cell: neither
@@ -30,8 +33,10 @@ pub(crate) fn grazes(quadrant: u8, d: DVec2) -> bool {
 
 impl AnyAnglePlanner {
     /// The planner for `obstacles` and robots of `radius_m` (0 for points: the any-angle
-    /// rules of the Moving AI benchmarks). Fails on a negative or non-finite radius, a map too
-    /// large for one bit per cell, or more than [`MAX_VERTICES`] corners.
+    /// rules of the Moving AI benchmarks): the map's corners, linked later as searches reach
+    /// them (or all at once with [`link_all`](Self::link_all)). Fails on a negative or
+    /// non-finite radius, a map too large for one bit per cell, or more than
+    /// [`MAX_VERTICES`] corners.
     pub fn build(obstacles: &ObstacleMap, radius_m: f64) -> Result<Self> {
         if !(radius_m.is_finite() && radius_m >= 0.0) {
             return Err(Error::InvalidParameter(format!(
@@ -64,61 +69,66 @@ impl AnyAnglePlanner {
             }
             if vertices.len() > MAX_VERTICES {
                 return Err(Error::InvalidParameter(format!(
-                    "any-angle paths link every pair of obstacle corners; this map has more than \
+                    "any-angle paths link obstacle corners pairwise; this map has more than \
                      {MAX_VERTICES} corners (more than the planner handles)"
                 )));
             }
         }
-        let mut planner = Self {
+        let links = (0..vertices.len()).map(|_| OnceLock::new()).collect();
+        Ok(Self {
             grid,
             radius_m,
             raster,
             vertices,
-            starts: Vec::new(),
-            adjacent: Vec::new(),
+            links,
             obstacles: (radius_m > 0.0).then(|| obstacles.clone()),
-        };
-        let upper: Vec<Vec<u32>> = (0..planner.vertices.len())
+        })
+    }
+
+    /// Whether corners `i` and `j` are linked: they see each other along a line grazing both.
+    fn linked(&self, i: usize, j: usize) -> bool {
+        let (u, v) = (self.vertices[i], self.vertices[j]);
+        let d = v.pos - u.pos;
+        i != j && grazes(u.quadrant, d) && grazes(v.quadrant, d) && self.clear(u.pos, v.pos)
+    }
+
+    /// The corners `u` is linked to, found on first use (one line-of-sight test per corner of
+    /// the map) and kept.
+    pub(crate) fn neighbours(&self, u: usize) -> &[u32] {
+        self.links[u].get_or_init(|| {
+            (0..self.vertices.len())
+                .filter(|&j| self.linked(u, j))
+                .map(|j| u32::try_from(j).expect("vertex count is bounded"))
+                .collect()
+        })
+    }
+
+    /// Link every corner now, on all threads, testing each pair once (otherwise corners are
+    /// linked as searches reach them): the whole visibility graph, for figures and for
+    /// planners shared by many queries.
+    pub fn link_all(&self) {
+        let n = self.vertices.len();
+        let upper: Vec<Vec<u32>> = (0..n)
             .into_par_iter()
             .map(|i| {
-                let u = planner.vertices[i];
-                (i + 1..planner.vertices.len())
-                    .filter(|&j| {
-                        let v = planner.vertices[j];
-                        let d = v.pos - u.pos;
-                        grazes(u.quadrant, d) && grazes(v.quadrant, d) && planner.clear(u.pos, v.pos)
-                    })
+                (i + 1..n)
+                    .filter(|&j| self.linked(i, j))
                     .map(|j| u32::try_from(j).expect("vertex count is bounded"))
                     .collect()
             })
             .collect();
-        let mut degree = vec![0u32; planner.vertices.len()];
-        for (i, list) in upper.iter().enumerate() {
-            degree[i] += u32::try_from(list.len()).expect("vertex count is bounded");
-            for &j in list {
-                degree[j as usize] += 1;
-            }
-        }
-        let mut starts = Vec::with_capacity(degree.len() + 1);
-        let mut total = 0u32;
-        starts.push(0);
-        for d in &degree {
-            total += d;
-            starts.push(total);
-        }
-        let mut fill: Vec<u32> = starts[..degree.len()].to_vec();
-        let mut adjacent = vec![0u32; total as usize];
+        let mut lists: Vec<Vec<u32>> = vec![Vec::new(); n];
         for (i, list) in upper.iter().enumerate() {
             for &j in list {
-                adjacent[fill[i] as usize] = j;
-                fill[i] += 1;
-                adjacent[fill[j as usize] as usize] = u32::try_from(i).expect("vertex count is bounded");
-                fill[j as usize] += 1;
+                lists[j as usize].push(u32::try_from(i).expect("vertex count is bounded"));
             }
         }
-        planner.starts = starts;
-        planner.adjacent = adjacent;
-        Ok(planner)
+        for (i, (mut list, upper)) in lists.into_iter().zip(upper).enumerate() {
+            // Lower neighbours first, then upper: increasing, as `neighbours` lists them.
+            list.extend(upper);
+            // A corner a search linked already holds the same list.
+            let _ = self.links[i].set(list.into_boxed_slice());
+        }
     }
 
     /// Whether the straight move `a → b` (cell units) is legal for the planner's robots.

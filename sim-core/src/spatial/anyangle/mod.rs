@@ -6,7 +6,10 @@
 //! graph: its size follows the obstacles' outlines, not the number of cells) and searches it
 //! with A*, joining the start and the goal to the corners they see. Only pairs whose joining
 //! line grazes both corners are linked, which keeps about a quarter of the visible pairs and
-//! no shortest path needs the rest.
+//! no shortest path needs the rest. A corner is linked when a search first expands it, so a
+//! planner costs nothing to build beyond finding the corners; links from the start are
+//! checked only when the search takes them (lazy A*), links to the goal only from corners
+//! the search expands.
 //!
 //! The rules are those of the Moving AI any-angle benchmarks: a path may run along the edge of
 //! a blocked cell, but not along an edge that two blocked cells share, nor through a point
@@ -60,9 +63,8 @@ pub struct AnyAnglePlanner {
     radius_m: f64,
     raster: raster::CellRaster,
     vertices: Vec<Vertex>,
-    /// Compressed sparse rows: `adjacent[starts[i]..starts[i + 1]]` are `i`'s neighbours.
-    starts: Vec<u32>,
-    adjacent: Vec<u32>,
+    /// Each corner's neighbours in the visibility graph, once linked.
+    links: Vec<std::sync::OnceLock<Box<[u32]>>>,
     /// The map, kept for exact swept-disc tests when the radius is positive.
     obstacles: Option<ObstacleMap>,
 }
@@ -107,9 +109,15 @@ impl AnyAnglePlanner {
         self.vertices.len()
     }
 
-    /// Edges (each counted once).
+    /// Edges among the corners linked so far (each counted once); all of them after
+    /// [`link_all`](Self::link_all).
     pub fn edge_count(&self) -> usize {
-        self.adjacent.len() / 2
+        self.links
+            .iter()
+            .filter_map(|l| l.get())
+            .map(|l| l.len())
+            .sum::<usize>()
+            / 2
     }
 
     /// The robot radius the planner was built for, metres.
@@ -121,7 +129,11 @@ impl AnyAnglePlanner {
     pub fn memory_bytes(&self) -> usize {
         self.raster.memory_bytes()
             + self.vertices.capacity() * std::mem::size_of::<Vertex>()
-            + (self.starts.capacity() + self.adjacent.capacity()) * 4
+            + self
+                .links
+                .iter()
+                .map(|l| std::mem::size_of_val(l) + l.get().map_or(0, |n| n.len() * 4))
+                .sum::<usize>()
             + self.obstacles.as_ref().map_or(0, ObstacleMap::memory_bytes)
     }
 

@@ -8,11 +8,13 @@ use glam::DVec2;
 use super::build::grazes;
 use super::{AnyAnglePath, AnyAnglePlanner, NoPath};
 
-/// A heap entry: estimated total length, then node (for a deterministic order among ties).
+/// A heap entry: estimated total length, then node (for a deterministic order among ties),
+/// and whether it is a link from the start not yet checked for sight.
 #[derive(Clone, Copy, PartialEq)]
 struct Open {
     f: f64,
     node: u32,
+    unchecked: bool,
 }
 
 impl Eq for Open {}
@@ -25,11 +27,37 @@ impl PartialOrd for Open {
 
 impl Ord for Open {
     fn cmp(&self, other: &Self) -> Ordering {
-        self.f.total_cmp(&other.f).then(self.node.cmp(&other.node))
+        self.f
+            .total_cmp(&other.f)
+            .then(self.node.cmp(&other.node))
+            .then(self.unchecked.cmp(&other.unchecked))
     }
 }
 
 const NONE: u32 = u32::MAX;
+
+/// A search's best lengths so far, the corners they come through, and the open entries.
+struct Front {
+    dist: Vec<f64>,
+    parent: Vec<u32>,
+    open: BinaryHeap<Reverse<Open>>,
+    goal: DVec2,
+}
+
+impl Front {
+    /// Reach `node` (at `at`) through `via` with length `d`, if that is shorter.
+    fn relax(&mut self, node: usize, at: DVec2, via: u32, d: f64) {
+        if d < self.dist[node] {
+            self.dist[node] = d;
+            self.parent[node] = via;
+            self.open.push(Reverse(Open {
+                f: d + at.distance(self.goal),
+                node: u32::try_from(node).expect("vertex count is bounded"),
+                unchecked: false,
+            }));
+        }
+    }
+}
 
 impl AnyAnglePlanner {
     /// The shortest path from `from` to `to` (world coordinates, metres) for the planner's
@@ -56,44 +84,55 @@ impl AnyAnglePlanner {
         };
         // Whether a corner sees the goal is asked only of corners the search expands.
         let mut sees_goal = vec![None::<bool>; n];
-        let mut dist = vec![f64::INFINITY; n + 1];
-        let mut parent = vec![NONE; n + 1];
         let mut closed = vec![false; n + 1];
-        let mut open = BinaryHeap::new();
-        let mut relax = |open: &mut BinaryHeap<Reverse<Open>>, dist: &mut [f64], node: usize, via: u32, d: f64| {
-            if d < dist[node] {
-                dist[node] = d;
-                parent[node] = via;
-                let at = if node == n { g } else { self.vertices[node].pos };
-                let node = u32::try_from(node).expect("vertex count is bounded");
-                open.push(Reverse(Open {
-                    f: d + at.distance(g),
-                    node,
-                }));
-            }
+        // Every corner the start might see enters unchecked; its sight line is tested only
+        // if the search takes it (it is then the best way to that corner, or the test fails
+        // and the corner waits for another way in).
+        let open = (0..n)
+            .filter(|&i| grazes(self.vertices[i].quadrant, s - self.vertices[i].pos))
+            .map(|i| {
+                let at = self.vertices[i].pos;
+                Reverse(Open {
+                    f: s.distance(at) + at.distance(g),
+                    node: u32::try_from(i).expect("vertex count is bounded"),
+                    unchecked: true,
+                })
+            })
+            .collect();
+        let mut front = Front {
+            dist: vec![f64::INFINITY; n + 1],
+            parent: vec![NONE; n + 1],
+            open,
+            goal: g,
         };
-        for i in 0..n {
-            if sees(s, i) {
-                relax(&mut open, &mut dist, i, NONE, s.distance(self.vertices[i].pos));
-            }
-        }
-        while let Some(Reverse(Open { node, .. })) = open.pop() {
+        while let Some(Reverse(Open { node, unchecked, .. })) = front.open.pop() {
             let u = node as usize;
             if closed[u] {
                 continue;
             }
+            if unchecked {
+                // Entries with a shorter way to `u` came first (and closed it): this one is
+                // the best, if the start does see `u`.
+                let at = self.vertices[u].pos;
+                if !self.clear(s, at) {
+                    continue;
+                }
+                front.dist[u] = s.distance(at);
+                front.parent[u] = NONE;
+            }
             closed[u] = true;
             if u == n {
-                return Ok(self.trace(from, to, &parent));
+                return Ok(self.trace(from, to, &front.parent));
             }
-            let (pu, du) = (self.vertices[u].pos, dist[u]);
+            let (pu, du) = (self.vertices[u].pos, front.dist[u]);
             if *sees_goal[u].get_or_insert_with(|| sees(g, u)) {
-                relax(&mut open, &mut dist, n, node, du + pu.distance(g));
+                front.relax(n, g, node, du + pu.distance(g));
             }
-            for &v in &self.adjacent[self.starts[u] as usize..self.starts[u + 1] as usize] {
+            for &v in self.neighbours(u) {
                 let v = v as usize;
                 if !closed[v] {
-                    relax(&mut open, &mut dist, v, node, du + pu.distance(self.vertices[v].pos));
+                    let at = self.vertices[v].pos;
+                    front.relax(v, at, node, du + pu.distance(at));
                 }
             }
         }

@@ -54,6 +54,10 @@ proptest! {
         let blocked = blocked_fn(w, h, &cells);
         let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
         let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+        // Linking every corner up front gives the graph that searches link on the way.
+        let linked = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        linked.link_all();
+        prop_assert_eq!(linked.path(point(s), point(g)), planner.path(point(s), point(g)));
         match planner.path(point(s), point(g)) {
             Ok(path) => {
                 let best = best.expect("the planner found a path the brute force did not");
