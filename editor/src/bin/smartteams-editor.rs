@@ -354,7 +354,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             json,
         } => {
             let map = load(&path)?;
-            match editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)? {
+            let found = editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)
+                .with_context(|| format!("{}: cannot plan paths", path.display()))?;
+            match found {
                 Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
                 Ok(report) => print!("{report}"),
                 Err(no_path) => {
