@@ -7,7 +7,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::raster::CellRaster;
-use super::sight::segment_clear;
+use super::sight::segment_between_legal_ends_clear;
 use super::{AnyAnglePlanner, Vertex};
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::{Error, Result};
@@ -131,9 +131,10 @@ impl AnyAnglePlanner {
         }
     }
 
-    /// Whether the straight move `a → b` (cell units) is legal for the planner's robots.
+    /// Whether the straight move `a → b` (cell units) is legal for the planner's robots,
+    /// for ends where a robot may stand (corners of the graph, a query's checked ends).
     pub(crate) fn clear(&self, a: DVec2, b: DVec2) -> bool {
-        if !segment_clear(&self.raster, a, b) {
+        if !segment_between_legal_ends_clear(&self.raster, a, b) {
             return false;
         }
         match &self.obstacles {

@@ -140,7 +140,8 @@ impl AnyAnglePlanner {
     /// Whether a robot of the planner's radius may move straight from `a` to `b` (world
     /// coordinates) under the planner's rules.
     pub fn is_leg_clear(&self, a: DVec2, b: DVec2) -> bool {
-        self.clear(self.to_cells(a), self.to_cells(b))
+        let (a, b) = (self.to_cells(a), self.to_cells(b));
+        self.stand_clear(a) && self.stand_clear(b) && self.clear(a, b)
     }
 
     fn to_cells(&self, p: DVec2) -> DVec2 {
