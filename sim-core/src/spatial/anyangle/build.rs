@@ -139,10 +139,7 @@ impl AnyAnglePlanner {
         }
         match &self.obstacles {
             None => true,
-            Some(map) => {
-                let g = self.grid;
-                map.is_swept_disc_free(g.origin() + a * g.cell_m(), g.origin() + b * g.cell_m(), self.radius_m)
-            }
+            Some(map) => map.is_swept_disc_free(self.to_world(a), self.to_world(b), self.radius_m),
         }
     }
 }

@@ -9,6 +9,11 @@ pub const MAX_RASTER_CELLS: u64 = 1 << 31;
 
 /// The map's cells as bits (1 = blocked), row 0 at the bottom. Cells outside the map read as
 /// blocked, as the any-angle rules require.
+///
+/// Not a [`BitGrid`](crate::spatial::BitGrid): this is the line-of-sight hot path, and
+/// `BitGrid`'s bounds-checked, 64-bit indexing (behind the range check done here anyway)
+/// linked the 768² rooms map's corners 15 % slower (2.1 / 1.9 s against 2.5 / 2.2 s, runs
+/// alternated, 2026-11-23).
 #[derive(Clone, Debug)]
 pub(crate) struct CellRaster {
     width: i64,

@@ -78,12 +78,6 @@ impl AnyAnglePlanner {
         }
         let n = self.vertices.len();
         // Node n is the goal. The start is the root and never re-entered.
-        let sees = |p: DVec2, i: usize| {
-            let v = self.vertices[i];
-            grazes(v.quadrant, p - v.pos) && self.clear(p, v.pos)
-        };
-        // Whether a corner sees the goal is asked only of corners the search expands.
-        let mut sees_goal = vec![None::<bool>; n];
         let mut closed = vec![false; n + 1];
         // Every corner the start might see enters unchecked; its sight line is tested only
         // if the search takes it (it is then the best way to that corner, or the test fails
@@ -125,7 +119,8 @@ impl AnyAnglePlanner {
                 return Ok(self.trace(from, to, &front.parent));
             }
             let (pu, du) = (self.vertices[u].pos, front.dist[u]);
-            if *sees_goal[u].get_or_insert_with(|| sees(g, u)) {
+            // Whether a corner sees the goal is asked only when the search expands it (once).
+            if grazes(self.vertices[u].quadrant, g - pu) && self.clear(g, pu) {
                 front.relax(n, g, node, du + pu.distance(g));
             }
             for &v in self.neighbours(u) {
