@@ -680,7 +680,11 @@ fn real_path_berlin_between_straight_line_and_octile() {
         }
         if i % 93 == 0 {
             let cli = cli_path(&map, from, to);
-            assert_eq!(cli.map(|c| c.0), found.as_ref().ok().map(|p| p.length_m));
+            let lib = found
+                .as_ref()
+                .ok()
+                .map(|p| (p.length_m, p.waypoints.iter().map(|w| [w.x, w.y]).collect::<Vec<_>>()));
+            assert_eq!(cli, lib);
         }
     }
     assert!(reachable > 900, "{reachable}");

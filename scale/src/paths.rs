@@ -81,8 +81,12 @@ pub fn read_scenario(path: &Path, map: &ObstacleMap) -> Result<Vec<PathQuery>> {
     Ok(queries)
 }
 
-/// `count` queries between centres of free cells drawn with `seed`.
+/// `count` queries between centres of free cells drawn with `seed`; none on a map without a
+/// free cell (where drawing would never end).
 pub fn random_queries(map: &ObstacleMap, count: usize, seed: u64) -> Vec<PathQuery> {
+    if map.free_area_m2() <= 0.0 {
+        return Vec::new();
+    }
     let g = map.grid();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut free_centre = || loop {
