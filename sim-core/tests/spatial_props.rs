@@ -13,8 +13,8 @@ use sim_core::spatial::PartialCells;
 use sim_core::spatial::TreasureIndex;
 use sim_core::spatial::{Aabb, Capsule, Disc, Overlap, Shape, clip_line};
 use sim_core::spatial::{BitGrid, Region};
+use sim_core::spatial::{CellSet, RegionQuadtree, Square};
 use sim_core::spatial::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex, TreasureId};
-use sim_core::spatial::{RegionQuadtree, Square};
 
 fn config(cases: u32) -> Config {
     Config {
@@ -117,6 +117,13 @@ fn cells_from_leaves<S: Shape>(map: &ObstacleMap, shape: &S) -> BTreeSet<(u32, u
         }
         ControlFlow::Continue(())
     });
+    out
+}
+
+/// The cells of a set, listed one by one.
+fn set_cells(set: &CellSet) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    set.for_each_cell(|x, y| out.push((x, y)));
     out
 }
 
@@ -342,6 +349,67 @@ proptest! {
         for (x, y) in w.cells() {
             prop_assert_eq!(by_view.tree().cell_value(x, y), by_disc.tree().cell_value(x, y));
         }
+    }
+
+    /// Views marked block by block (issue 11: each 8 × 8 block under a small view set by
+    /// one descent) hold exactly the cells the general walk marks, and report exactly the
+    /// cells that changed, each once; the collective map fed those reports holds the same
+    /// cells; obstacle counts over the reported sets match brute force. Radii up to 20
+    /// cells take both the block path and the walk.
+    #[test]
+    fn issue11_views_marked_by_blocks_are_the_walks_cells(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let obstacles = w.map();
+        let mut by_view = KnownMap::new(w.grid);
+        let mut by_walk = KnownMap::new(w.grid);
+        let mut explored = KnownMap::new(w.grid);
+        let mut c = w.random_point(&mut rng);
+        let mut r = rng.random_range(0.5..6.0) * w.grid.cell_m();
+        for step in 0..20 {
+            if rng.random_bool(0.25) {
+                c = w.random_point(&mut rng);
+                r = rng.random_range(0.0..20.0) * w.grid.cell_m();
+            } else {
+                c += DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..1.5) * w.grid.cell_m();
+            }
+            if step % 6 == 5 {
+                let mut other = KnownMap::new(w.grid);
+                other.mark_disc(w.random_point(&mut rng), 3.0 * w.grid.cell_m());
+                by_view.merge(&other);
+                by_walk.merge(&other);
+                explored.merge(&other);
+            }
+            let before: Vec<bool> = w.cells().map(|(x, y)| by_view.tree().cell_value(x, y)).collect();
+            let mut reported = BTreeSet::new();
+            let mut sets = Vec::new();
+            let grew = by_view.mark_view_reporting(c, r, |set| {
+                set.for_each_cell(|x, y| assert!(reported.insert((x, y)), "cell ({x}, {y}) reported twice"));
+                sets.push(set);
+            });
+            by_walk.mark_reporting(&Disc { center: c, radius: r }, |_| {});
+            by_view.validate().unwrap();
+            prop_assert_eq!(by_view.known_cells(), by_walk.known_cells());
+            prop_assert_eq!(grew, !reported.is_empty());
+            let changed: BTreeSet<(u32, u32)> = w
+                .cells()
+                .zip(&before)
+                .filter(|&((x, y), &was)| !was && by_view.tree().cell_value(x, y))
+                .map(|(cell, _)| cell)
+                .collect();
+            prop_assert_eq!(&reported, &changed);
+            for set in sets {
+                let free = set_cells(&set).iter().filter(|&&(x, y)| !w.blocked(x, y)).count() as u64;
+                prop_assert_eq!(obstacles.tree().count_cells_in_set(set, false), free);
+                explored.mark_cells_reporting(set, |_| {});
+            }
+            explored.validate().unwrap();
+        }
+        for (x, y) in w.cells() {
+            let v = by_walk.tree().cell_value(x, y);
+            prop_assert_eq!(by_view.tree().cell_value(x, y), v, "cell ({}, {})", x, y);
+            prop_assert_eq!(explored.tree().cell_value(x, y), v, "explored cell ({}, {})", x, y);
+        }
+        prop_assert_eq!(explored.known_cells(), by_walk.known_cells());
     }
 
     #[test]

@@ -13,7 +13,7 @@ use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
-    Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, Square, TreasureId, TreasureIndex,
+    CellSet, Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex,
 };
 use crate::world::{Action, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
@@ -27,10 +27,10 @@ pub(super) struct Agent {
     /// Known cells of the last map merged from each sender: a map that has not grown since
     /// is already contained in ours (maps only grow), so merging it again is skipped.
     pub(super) merged_from: HashMap<RobotId, u64, foldhash::fast::FixedState>,
-    /// Squares its own view added to its known map this round: the only cells it can be
+    /// Cells its own view added to its known map this round: the only cells it can be
     /// first to explore (what it knew before was seen, by it or another, in an earlier
     /// round), so the collective map is updated from these instead of from its view disc.
-    pub(super) new_squares: Vec<Square>,
+    pub(super) new_squares: Vec<CellSet>,
     /// This round's move with obstacles already accounted for, worked out in parallel in
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,

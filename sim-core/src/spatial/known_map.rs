@@ -8,8 +8,12 @@ use glam::DVec2;
 use crate::spatial::geometry::{Aabb, Clipped, Disc, DiscBeyond, Shape};
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
-use crate::spatial::quadtree::PartialCells;
 use crate::spatial::quadtree::RegionQuadtree;
+use crate::spatial::quadtree::{CellSet, PartialCells};
+
+/// Views spanning at most this many 8 × 8 blocks are marked block by block (see
+/// [`KnownMap::mark_view_reporting`]): up to 4 × 4, a view of about 12 cells' radius.
+const MAX_VIEW_BLOCKS: u32 = 16;
 
 /// The explored part of the map, as seen by one robot (or a team).
 #[derive(Clone, Debug)]
@@ -68,26 +72,40 @@ impl KnownMap {
         self.mark_view_reporting(center, radius_m, |_| {})
     }
 
-    /// [`mark_view`](Self::mark_view), calling `newly_known` with the squares that became
+    /// [`mark_view`](Self::mark_view), calling `newly_known` with the cells that became
     /// known.
-    pub fn mark_view_reporting(
-        &mut self,
-        center: DVec2,
-        radius_m: f64,
-        newly_known: impl FnMut(crate::spatial::quadtree::Square),
-    ) -> bool {
+    pub fn mark_view_reporting(&mut self, center: DVec2, radius_m: f64, mut newly_known: impl FnMut(CellSet)) -> bool {
         let disc = Disc {
             center,
             radius: radius_m,
         };
         let before = self.known_cells;
-        self.mark_reporting(
-            &DiscBeyond {
+        // A view a few blocks across: each block classified and set at once, by one
+        // descent along its coordinates (issue 11: the walk from the root along the view's
+        // rim was half of a random walker's round). Bigger views take the pruned walk, which
+        // skips what the last view marked.
+        let mut added = 0;
+        let mut report = |set: CellSet| {
+            added += set.cells();
+            newly_known(set);
+        };
+        let clip = self.grid().extent();
+        let by_blocks = if clip.contains_box(&disc.bounds()) {
+            self.tree
+                .fill_blocks_reporting(&disc, true, PartialCells::Exclude, MAX_VIEW_BLOCKS, &mut report)
+        } else {
+            let clipped = Clipped { shape: &disc, clip };
+            self.tree
+                .fill_blocks_reporting(&clipped, true, PartialCells::Exclude, MAX_VIEW_BLOCKS, &mut report)
+        };
+        self.known_cells += added;
+        if !by_blocks {
+            let beyond = DiscBeyond {
                 disc,
                 seen: self.last_view,
-            },
-            newly_known,
-        );
+            };
+            self.mark_reporting(&beyond, |sq| newly_known(CellSet::whole(sq)));
+        }
         self.last_view = Some(disc);
         self.known_cells > before
     }
@@ -99,24 +117,21 @@ impl KnownMap {
         self.known_cells > before
     }
 
-    /// Mark grid square `sq` known, reporting the squares that became known: what
-    /// [`mark_reporting`](Self::mark_reporting) does with the square's box, by one descent
-    /// along its coordinates (the square must lie inside the map; others take the general
-    /// path).
-    pub fn mark_square_reporting(
-        &mut self,
-        sq: crate::spatial::quadtree::Square,
-        mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
-    ) {
+    /// Mark the cells of `set` known, reporting those that became known: what
+    /// [`mark_reporting`](Self::mark_reporting) does with them, by one descent along the
+    /// square's coordinates (the square must lie inside the map; whole squares that do not
+    /// take the general path).
+    pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) {
+        let sq = set.square();
         let square = self.grid().square(sq.x, sq.y, sq.level);
-        if !self.grid().extent().contains_box(&square) {
-            self.mark_reporting(&square, newly_known);
+        if set.is_whole() && !self.grid().extent().contains_box(&square) {
+            self.mark_reporting(&square, |sq| newly_known(CellSet::whole(sq)));
             return;
         }
         let mut added = 0;
-        self.tree.fill_square_reporting(sq, true, |sq| {
-            added += sq.cells();
-            newly_known(sq);
+        self.tree.fill_cells_reporting(set, true, |set| {
+            added += set.cells();
+            newly_known(set);
         });
         self.known_cells += added;
     }

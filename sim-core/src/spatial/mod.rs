@@ -23,6 +23,6 @@ pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
 pub use nav::{LazyNavGraph, NavGraph, NavNodeId, Route};
 pub use obstacle_map::ObstacleMap;
-pub use quadtree::{BitGrid, Components, PartialCells, Region, RegionQuadtree, Square};
+pub use quadtree::{BitGrid, CellSet, Components, PartialCells, Region, RegionQuadtree, Square};
 pub use robot_index::RobotIndex;
 pub use treasure_index::{BUCKET, Treasure, TreasureIndex};

@@ -9,7 +9,7 @@
 use glam::DVec2;
 
 use crate::engine::simulation::Simulation;
-use crate::spatial::{Disc, DiscBeyond, KnownMap, ObstacleMap, Square};
+use crate::spatial::{CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap};
 use crate::world::Event;
 
 /// One robot as the explored-map update sees it at the start of the round.
@@ -28,7 +28,7 @@ pub(super) struct ExploredUpdate {
     views: Vec<Option<Disc>>,
     viewers: Vec<Viewer>,
     /// Each robot's new squares (moved out of its agent, given back in `finish`).
-    new_squares: Vec<Vec<Square>>,
+    new_squares: Vec<Vec<CellSet>>,
     /// Free cells each robot was first to see.
     fresh: Vec<u64>,
 }
@@ -75,18 +75,18 @@ impl ExploredUpdate {
                 radius: viewer.view_radius_m,
             };
             let mut fresh = 0;
-            let mut count_free = |sq| fresh += obstacles.tree().count_cells_in(sq, false);
+            let mut count_free = |set| fresh += obstacles.tree().count_cells_in_set(set, false);
             if viewer.has_known {
                 // Only what its own map gained can be new to everyone (a descent per square
                 // instead of a walk along the view's rim).
-                for &sq in &self.new_squares[i] {
-                    self.explored.mark_square_reporting(sq, &mut count_free);
+                for &set in &self.new_squares[i] {
+                    self.explored.mark_cells_reporting(set, &mut count_free);
                 }
             } else {
                 // What lay wholly inside this robot's last view is explored already.
                 let seen = self.views[i];
                 self.explored
-                    .mark_reporting(&DiscBeyond { disc, seen }, &mut count_free);
+                    .mark_reporting(&DiscBeyond { disc, seen }, |sq| count_free(CellSet::whole(sq)));
             }
             self.views[i] = Some(disc);
             self.fresh[i] = fresh;

@@ -123,6 +123,69 @@ impl Square {
     }
 }
 
+/// Some cells of one square of a tree: all of them, or those of a bit mask inside an 8 × 8
+/// block. What a block-wise fill reports, and what the collective explored map takes from
+/// the robots' own maps (issue 11: a view's gain in one block is one set, settled by one
+/// descent, instead of a handful of squares each descended to on its own).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CellSet {
+    square: Square,
+    /// `u64::MAX`: every cell of `square`; otherwise `square` is a block and these are its
+    /// cells in Z order (see [`block`]).
+    bits: u64,
+}
+
+impl CellSet {
+    /// Every cell of `square`.
+    pub fn whole(square: Square) -> Self {
+        Self { square, bits: u64::MAX }
+    }
+
+    /// The cells `bits` (Z order, not all set) of the block at `square`.
+    pub(crate) fn of_block(square: Square, bits: u64) -> Self {
+        debug_assert_eq!(square.level, block::BLOCK_LEVEL);
+        Self { square, bits }
+    }
+
+    /// The square the cells lie in.
+    pub fn square(&self) -> Square {
+        self.square
+    }
+
+    /// Whether the set is its whole square.
+    pub fn is_whole(&self) -> bool {
+        self.bits == u64::MAX
+    }
+
+    /// Number of cells in the set.
+    pub fn cells(&self) -> u64 {
+        if self.is_whole() {
+            self.square.cells()
+        } else {
+            u64::from(self.bits.count_ones())
+        }
+    }
+
+    /// Call `visit` with every cell `(x, y)` of the set (in Z order within the square).
+    pub fn for_each_cell(&self, mut visit: impl FnMut(u32, u32)) {
+        let sq = self.square;
+        if self.is_whole() {
+            for y in sq.y..sq.y + sq.side_cells() {
+                for x in sq.x..sq.x + sq.side_cells() {
+                    visit(x, y);
+                }
+            }
+            return;
+        }
+        let mut bits = self.bits;
+        while bits != 0 {
+            let (dx, dy) = block::cell_at(bits.trailing_zeros());
+            visit(sq.x + dx, sq.y + dy);
+            bits &= bits - 1;
+        }
+    }
+}
+
 const FLAG: u8 = 0x80;
 
 /// A level with a flag in its top bit (levels never exceed [`MAX_DEPTH`] < 128).

@@ -5,7 +5,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use super::block::{self, BLOCK_LEVEL, Node};
-use super::{NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
+use super::{CellSet, NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Overlap, Shape, clip_line};
 
 impl RegionQuadtree {
@@ -342,6 +342,26 @@ impl RegionQuadtree {
     /// Number of cells of `sq` holding `value`.
     pub fn count_cells_in(&self, sq: Square, value: bool) -> u64 {
         self.subtree_cells(self.descend_to(sq), value, sq)
+    }
+
+    /// Number of cells of `set` holding `value` (one descent).
+    pub fn count_cells_in_set(&self, set: CellSet, value: bool) -> u64 {
+        if set.is_whole() {
+            return self.count_cells_in(set.square(), value);
+        }
+        let bits = match self.descend_to(set.square()) {
+            Node::Leaf(v) => {
+                if v {
+                    u64::MAX
+                } else {
+                    0
+                }
+            }
+            Node::Bits { bits, .. } => bits,
+            Node::Group(g) => self.bits_of(g, BLOCK_LEVEL),
+        };
+        let held = if value { bits } else { !bits };
+        u64::from((held & set.bits).count_ones())
     }
 
     /// Number of cells where `self` holds `a` and `other` holds `b`. Both trees must cover
