@@ -351,11 +351,11 @@ proptest! {
         }
     }
 
-    /// Views marked block by block (issue 11: each 8 × 8 block under a small view set by
-    /// one descent) hold exactly the cells the general walk marks, and report exactly the
-    /// cells that changed, each once; the collective map fed those reports holds the same
-    /// cells; obstacle counts over the reported sets match brute force. Radii up to 20
-    /// cells take both the block path and the walk.
+    /// Views marked from their cells worked out at once (issue 11: one walk that goes only
+    /// where the cells are, no shape tests) hold exactly the cells the general walk marks,
+    /// and report exactly the cells that changed, each once; the collective map fed those
+    /// reports holds the same cells; obstacle counts over the reported sets match brute
+    /// force.
     #[test]
     fn issue11_views_marked_by_blocks_are_the_walks_cells(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -410,6 +410,33 @@ proptest! {
             prop_assert_eq!(explored.tree().cell_value(x, y), v, "explored cell ({}, {})", x, y);
         }
         prop_assert_eq!(explored.known_cells(), by_walk.known_cells());
+    }
+
+    /// Views wider than 64 cells take the walk that skips the last view; views jumping
+    /// between both paths on a map of a few hundred cells mark what whole discs mark.
+    #[test]
+    fn issue11_wide_and_narrow_views_mark_what_whole_discs_mark(
+        w in 65u32..300, h in 65u32..300, cell in prop_oneof![Just(1.0), 0.1f64..3.0], seed in any::<u64>()
+    ) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = DVec2::new(rng.random_range(-500.0..500.0), rng.random_range(-500.0..500.0));
+        let grid = Grid::new(origin, cell, w, h).unwrap();
+        let mut by_view = KnownMap::new(grid);
+        let mut by_disc = KnownMap::new(grid);
+        let e = grid.extent();
+        let mut c = e.min + (e.max - e.min) * DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+        for _ in 0..12 {
+            let r = rng.random_range(0.0..45.0) * cell;
+            c += DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..8.0) * cell;
+            prop_assert_eq!(by_view.mark_view(c, r), by_disc.mark_disc(c, r));
+            by_view.validate().unwrap();
+            prop_assert_eq!(by_view.known_cells(), by_disc.known_cells());
+        }
+        let mut a = Vec::new();
+        by_view.tree().for_each_leaf(|sq, v| a.push((sq, v)));
+        let mut b = Vec::new();
+        by_disc.tree().for_each_leaf(|sq, v| b.push((sq, v)));
+        prop_assert_eq!(a, b);
     }
 
     #[test]

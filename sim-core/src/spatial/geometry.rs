@@ -220,6 +220,87 @@ pub struct Disc {
     pub radius: f64,
 }
 
+/// A rectangle of grid cells as row masks: bit `i` of `rows[j]` is cell `(x0 + i, y0 + j)`
+/// (at most 64 columns and 64 rows).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CellRows {
+    /// Column of bit 0.
+    pub x0: u32,
+    /// Row of `rows[0]`.
+    pub y0: u32,
+    /// Number of rows in use.
+    pub len: usize,
+    /// The rows, south to north.
+    pub rows: [u64; 64],
+}
+
+impl Disc {
+    /// The cells of `grid` that lie wholly inside the disc and inside `clip`, as row masks,
+    /// if the disc's bounds span at most 64 cells a side of the covering square (else
+    /// `None`). Exactly the cells that [`Shape::classify_cells`] of the disc (clipped by
+    /// `clip`) reports contained, worked out once for the whole disc: the distances along
+    /// each column and row of cell edges once, then one test per cell (issue 11: a robot's
+    /// view, classified block by block, repeated that work for every block it touched).
+    pub fn contained_rows(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb) -> Option<CellRows> {
+        let b = self.bounds();
+        let side = grid.side_cells();
+        let lo = (b.min - grid.origin()) / grid.cell_m();
+        let hi = (b.max - grid.origin()) / grid.cell_m();
+        let mut out = CellRows {
+            x0: 0,
+            y0: 0,
+            len: 0,
+            rows: [0; 64],
+        };
+        if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < f64::from(side) && lo.y < f64::from(side)) {
+            return Some(out);
+        }
+        // Saturating casts clamp to the covering square; a cell whose edge the bounds merely
+        // touch is included, so no cell the disc may contain is left out.
+        let cell = |v: f64| (v.floor().max(0.0) as u32).min(side - 1);
+        let (x0, x1, y0, y1) = (cell(lo.x), cell(hi.x), cell(lo.y), cell(hi.y));
+        if x1 - x0 >= 64 || y1 - y0 >= 64 {
+            return None;
+        }
+        let r2 = self.radius * self.radius;
+        // Per column (and row): squared distances to the nearest point and to the farthest
+        // edge, as `axis_distances` computes them, and whether the clip holds it.
+        let along = |first: u32, last: u32, c: f64, edge: &dyn Fn(u32) -> f64, lo: f64, hi: f64| {
+            let mut near = [0.0; 64];
+            let mut far = [0.0; 64];
+            let mut within = 0u64;
+            for (i, k) in (first..=last).enumerate() {
+                let (a, b) = (edge(k), edge(k + 1));
+                let d = c.max(a).min(b) - c;
+                near[i] = d * d;
+                let f = (c - a).abs().max((c - b).abs());
+                far[i] = f * f;
+                within |= u64::from(lo <= a && b <= hi) << i;
+            }
+            (near, far, within)
+        };
+        let (near_x, far_x, cols_within) = along(x0, x1, self.center.x, &|k| grid.corner(k, 0).x, clip.min.x, clip.max.x);
+        let (near_y, far_y, rows_within) = along(y0, y1, self.center.y, &|k| grid.corner(0, k).y, clip.min.y, clip.max.y);
+        let width = (x1 - x0 + 1) as usize;
+        out.x0 = x0;
+        out.y0 = y0;
+        out.len = (y1 - y0 + 1) as usize;
+        for j in 0..out.len {
+            if rows_within >> j & 1 == 0 {
+                continue;
+            }
+            let mut row = 0u64;
+            for i in 0..width {
+                // The sums and comparisons of `classify_cells`: contained and intersecting.
+                let inside = far_x[i] + far_y[j] <= r2 && near_x[i] + near_y[j] < r2;
+                row |= u64::from(inside) << i;
+            }
+            out.rows[j] = row & cols_within;
+        }
+        Some(out)
+    }
+}
+
 impl Shape for Disc {
     #[inline]
     fn intersects(&self, b: &Aabb) -> bool {

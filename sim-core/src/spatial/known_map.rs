@@ -11,10 +11,6 @@ use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::{CellSet, PartialCells};
 
-/// Views spanning at most this many 8 × 8 blocks are marked block by block (see
-/// [`KnownMap::mark_view_reporting`]): up to 4 × 4, a view of about 12 cells' radius.
-const MAX_VIEW_BLOCKS: u32 = 16;
-
 /// The explored part of the map, as seen by one robot (or a team).
 #[derive(Clone, Debug)]
 pub struct KnownMap {
@@ -80,26 +76,20 @@ impl KnownMap {
             radius: radius_m,
         };
         let before = self.known_cells;
-        // A view a few blocks across: each block classified and set at once, by one
-        // descent along its coordinates (issue 11: the walk from the root along the view's
-        // rim was half of a random walker's round). Bigger views take the pruned walk, which
-        // skips what the last view marked.
-        let mut added = 0;
-        let mut report = |set: CellSet| {
-            added += set.cells();
-            newly_known(set);
-        };
+        // A view up to 64 cells across: its cells worked out at once, then set by one walk
+        // that goes only where they are (issue 11: the walk from the root along the view's
+        // rim, with shape tests at every node, was half of a random walker's round). Bigger
+        // views take that walk, which skips what the last view marked.
         let clip = self.grid().extent();
-        let by_blocks = if clip.contains_box(&disc.bounds()) {
-            self.tree
-                .fill_blocks_reporting(&disc, true, PartialCells::Exclude, MAX_VIEW_BLOCKS, &mut report)
-        } else {
-            let clipped = Clipped { shape: &disc, clip };
-            self.tree
-                .fill_blocks_reporting(&clipped, true, PartialCells::Exclude, MAX_VIEW_BLOCKS, &mut report)
-        };
+        let mut added = 0;
+        let by_rows = disc.contained_rows(self.grid(), &clip).is_some_and(|rows| {
+            self.tree.fill_rows_reporting(&rows, true, |set| {
+                added += set.cells();
+                newly_known(set);
+            })
+        });
         self.known_cells += added;
-        if !by_blocks {
+        if !by_rows {
             let beyond = DiscBeyond {
                 disc,
                 seen: self.last_view,

@@ -3,7 +3,7 @@
 
 use super::block::{self, BLOCK_LEVEL, Node};
 use super::{CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
-use crate::spatial::geometry::{Aabb, Overlap, Shape};
+use crate::spatial::geometry::{Aabb, CellRows, Overlap, Shape};
 
 /// What [`RegionQuadtree::fill`] does with a cell the shape covers only in part.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,107 +86,86 @@ impl RegionQuadtree {
         }
     }
 
-    /// [`fill_reporting`](Self::fill_reporting) for a small shape, block by block: every
-    /// 8 × 8 block under the shape's bounds is classified at once
-    /// ([`Shape::classify_cells`]) and updated by one descent along its coordinates, with no
-    /// box tests on the way down (issue 11: a robot's view, a few blocks across, cost a
-    /// shape-driven walk from the root every round; this is the whole of the marking now).
-    /// The cells set are exactly those of `fill_reporting`; the sets reported differ in
-    /// shape (a block's gain at once) but not in the cells they hold.
+    /// Set the cells of `cells` to `value` in one walk that goes only where they are (integer
+    /// tests, no shapes), calling `changed` with each block's cells that switched. Trees
+    /// with blocks only (`false`, nothing done, otherwise).
     ///
-    /// Does nothing and returns `false` when the tree has no blocks, the bounds span more
-    /// than `max_blocks` blocks (the walk prunes big shapes better) or the shape cannot
-    /// classify cells; the caller then takes the general path.
-    pub fn fill_blocks_reporting<S: Shape>(
-        &mut self,
-        shape: &S,
-        value: bool,
-        partial: PartialCells,
-        max_blocks: u32,
-        mut changed: impl FnMut(CellSet),
-    ) -> bool {
+    /// Issue 11: a robot's view, a few blocks across, was marked by a shape-driven walk
+    /// from the root along its rim; with its cells worked out at once
+    /// ([`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows)) marking
+    /// is a few descents that stop at squares already known.
+    pub fn fill_rows_reporting(&mut self, cells: &CellRows, value: bool, mut changed: impl FnMut(CellSet)) -> bool {
         if !self.packed {
             return false;
         }
-        let Some((lo, hi)) = self.blocks_under(&shape.bounds()) else {
-            // Wholly outside the covering square: nothing to fill.
+        let any = cells.rows[..cells.len].iter().fold(0, |a, &r| a | r);
+        if any == 0 {
             return true;
+        }
+        let area = RowArea {
+            cells,
+            x_end: cells.x0 + (64 - any.leading_zeros()),
+            y_end: cells.y0 + cells.len as u32,
         };
-        if (hi.0 - lo.0 + 1) * (hi.1 - lo.1 + 1) > max_blocks {
-            return false;
-        }
-        for by in lo.1..=hi.1 {
-            for bx in lo.0..=hi.0 {
-                let sq = Square {
-                    x: bx << BLOCK_LEVEL,
-                    y: by << BLOCK_LEVEL,
-                    level: BLOCK_LEVEL,
-                };
-                // Classified only when the descent finds the block not already `value`
-                // (most of a wandering robot's view lies in blocks it has wholly seen).
-                let mut classified = true;
-                let flipped = self.set_block_cells_with(sq, value, |tree| {
-                    let Some(m) = shape.classify_cells(&tree.block_cells(sq)) else {
-                        classified = false;
-                        return 0;
-                    };
-                    block::z_order(match partial {
-                        PartialCells::Include => m.intersects,
-                        PartialCells::Exclude => m.contains,
-                    })
-                });
-                if !classified {
-                    debug_assert!(bx == lo.0 && by == lo.1, "a shape classifies all blocks or none");
-                    return false;
-                }
-                if flipped != 0 {
-                    changed(CellSet::of_block(sq, flipped));
-                }
-            }
-        }
+        let root = self.root_square();
+        self.root = self.fill_rows_node(self.root, root, &area, value, &mut changed);
         true
     }
 
-    /// The blocks (inclusive lower-left and upper-right, in block coordinates) that hold
-    /// the cells of the covering square meeting `bounds`, if any does.
-    fn blocks_under(&self, bounds: &Aabb) -> Option<((u32, u32), (u32, u32))> {
-        let g = &self.grid;
-        let lo = (bounds.min - g.origin()) / g.cell_m();
-        let hi = (bounds.max - g.origin()) / g.cell_m();
-        let side = f64::from(g.side_cells());
-        if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < side && lo.y < side) {
-            return None;
+    fn fill_rows_node(
+        &mut self,
+        n: NodeRef,
+        at: Square,
+        area: &RowArea,
+        value: bool,
+        changed: &mut impl FnMut(CellSet),
+    ) -> NodeRef {
+        if n == leaf(value) || !area.meets(at) {
+            return n;
         }
-        // Saturating casts clamp to the covering square; a cell whose edge the bounds
-        // merely touch is included, so no cell the shape may cover is left out.
-        let last = g.side_cells() - 1;
-        let cell = |v: f64| (v.floor().max(0.0) as u32).min(last) >> BLOCK_LEVEL;
-        Some(((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y))))
+        if at.level == BLOCK_LEVEL {
+            let cover = block::z_order(area.block_mask(at));
+            let bits = self.bits_of(n, BLOCK_LEVEL);
+            let set = if value { bits | cover } else { bits & !cover };
+            if set == bits {
+                return n;
+            }
+            changed(CellSet::of_block(at, set ^ bits));
+            return self.store_bits(n, set);
+        }
+        if is_leaf(n) {
+            // A leaf of the other value splits only if something changes below it.
+            let kids = [0, 1, 2, 3].map(|i| self.fill_rows_node(n, at.child(i), area, value, changed));
+            return if kids == [n; 4] { n } else { self.make_node(kids) };
+        }
+        let mut any = false;
+        for i in 0..4 {
+            let k = self.groups[n as usize][i];
+            let k2 = self.fill_rows_node(k, at.child(i), area, value, changed);
+            if k2 != k {
+                self.groups[n as usize][i] = k2;
+                any = true;
+            }
+        }
+        if any { self.merge_if_uniform(n) } else { n }
     }
 
     /// Set the cells `bits` (Z order) of the block at square `block` to `value` by one
     /// descent along its coordinates; returns the cells that changed. Packed trees only.
     pub(crate) fn set_block_cells(&mut self, block: Square, bits: u64, value: bool) -> u64 {
-        self.set_block_cells_with(block, value, |_| bits)
-    }
-
-    /// [`set_block_cells`](Self::set_block_cells) with the cells given by `cover`, called
-    /// only if the descent reaches a block or a leaf of the other value.
-    fn set_block_cells_with(&mut self, block: Square, value: bool, cover: impl FnOnce(&Self) -> u64) -> u64 {
         debug_assert!(self.packed && block.level == BLOCK_LEVEL);
         let root = self.root_square();
         let mut flipped = 0;
-        let mut cover = Some(cover);
-        self.root = self.set_block_node(self.root, root, block, &mut cover, value, &mut flipped);
+        self.root = self.set_block_node(self.root, root, block, bits, value, &mut flipped);
         flipped
     }
 
-    fn set_block_node<F: FnOnce(&Self) -> u64>(
+    fn set_block_node(
         &mut self,
         n: NodeRef,
         at: Square,
         target: Square,
-        cover: &mut Option<F>,
+        cover: u64,
         value: bool,
         flipped: &mut u64,
     ) -> NodeRef {
@@ -194,7 +173,6 @@ impl RegionQuadtree {
             return n;
         }
         if at.level == BLOCK_LEVEL {
-            let cover = cover.take().map_or(0, |f| f(self));
             let bits = self.bits_of(n, BLOCK_LEVEL);
             let set = if value { bits | cover } else { bits & !cover };
             *flipped = set ^ bits;
@@ -526,5 +504,46 @@ fn report_bits(bits: u64, sq: Square, changed: &mut impl FnMut(Square)) {
     }
     for i in 0..4 {
         report_bits(block::child_bits(bits, sq.level, i), sq.child(i), changed);
+    }
+}
+
+/// The cells of a [`CellRows`] with their extent, for [`RegionQuadtree::fill_rows_reporting`].
+struct RowArea<'a> {
+    cells: &'a CellRows,
+    /// One past the last column holding a cell.
+    x_end: u32,
+    /// One past the last row.
+    y_end: u32,
+}
+
+impl RowArea<'_> {
+    /// Whether square `sq` shares cells with the rows' rectangle.
+    #[inline]
+    fn meets(&self, sq: Square) -> bool {
+        let side = sq.side_cells();
+        sq.x < self.x_end && self.cells.x0 < sq.x + side && sq.y < self.y_end && self.cells.y0 < sq.y + side
+    }
+
+    /// The cells of the block at `sq` (8 × 8) as a row-major mask (bit `8 j + i`).
+    #[inline]
+    fn block_mask(&self, sq: Square) -> u64 {
+        let mut mask = 0u64;
+        for j in 0..8 {
+            let y = sq.y + j;
+            if y < self.cells.y0 || y >= self.y_end {
+                continue;
+            }
+            let row = self.cells.rows[(y - self.cells.y0) as usize];
+            // Columns sq.x .. sq.x + 8 of the row, whose bit 0 is column x0.
+            let byte = if sq.x >= self.cells.x0 {
+                let s = sq.x - self.cells.x0;
+                if s < 64 { (row >> s) & 0xFF } else { 0 }
+            } else {
+                let s = self.cells.x0 - sq.x;
+                if s < 8 { (row << s) & 0xFF } else { 0 }
+            };
+            mask |= byte << (8 * j);
+        }
+        mask
     }
 }
