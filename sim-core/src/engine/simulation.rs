@@ -34,6 +34,9 @@ pub(super) struct Agent {
     /// This round's move with obstacles already accounted for, worked out in parallel in
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,
+    /// With a planned move: the robots that could be in its way (see
+    /// [`Simulation::robots_near_move`]), also listed in step 2.
+    pub(super) planned_near: Vec<u32>,
 }
 
 /// A move's obstacle test done ahead of step 3: the robot standing at `from` moving by `d`
@@ -167,6 +170,7 @@ impl Simulation {
                     merged_from: HashMap::default(),
                     new_squares: Vec::new(),
                     planned_move: None,
+                    planned_near: Vec::new(),
                 });
             }
         }

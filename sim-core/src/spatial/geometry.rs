@@ -279,8 +279,10 @@ impl Disc {
             }
             (near, far, within)
         };
-        let (near_x, far_x, cols_within) = along(x0, x1, self.center.x, &|k| grid.corner(k, 0).x, clip.min.x, clip.max.x);
-        let (near_y, far_y, rows_within) = along(y0, y1, self.center.y, &|k| grid.corner(0, k).y, clip.min.y, clip.max.y);
+        let (near_x, far_x, cols_within) =
+            along(x0, x1, self.center.x, &|k| grid.corner(k, 0).x, clip.min.x, clip.max.x);
+        let (near_y, far_y, rows_within) =
+            along(y0, y1, self.center.y, &|k| grid.corner(0, k).y, clip.min.y, clip.max.y);
         let width = (x1 - x0 + 1) as usize;
         out.x0 = x0;
         out.y0 = y0;

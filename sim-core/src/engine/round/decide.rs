@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
-use super::resolve::{move_within_means, trim_to_obstacles, upkeep};
+use super::resolve::{Bodies, move_within_means, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::ObstacleMap;
@@ -23,6 +23,7 @@ impl Simulation {
         let seed = self.seed;
         let types = &self.types;
         let obstacles = &self.map.obstacles;
+        let bodies = Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m);
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter())
@@ -39,15 +40,22 @@ impl Simulation {
                 let rng = Simulation::rng_for(seed, robot.id, round);
                 let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
                 agent.action = agent.strategy.decide(&mut ctx);
-                agent.planned_move = plan_move(agent, robot, kind, obstacles);
+                agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
             });
     }
 }
 
 /// The obstacle test of this round's move, if it is one, done here in parallel rather than
 /// in the sequential step 3: with the energy step 3 will leave the robot before it moves
-/// (upkeep is charged first), the same trim to speed and energy, the same bisection.
-fn plan_move(agent: &Agent, robot: &Robot, kind: &RobotType, obstacles: &ObstacleMap) -> Option<PlannedMove> {
+/// (upkeep is charged first), the same trim to speed and energy, the same bisection; and
+/// the robots that could be in its way (into `agent.planned_near`).
+fn plan_move(
+    agent: &mut Agent,
+    robot: &Robot,
+    kind: &RobotType,
+    obstacles: &ObstacleMap,
+    bodies: &Bodies,
+) -> Option<PlannedMove> {
     let Action::MoveTo { to } = agent.action else {
         return None;
     };
@@ -61,10 +69,18 @@ fn plan_move(agent: &Agent, robot: &Robot, kind: &RobotType, obstacles: &Obstacl
         return None;
     }
     let d = move_within_means(from, to, kind, energy);
+    let free = trim_to_obstacles(obstacles, from, d, kind.radius_m);
+    bodies.near_move(
+        robot.id.index(),
+        from,
+        free.length(),
+        kind.radius_m,
+        &mut agent.planned_near,
+    );
     Some(PlannedMove {
         from,
         d,
         radius_m: kind.radius_m,
-        free: trim_to_obstacles(obstacles, from, d, kind.radius_m),
+        free,
     })
 }

@@ -157,14 +157,23 @@ impl Simulation {
             return Outcome::Done;
         }
         let d = move_within_means(from, to, kind, self.robots[i].energy);
-        let d = match self.agents[i].planned_move.take() {
-            Some(p) if p.is_for(from, d, kind.radius_m) => p.free,
-            _ => trim_to_obstacles(&self.map.obstacles, from, d, kind.radius_m),
-        };
         // Other robots: halve the move until the end position overlaps nobody. Who could be
-        // in the way is asked of the index once for the whole move, not once per halving.
+        // in the way depends only on the start of the round and the obstacle-trimmed move,
+        // so step 2 listed them with the move's obstacle test (issue 11: the look-up was an
+        // eighth of the sequential step); otherwise they are listed here, once for the whole
+        // move, not once per halving.
         let mut near = std::mem::take(&mut self.near_scratch);
-        self.robots_near_move(i, from, d.length(), kind.radius_m, &mut near);
+        let d = match self.agents[i].planned_move.take() {
+            Some(p) if p.is_for(from, d, kind.radius_m) => {
+                std::mem::swap(&mut near, &mut self.agents[i].planned_near);
+                p.free
+            }
+            _ => {
+                let d = trim_to_obstacles(&self.map.obstacles, from, d, kind.radius_m);
+                self.bodies().near_move(i, from, d.length(), kind.radius_m, &mut near);
+                d
+            }
+        };
         let mut step = d;
         let mut tries = 0;
         while step.length() > 1e-9 && self.overlaps_any(&near, from + step, kind.radius_m) {
@@ -190,18 +199,9 @@ impl Simulation {
         }
     }
 
-    /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere within
-    /// `length` of `from`. The index holds start-of-round positions and robots move at most
-    /// `max_speed_m` a round, so one touching an end point `p` now started within
-    /// `radius + max_radius_m + max_speed_m` of `p`, hence within that plus `length` of `from`.
-    fn robots_near_move(&self, i: usize, from: DVec2, length: f64, radius: f64, near: &mut Vec<u32>) {
-        near.clear();
-        let reach = radius + self.max_radius_m + self.max_speed_m + length;
-        self.body_index.for_each_within(from, reach, |id, _| {
-            if id.index() != i {
-                near.push(id.get());
-            }
-        });
+    /// The start-of-round robots, for listing who could be in a move's way.
+    pub(super) fn bodies(&self) -> Bodies<'_> {
+        Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m)
     }
 
     /// Whether a disc at `p` would overlap one of `near` where it stands now.
@@ -392,6 +392,38 @@ pub(super) fn move_within_means(from: DVec2, to: DVec2, kind: &RobotType, energy
     }
     d *= len / wanted;
     d
+}
+
+/// The robots where they stood at the start of the round (the contact-sized index), for
+/// listing who could be in a move's way.
+pub(super) struct Bodies<'a> {
+    index: &'a RobotIndex,
+    max_radius_m: f64,
+    max_speed_m: f64,
+}
+
+impl<'a> Bodies<'a> {
+    pub(super) fn new(index: &'a RobotIndex, max_radius_m: f64, max_speed_m: f64) -> Self {
+        Self {
+            index,
+            max_radius_m,
+            max_speed_m,
+        }
+    }
+
+    /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere
+    /// within `length` of `from`. Robots move at most `max_speed_m` a round, so one touching
+    /// an end point `p` now started within `radius + max_radius_m + max_speed_m` of `p`,
+    /// hence within that plus `length` of `from`.
+    pub(super) fn near_move(&self, i: usize, from: DVec2, length: f64, radius: f64, near: &mut Vec<u32>) {
+        near.clear();
+        let reach = radius + self.max_radius_m + self.max_speed_m + length;
+        self.index.for_each_within(from, reach, |id, _| {
+            if id.index() != i {
+                near.push(id.get());
+            }
+        });
+    }
 }
 
 /// The part of move `d` from `from` that a disc of `radius_m` sweeps free of obstacles: all
