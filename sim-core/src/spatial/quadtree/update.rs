@@ -4,6 +4,7 @@
 use super::block::{self, BLOCK_LEVEL, Node};
 use super::{CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
 use crate::spatial::geometry::{Aabb, CellRows, Overlap, Shape};
+use crate::spatial::grid::MAX_DEPTH;
 
 /// What [`RegionQuadtree::fill`] does with a cell the shape covers only in part.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,13 +103,47 @@ impl RegionQuadtree {
         if any == 0 {
             return true;
         }
+        // The rectangle the cells span (a disc's outer rows and columns hold none).
+        let rows = &cells.rows[..cells.len];
+        let first = rows.iter().position(|&r| r != 0).unwrap_or(0);
+        let last = rows.iter().rposition(|&r| r != 0).unwrap_or(0);
         let area = RowArea {
             cells,
+            x_start: cells.x0 + any.trailing_zeros(),
             x_end: cells.x0 + (64 - any.leading_zeros()),
-            y_end: cells.y0 + cells.len as u32,
+            y_start: cells.y0 + first as u32,
+            y_end: cells.y0 + last as u32 + 1,
         };
-        let root = self.root_square();
-        self.root = self.fill_rows_node(self.root, root, &area, value, &mut changed);
+        // Down to the deepest group whose one child holds every cell, remembering the way
+        // (the walk would test all four children at each of these levels).
+        let want = leaf(value);
+        let mut path = [(0u32, 0usize); MAX_DEPTH as usize];
+        let mut depth = 0;
+        let (mut n, mut at) = (self.root, self.root_square());
+        while at.level > BLOCK_LEVEL && !is_leaf(n) && !is_block(n) {
+            let Some(i) = area.child_holding(at) else { break };
+            path[depth] = (n, i);
+            depth += 1;
+            n = self.groups[n as usize][i];
+            at = at.child(i);
+        }
+        if n == want {
+            return true;
+        }
+        let mut new = self.fill_rows_node(n, at, &area, value, &mut changed);
+        // Back up the way: write the changed child, and merge groups that became uniform.
+        let mut old = n;
+        while new != old {
+            let Some(d) = depth.checked_sub(1) else {
+                self.root = new;
+                break;
+            };
+            depth = d;
+            let (g, i) = path[d];
+            self.groups[g as usize][i] = new;
+            old = g;
+            new = self.merge_if_uniform(g);
+        }
         true
     }
 
@@ -120,9 +155,6 @@ impl RegionQuadtree {
         value: bool,
         changed: &mut impl FnMut(CellSet),
     ) -> NodeRef {
-        if n == leaf(value) || !area.meets(at) {
-            return n;
-        }
         if at.level == BLOCK_LEVEL {
             let cover = block::z_order(area.block_mask(at));
             let bits = self.bits_of(n, BLOCK_LEVEL);
@@ -133,15 +165,28 @@ impl RegionQuadtree {
             changed(CellSet::of_block(at, set ^ bits));
             return self.store_bits(n, set);
         }
+        // Children the cells miss, or already `value`, are settled here without a call.
+        let want = leaf(value);
         if is_leaf(n) {
             // A leaf of the other value splits only if something changes below it.
-            let kids = [0, 1, 2, 3].map(|i| self.fill_rows_node(n, at.child(i), area, value, changed));
+            let kids = [0, 1, 2, 3].map(|i| {
+                let c = at.child(i);
+                if area.meets(c) {
+                    self.fill_rows_node(n, c, area, value, changed)
+                } else {
+                    n
+                }
+            });
             return if kids == [n; 4] { n } else { self.make_node(kids) };
         }
         let mut any = false;
         for i in 0..4 {
             let k = self.groups[n as usize][i];
-            let k2 = self.fill_rows_node(k, at.child(i), area, value, changed);
+            let c = at.child(i);
+            if k == want || !area.meets(c) {
+                continue;
+            }
+            let k2 = self.fill_rows_node(k, c, area, value, changed);
             if k2 != k {
                 self.groups[n as usize][i] = k2;
                 any = true;
@@ -510,6 +555,10 @@ fn report_bits(bits: u64, sq: Square, changed: &mut impl FnMut(Square)) {
 /// The cells of a [`CellRows`] with their extent, for [`RegionQuadtree::fill_rows_reporting`].
 struct RowArea<'a> {
     cells: &'a CellRows,
+    /// The first column holding a cell.
+    x_start: u32,
+    /// The first row holding a cell.
+    y_start: u32,
     /// One past the last column holding a cell.
     x_end: u32,
     /// One past the last row.
@@ -517,11 +566,33 @@ struct RowArea<'a> {
 }
 
 impl RowArea<'_> {
+    /// The child of `sq` that holds every cell of the rectangle, if one does.
+    #[inline]
+    fn child_holding(&self, sq: Square) -> Option<usize> {
+        let mid_x = sq.x + (1 << (sq.level - 1));
+        let mid_y = sq.y + (1 << (sq.level - 1));
+        let east = if self.x_start >= mid_x {
+            1
+        } else if self.x_end <= mid_x {
+            0
+        } else {
+            return None;
+        };
+        let north = if self.y_start >= mid_y {
+            2
+        } else if self.y_end <= mid_y {
+            0
+        } else {
+            return None;
+        };
+        Some(east | north)
+    }
+
     /// Whether square `sq` shares cells with the rows' rectangle.
     #[inline]
     fn meets(&self, sq: Square) -> bool {
         let side = sq.side_cells();
-        sq.x < self.x_end && self.cells.x0 < sq.x + side && sq.y < self.y_end && self.cells.y0 < sq.y + side
+        sq.x < self.x_end && self.x_start < sq.x + side && sq.y < self.y_end && self.y_start < sq.y + side
     }
 
     /// The cells of the block at `sq` (8 × 8) as a row-major mask (bit `8 j + i`).
@@ -530,7 +601,7 @@ impl RowArea<'_> {
         let mut mask = 0u64;
         for j in 0..8 {
             let y = sq.y + j;
-            if y < self.cells.y0 || y >= self.y_end {
+            if y < self.y_start || y >= self.y_end {
                 continue;
             }
             let row = self.cells.rows[(y - self.cells.y0) as usize];
