@@ -35,7 +35,7 @@ pub(super) struct Agent {
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,
     /// With a planned move: the robots that could be in its way (see
-    /// [`Simulation::robots_near_move`]), also listed in step 2.
+    /// `Bodies::near_move` in step 3), also listed in step 2.
     pub(super) planned_near: Vec<u32>,
 }
 

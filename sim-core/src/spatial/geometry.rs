@@ -156,13 +156,18 @@ fn axis_distances(edges: &[f64; 9], c: f64) -> ([f64; 8], [f64; 8]) {
     let mut near = [0.0; 8];
     let mut far = [0.0; 8];
     for i in 0..8 {
-        let (lo, hi) = (edges[i], edges[i + 1]);
-        let d = c.max(lo).min(hi) - c;
-        near[i] = d * d;
-        let f = (c - lo).abs().max((c - hi).abs());
-        far[i] = f * f;
+        (near[i], far[i]) = edge_distances(c, edges[i], edges[i + 1]);
     }
     (near, far)
+}
+
+/// Squared distances from `c` to the nearest point of `lo..hi` and to its farther end: one
+/// axis of [`Aabb::distance_squared_to`] and [`Aabb::farthest_corner_distance_squared`].
+#[inline]
+fn edge_distances(c: f64, lo: f64, hi: f64) -> (f64, f64) {
+    let d = c.max(lo).min(hi) - c;
+    let f = (c - lo).abs().max((c - hi).abs());
+    (d * d, f * f)
 }
 
 /// The cells `(i, j)` of a block for which `test(along_x[i], along_y[j])` holds, as a row-major
@@ -264,17 +269,14 @@ impl Disc {
         }
         let r2 = self.radius * self.radius;
         // Per column (and row): squared distances to the nearest point and to the farthest
-        // edge, as `axis_distances` computes them, and whether the clip holds it.
+        // edge, as for `classify_cells`, and whether the clip holds it.
         let along = |first: u32, last: u32, c: f64, edge: &dyn Fn(u32) -> f64, lo: f64, hi: f64| {
             let mut near = [0.0; 64];
             let mut far = [0.0; 64];
             let mut within = 0u64;
             for (i, k) in (first..=last).enumerate() {
                 let (a, b) = (edge(k), edge(k + 1));
-                let d = c.max(a).min(b) - c;
-                near[i] = d * d;
-                let f = (c - a).abs().max((c - b).abs());
-                far[i] = f * f;
+                (near[i], far[i]) = edge_distances(c, a, b);
                 within |= u64::from(lo <= a && b <= hi) << i;
             }
             (near, far, within)

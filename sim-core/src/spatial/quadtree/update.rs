@@ -45,43 +45,59 @@ impl RegionQuadtree {
     /// collective explored map takes each robot's new squares this way, a few thousand a
     /// round).
     pub fn fill_square_reporting(&mut self, sq: Square, value: bool, mut changed: impl FnMut(Square)) {
-        let root = self.root_square();
-        let before = self.root;
-        self.root = self.fill_square_node(before, root, sq, leaf(value), &mut changed);
+        // A whole square's changes are reported as whole squares.
+        self.fill_cells_reporting(CellSet::whole(sq), value, |set| changed(set.square()));
     }
 
-    fn fill_square_node(
+    /// Set the cells of `set` to `value`, calling `changed` with the cells that switched (a
+    /// whole square's as whole squares, a block's as one set), by one descent along the
+    /// square's coordinates (see [`fill_square_reporting`](Self::fill_square_reporting)).
+    pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
+        let root = self.root_square();
+        let before = self.root;
+        self.root = self.fill_cells_node(before, root, set, leaf(value), &mut changed);
+    }
+
+    fn fill_cells_node(
         &mut self,
         n: NodeRef,
         at: Square,
-        target: Square,
+        set: CellSet,
         want: NodeRef,
-        changed: &mut impl FnMut(Square),
+        changed: &mut impl FnMut(CellSet),
     ) -> NodeRef {
         if n == want {
             return n;
         }
-        if at.level == target.level {
-            return self.replace_with_leaf(n, at, want, changed);
+        let target = set.square();
+        if at.level == target.level && set.is_whole() {
+            return self.replace_with_leaf(n, at, want, &mut |sq| changed(CellSet::whole(sq)));
         }
         if self.packs(at.level) {
-            // An aligned square's cells are consecutive in Z order.
             let bits = self.bits_of(n, BLOCK_LEVEL);
-            let first = block::cell_index(target.x - at.x, target.y - at.y);
-            let cover = block::low_bits(target.level) << first;
+            let cover = if set.is_whole() {
+                // An aligned square's cells are consecutive in Z order.
+                block::low_bits(target.level) << block::cell_index(target.x - at.x, target.y - at.y)
+            } else {
+                set.bits
+            };
             let filled = if want == FULL { bits | cover } else { bits & !cover };
-            report_bits(filled ^ bits, at, changed);
+            if set.is_whole() {
+                report_bits(filled ^ bits, at, &mut |sq| changed(CellSet::whole(sq)));
+            } else if filled != bits {
+                changed(CellSet::of_block(at, filled ^ bits));
+            }
             return self.store_bits(n, filled);
         }
         let half = at.level - 1;
         let i = (((target.x >> half) & 1) | (((target.y >> half) & 1) << 1)) as usize;
         if is_leaf(n) {
             let mut kids = [n; 4];
-            kids[i] = self.fill_square_node(n, at.child(i), target, want, changed);
+            kids[i] = self.fill_cells_node(n, at.child(i), set, want, changed);
             self.make_node(kids)
         } else {
             let k = self.groups[n as usize][i];
-            let k2 = self.fill_square_node(k, at.child(i), target, want, changed);
+            let k2 = self.fill_cells_node(k, at.child(i), set, want, changed);
             self.groups[n as usize][i] = k2;
             self.merge_if_uniform(n)
         }
@@ -193,70 +209,6 @@ impl RegionQuadtree {
             }
         }
         if any { self.merge_if_uniform(n) } else { n }
-    }
-
-    /// Set the cells `bits` (Z order) of the block at square `block` to `value` by one
-    /// descent along its coordinates; returns the cells that changed. Packed trees only.
-    pub(crate) fn set_block_cells(&mut self, block: Square, bits: u64, value: bool) -> u64 {
-        debug_assert!(self.packed && block.level == BLOCK_LEVEL);
-        let root = self.root_square();
-        let mut flipped = 0;
-        self.root = self.set_block_node(self.root, root, block, bits, value, &mut flipped);
-        flipped
-    }
-
-    fn set_block_node(
-        &mut self,
-        n: NodeRef,
-        at: Square,
-        target: Square,
-        cover: u64,
-        value: bool,
-        flipped: &mut u64,
-    ) -> NodeRef {
-        if n == leaf(value) {
-            return n;
-        }
-        if at.level == BLOCK_LEVEL {
-            let bits = self.bits_of(n, BLOCK_LEVEL);
-            let set = if value { bits | cover } else { bits & !cover };
-            *flipped = set ^ bits;
-            return if *flipped == 0 { n } else { self.store_bits(n, set) };
-        }
-        let half = at.level - 1;
-        let i = (((target.x >> half) & 1) | (((target.y >> half) & 1) << 1)) as usize;
-        if is_leaf(n) {
-            // A leaf of the other value splits only if something changes below it.
-            let k2 = self.set_block_node(n, at.child(i), target, cover, value, flipped);
-            if k2 == n {
-                return n;
-            }
-            let mut kids = [n; 4];
-            kids[i] = k2;
-            self.make_node(kids)
-        } else {
-            let k = self.groups[n as usize][i];
-            let k2 = self.set_block_node(k, at.child(i), target, cover, value, flipped);
-            if k2 == k {
-                return n;
-            }
-            self.groups[n as usize][i] = k2;
-            self.merge_if_uniform(n)
-        }
-    }
-
-    /// Set the cells of `set` to `value`, calling `changed` with the cells that switched
-    /// (one descent: along the square's coordinates, see
-    /// [`fill_square_reporting`](Self::fill_square_reporting)).
-    pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
-        if set.is_whole() {
-            self.fill_square_reporting(set.square(), value, |sq| changed(CellSet::whole(sq)));
-        } else {
-            let flipped = self.set_block_cells(set.square(), set.bits, value);
-            if flipped != 0 {
-                changed(CellSet::of_block(set.square(), flipped));
-            }
-        }
     }
 
     /// Set one cell of the covering square.
