@@ -412,6 +412,60 @@ proptest! {
         prop_assert_eq!(explored.known_cells(), by_walk.known_cells());
     }
 
+    /// A view's rows (found by following the ends of each row's run) are exactly the cells
+    /// a brute-force test over every cell finds wholly inside the disc and the clip, and
+    /// taking one view's rows out of another's leaves exactly the set difference.
+    #[test]
+    fn issue11_view_rows_are_the_cells_wholly_inside(
+        cell in prop_oneof![Just(1.0), 0.05f64..4.0], seed in any::<u64>()
+    ) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = DVec2::new(rng.random_range(-900.0..900.0), rng.random_range(-900.0..900.0));
+        let grid = Grid::new(origin, cell, 96, 80).unwrap();
+        let e = grid.extent();
+        let clip = if rng.random_bool(0.5) {
+            e
+        } else {
+            let a = e.min + (e.max - e.min) * DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+            let b = e.min + (e.max - e.min) * DVec2::new(rng.random_range(0.0..1.0), rng.random_range(0.0..1.0));
+            Aabb { min: a.min(b), max: a.max(b) }
+        };
+        let brute = |d: &Disc| -> BTreeSet<(u32, u32)> {
+            let r2 = d.radius * d.radius;
+            (0..96u32).flat_map(|x| (0..80u32).map(move |y| (x, y))).filter(|&(x, y)| {
+                let b = grid.square(x, y, 0);
+                b.farthest_corner_distance_squared(d.center) <= r2 && b.distance_squared_to(d.center) < r2
+                    && clip.contains_box(&b)
+            }).collect()
+        };
+        let cells_of = |rows: &sim_core::spatial::CellRows| -> BTreeSet<(u32, u32)> {
+            let mut out = BTreeSet::new();
+            for (j, &row) in rows.rows[..rows.len].iter().enumerate() {
+                for i in 0..64 {
+                    if row >> i & 1 == 1 {
+                        out.insert((rows.x0 + i, rows.y0 + j as u32));
+                    }
+                }
+            }
+            out
+        };
+        let mut c = e.min + (e.max - e.min) * DVec2::new(rng.random_range(-0.1..1.1), rng.random_range(-0.1..1.1));
+        let mut last: Option<(sim_core::spatial::CellRows, BTreeSet<(u32, u32)>)> = None;
+        for _ in 0..12 {
+            let disc = Disc { center: c, radius: rng.random_range(0.0..31.0) * cell };
+            let rows = disc.contained_rows(&grid, &clip).expect("at most 63 cells across");
+            let want = brute(&disc);
+            prop_assert_eq!(cells_of(&rows), want.clone(), "disc {:?}", disc);
+            if let Some((old_rows, old)) = &last {
+                let mut fresh = rows.clone();
+                fresh.remove(old_rows);
+                prop_assert_eq!(cells_of(&fresh), want.difference(old).copied().collect::<BTreeSet<_>>());
+            }
+            last = Some((rows, want));
+            c += DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..70.0) * cell;
+        }
+    }
+
     /// Views wider than 64 cells take the walk that skips the last view; views jumping
     /// between both paths on a map of a few hundred cells mark what whole discs mark.
     #[test]

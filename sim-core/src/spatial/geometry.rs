@@ -239,6 +239,27 @@ pub struct CellRows {
     pub rows: [u64; 64],
 }
 
+impl CellRows {
+    /// Take out of these rows every cell that `other` holds.
+    pub fn remove(&mut self, other: &CellRows) {
+        // Bit `i` of `other`'s row is column `other.x0 + i`, here bit `i - dx`.
+        let dx = i64::from(self.x0) - i64::from(other.x0);
+        let shift = |row: u64| match dx {
+            0..=63 => row >> dx,
+            -63..=-1 => row << -dx,
+            _ => 0,
+        };
+        for (j, row) in self.rows[..self.len].iter_mut().enumerate() {
+            let k = i64::from(self.y0) + j as i64 - i64::from(other.y0);
+            if let Ok(k) = usize::try_from(k)
+                && k < other.len
+            {
+                *row &= !shift(other.rows[k]);
+            }
+        }
+    }
+}
+
 impl Disc {
     /// The cells of `grid` that lie wholly inside the disc and inside `clip`, as row masks,
     /// if the disc's bounds span at most 64 cells a side of the covering square (else
@@ -270,36 +291,53 @@ impl Disc {
         let r2 = self.radius * self.radius;
         // Per column (and row): squared distances to the nearest point and to the farthest
         // edge, as for `classify_cells`, and whether the clip holds it.
-        let along = |first: u32, last: u32, c: f64, edge: &dyn Fn(u32) -> f64, lo: f64, hi: f64| {
-            let mut near = [0.0; 64];
-            let mut far = [0.0; 64];
-            let mut within = 0u64;
-            for (i, k) in (first..=last).enumerate() {
-                let (a, b) = (edge(k), edge(k + 1));
-                (near[i], far[i]) = edge_distances(c, a, b);
-                within |= u64::from(lo <= a && b <= hi) << i;
-            }
-            (near, far, within)
-        };
-        let (near_x, far_x, cols_within) =
-            along(x0, x1, self.center.x, &|k| grid.corner(k, 0).x, clip.min.x, clip.max.x);
-        let (near_y, far_y, rows_within) =
-            along(y0, y1, self.center.y, &|k| grid.corner(0, k).y, clip.min.y, clip.max.y);
-        let width = (x1 - x0 + 1) as usize;
+        let (width, len) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
+        let (mut near_x, mut far_x) = ([0.0; 64], [0.0; 64]);
+        let mut cols_within = 0u64;
+        for i in 0..width {
+            let k = x0 + i as u32;
+            let (a, b) = (grid.corner(k, 0).x, grid.corner(k + 1, 0).x);
+            (near_x[i], far_x[i]) = edge_distances(self.center.x, a, b);
+            cols_within |= u64::from(clip.min.x <= a && b <= clip.max.x) << i;
+        }
+        // Along a row both distances fall to the column of the centre and rise after it,
+        // so a row's contained cells are a run through that column, whose ends move a
+        // little from row to row: a few tests per row find them, each the sums and
+        // comparisons of `classify_cells` (issue 11: testing every cell of the square
+        // around the view was a fifth of a walker's round).
+        let mid = (1..width).fold(0, |m, i| if far_x[i] < far_x[m] { i } else { m });
+        let (mut lo, mut hi) = (mid, mid);
         out.x0 = x0;
         out.y0 = y0;
-        out.len = (y1 - y0 + 1) as usize;
-        for j in 0..out.len {
-            if rows_within >> j & 1 == 0 {
+        out.len = len;
+        for j in 0..len {
+            let k = y0 + j as u32;
+            let (a, b) = (grid.corner(0, k).y, grid.corner(0, k + 1).y);
+            let (ny, fy) = edge_distances(self.center.y, a, b);
+            let inside = |i: usize| far_x[i] + fy <= r2 && near_x[i] + ny < r2;
+            if !(clip.min.y <= a && b <= clip.max.y) || !inside(mid) {
                 continue;
             }
-            let mut row = 0u64;
-            for i in 0..width {
-                // The sums and comparisons of `classify_cells`: contained and intersecting.
-                let inside = far_x[i] + far_y[j] <= r2 && near_x[i] + near_y[j] < r2;
-                row |= u64::from(inside) << i;
+            if inside(lo) {
+                while lo > 0 && inside(lo - 1) {
+                    lo -= 1;
+                }
+            } else {
+                while !inside(lo) {
+                    lo += 1;
+                }
             }
-            out.rows[j] = row & cols_within;
+            if inside(hi) {
+                while hi + 1 < width && inside(hi + 1) {
+                    hi += 1;
+                }
+            } else {
+                while !inside(hi) {
+                    hi -= 1;
+                }
+            }
+            let run = (u64::MAX >> (63 - (hi - lo))) << lo;
+            out.rows[j] = run & cols_within;
         }
         Some(out)
     }

@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-use crate::spatial::geometry::{Aabb, Clipped, Disc, DiscBeyond, Shape};
+use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape};
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
@@ -19,6 +19,8 @@ pub struct KnownMap {
     known_cells: u64,
     /// The view disc [`mark_view`](Self::mark_view) marked last: all it holds is known.
     last_view: Option<Disc>,
+    /// That view's cells, when it was marked by its rows: all known.
+    last_rows: Option<Box<CellRows>>,
 }
 
 impl KnownMap {
@@ -28,6 +30,7 @@ impl KnownMap {
             tree: RegionQuadtree::uniform(grid, false),
             known_cells: 0,
             last_view: None,
+            last_rows: None,
         }
     }
 
@@ -38,6 +41,7 @@ impl KnownMap {
             tree,
             known_cells,
             last_view: None,
+            last_rows: None,
         }
     }
 
@@ -82,13 +86,27 @@ impl KnownMap {
         // views take that walk, which skips what the last view marked.
         let clip = self.grid().extent();
         let mut added = 0;
-        let by_rows = disc.contained_rows(self.grid(), &clip).is_some_and(|rows| {
-            self.tree.fill_rows_reporting(&rows, true, |set| {
+        let rows = disc.contained_rows(self.grid(), &clip);
+        let by_rows = rows.as_ref().is_some_and(|rows| {
+            // Only the cells the last view did not hold: a walker's view moves a fraction
+            // of itself a round, so most rounds that is a thin crescent, or nothing.
+            let mut fresh = rows.clone();
+            if let Some(last) = &self.last_rows {
+                fresh.remove(last);
+            }
+            self.tree.fill_rows_reporting(&fresh, true, |set| {
                 added += set.cells();
                 newly_known(set);
             })
         });
         self.known_cells += added;
+        match (by_rows, rows) {
+            (true, Some(rows)) => match &mut self.last_rows {
+                Some(last) => **last = rows,
+                None => self.last_rows = Some(Box::new(rows)),
+            },
+            _ => self.last_rows = None,
+        }
         if !by_rows {
             let beyond = DiscBeyond {
                 disc,
