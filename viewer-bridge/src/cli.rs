@@ -31,6 +31,10 @@ pub enum Command {
     View(ViewArgs),
     /// List the strategies this build knows.
     Strategies,
+    /// Run every combination of a sweep file's values headless, on all cores, into one CSV.
+    Sweep(crate::sweep::SweepArgs),
+    /// Join the CSVs of a sweep's shards into the CSV a single-machine sweep writes.
+    Merge(crate::sweep::MergeArgs),
 }
 
 /// Where a recording goes (shared by `run` and `view`).
@@ -209,6 +213,32 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             };
             crate::run::view_map(&args.map, &target)?;
             println!("{}: shown in {target}", args.map.display());
+            Ok(())
+        }
+        Command::Sweep(args) => {
+            let summary = crate::sweep::sweep(&args, registry, !args.quiet && std::io::stderr().is_terminal())?;
+            if !args.quiet {
+                println!(
+                    "{}: {} runs of {} ({} resumed), {} rows; manifest {}",
+                    summary.output.display(),
+                    summary.runs,
+                    summary.runs_total,
+                    summary.resumed,
+                    summary.rows,
+                    summary.manifest.display()
+                );
+            }
+            Ok(())
+        }
+        Command::Merge(args) => {
+            let summary = crate::sweep::merge_parts(&args)?;
+            let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));
+            println!(
+                "{}: {} runs{total}, {} rows",
+                args.output.display(),
+                summary.runs,
+                summary.rows
+            );
             Ok(())
         }
         Command::Run(args) => {

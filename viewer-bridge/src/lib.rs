@@ -22,4 +22,5 @@ pub mod layers;
 pub mod progress;
 pub mod rerun_observer;
 pub mod run;
+pub mod sweep;
 pub mod viewer;

@@ -146,7 +146,7 @@ pub struct SimConfig {
 }
 
 /// Line and column (1-based) of a byte offset.
-fn line_col(text: &str, offset: usize) -> (usize, usize) {
+pub(crate) fn line_col(text: &str, offset: usize) -> (usize, usize) {
     let before = &text[..offset.min(text.len())];
     let line = before.matches('\n').count() + 1;
     let col = before.rfind('\n').map_or(before.len(), |nl| before.len() - nl - 1) + 1;
@@ -410,7 +410,13 @@ impl SimConfig {
             return Err(self.map_error(format!("map file {} does not exist", self.map_path.display())));
         }
         let map = MapData::load(&self.map_path).map_err(|e| self.map_error(e.to_string()))?;
-        let mut builder = ScenarioBuilder::new(Arc::new(map))
+        self.scenario_with_map(registry, Arc::new(map))
+    }
+
+    /// [`scenario`](Self::scenario) on a map already loaded (a sweep loads each of its maps
+    /// once for all its runs).
+    pub fn scenario_with_map(&self, registry: &StrategyRegistry, map: Arc<MapData>) -> Result<Scenario> {
+        let mut builder = ScenarioBuilder::new(map)
             .with_name(self.name.clone())
             .with_seed(self.seed)
             .with_rounds(self.rounds)

@@ -6,6 +6,7 @@ mod config;
 mod csv;
 mod invariants;
 mod observer;
+pub mod sweep;
 
 pub use config::{GroupConfig, Outputs, SimConfig};
 pub use csv::{MetricsCsv, ROBOT_STATS_COLUMNS, write_robot_stats};
