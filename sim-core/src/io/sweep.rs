@@ -696,7 +696,6 @@ pub fn run_sweep(
         });
         bytes.extend_from_slice(&part_bytes);
     }
-    write_atomically(output, &bytes)?;
     let manifest = Manifest {
         smartteams_version: env!("CARGO_PKG_VERSION").to_owned(),
         sweep: sweep.name.clone(),
@@ -707,8 +706,11 @@ pub fn run_sweep(
         shards: vec![shard.to_string()],
         runs: manifest_runs,
     };
+    // The manifest first: a CSV is never seen without it (a merge that finds the CSVs of
+    // all shards but one checks from the manifests that the sweep is whole).
     let manifest_file = manifest_path(output);
     write_manifest(&manifest_file, &manifest)?;
+    write_atomically(output, &bytes)?;
     std::fs::remove_dir_all(&parts).map_err(io_error(&parts))?;
     Ok(SweepSummary {
         runs_total: sweep.run_count(),
