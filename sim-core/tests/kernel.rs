@@ -498,3 +498,122 @@ fn issue11_map_explored_once_and_every_free_cell_credited_once() {
     let credited: f64 = sim.robots().iter().map(|r| r.stats.explored_m2).sum();
     assert!((credited - free_m2).abs() < 1e-6, "credited {credited} m² of {free_m2}");
 }
+
+/// Walks east; robot 2 panics in round 10, after queueing a message.
+struct Fragile;
+
+impl Strategy for Fragile {
+    fn needs(&self) -> Needs {
+        Needs::NONE
+    }
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        if ctx.round == 10 && ctx.me.id.get() == 2 {
+            ctx.broadcast(sim_core::world::Payload::Custom {
+                kind: "last words".into(),
+                data: Vec::new(),
+            });
+            panic!("sensor fault in round {}", ctx.round);
+        }
+        Action::MoveTo {
+            to: ctx.position() + DVec2::new(0.2, 0.0),
+        }
+    }
+}
+
+#[test]
+fn issue13_a_panicking_strategy_disables_only_its_robot() {
+    let mut registry = StrategyRegistry::with_builtins();
+    registry.register("fragile", "", |_| Ok(Box::new(Fragile)));
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut s = scenario(
+                rooms_map(Vec::new()),
+                9,
+                30,
+                vec![
+                    (4, RobotType::explorer(), "fragile"),
+                    (2, RobotType::explorer(), "random_walk"),
+                ],
+            );
+            s.groups[0].start = Start::At(DVec2::new(2.5, 26.5));
+            let mut sim = new_sim(s, &registry).unwrap();
+            let mut events = Vec::new();
+            let mut trace = Trace::default();
+            run_checked(&mut sim, &mut [&mut Events(&mut events), &mut trace]);
+            (sim, events, trace)
+        })
+    };
+    let (sim, events, trace) = run(2);
+    // The run went on to the end; only robot 2 stopped, where it stood at the end of round 9.
+    assert_eq!(sim.round(), 30);
+    let failed: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            sim_core::world::Event::StrategyFailed { robot, reason } => Some((robot.get(), reason.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        failed,
+        [(2, "its strategy panicked: sensor fault in round 10".to_owned())]
+    );
+    let robots = sim.robots();
+    assert!(!robots[2].alive);
+    assert!(robots.iter().enumerate().all(|(i, r)| r.alive == (i != 2)));
+    let start = robots[2].position;
+    let at_round_9 = trace.0[8].1[2];
+    assert_eq!((start.x.to_bits(), start.y.to_bits()), (at_round_9.0, at_round_9.1));
+    // The others walked on after round 10 (east at 0.2 m a round; robot 2 now stands in
+    // the way of some, so together rather than each).
+    let x = |round: usize, i: usize| f64::from_bits(trace.0[round - 1].1[i].0);
+    let gained: f64 = [0, 1, 3].iter().map(|&i| x(30, i) - x(10, i)).sum();
+    assert!(gained > 3.0, "the other fragile robots gained {gained} m");
+    assert!(robots[4..].iter().all(|r| r.stats.distance_m > 1.0));
+    let m = sim.report().metrics;
+    assert_eq!((m.strategies_failed, m.robots_alive), (1, 5));
+    // Its last words were not sent.
+    assert_eq!(robots[2].stats.messages_sent, 0);
+    // And the same on one thread.
+    let (_, events_1, trace_1) = run(1);
+    assert_eq!(events_1, events);
+    assert_eq!(trace_1.0, trace.0);
+}
+
+/// Stands still; robot 1 thinks for 40 ms in round 3.
+struct Ponderer;
+
+impl Strategy for Ponderer {
+    fn needs(&self) -> Needs {
+        Needs::NONE
+    }
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        if ctx.round == 3 && ctx.me.id.get() == 1 {
+            std::thread::sleep(std::time::Duration::from_millis(40));
+        }
+        Action::Idle
+    }
+}
+
+#[test]
+fn issue13_a_slow_decision_is_reported_with_its_robot_and_time() {
+    let mut registry = StrategyRegistry::empty();
+    registry.register("ponder", "", |_| Ok(Box::new(Ponderer)));
+    let run = |limit: Option<std::time::Duration>| {
+        let s = scenario(rooms_map(Vec::new()), 1, 5, vec![(3, RobotType::explorer(), "ponder")]);
+        let mut sim = new_sim(s, &registry).unwrap().with_decide_limit(limit);
+        let mut slow = Vec::new();
+        for _ in 0..5 {
+            let report = sim.step();
+            slow.extend(report.slow_decisions.iter().map(|&(r, t)| (report.round, r.get(), t)));
+        }
+        slow
+    };
+    let slow = run(Some(std::time::Duration::from_millis(20)));
+    assert!(
+        slow.iter()
+            .any(|&(round, robot, t)| (round, robot) == (3, 1) && t >= std::time::Duration::from_millis(40)),
+        "{slow:?}"
+    );
+    assert!(run(None).is_empty());
+}

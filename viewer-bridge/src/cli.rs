@@ -116,6 +116,10 @@ pub struct RunArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Report a strategy that takes longer than this to decide one round (milliseconds;
+    /// 0: do not time decisions).
+    #[arg(long, value_name = "MS", default_value_t = 100)]
+    pub decide_limit_ms: u64,
     /// Where the recording goes.
     #[command(flatten)]
     pub viewer: ViewerArgs,
@@ -167,6 +171,7 @@ impl RunArgs {
         Ok(RunConfig {
             config,
             threads: self.threads,
+            decide_limit: (self.decide_limit_ms > 0).then(|| std::time::Duration::from_millis(self.decide_limit_ms)),
             metrics,
             robot_stats,
             viewer,

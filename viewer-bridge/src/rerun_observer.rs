@@ -860,7 +860,7 @@ impl Observer for RerunObserver {
             .iter()
             .map(|e| {
                 (
-                    matches!(e, Event::RobotDisabled { .. }),
+                    matches!(e, Event::RobotDisabled { .. } | Event::StrategyFailed { .. }),
                     format!("round {}: {e}", report.round),
                 )
             })

@@ -11,7 +11,8 @@ use sim_core::engine::Simulation;
 use sim_core::io::Observer;
 use sim_core::io::SimConfig;
 use sim_core::io::{MetricsCsv, write_robot_stats};
-use sim_core::world::MapData;
+use sim_core::spatial::RobotId;
+use sim_core::world::{Event, MapData, RoundReport};
 
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
@@ -24,6 +25,8 @@ pub struct RunConfig {
     pub config: SimConfig,
     /// Worker threads for the decide phase (`None`: one per core).
     pub threads: Option<usize>,
+    /// Decisions slower than this are reported (`None`: not timed).
+    pub decide_limit: Option<Duration>,
     /// Per-round metrics CSV.
     pub metrics: Option<PathBuf>,
     /// Per-robot statistics CSV.
@@ -53,6 +56,8 @@ pub struct Summary {
     pub setup: Duration,
     /// Where the recording went and what it cost.
     pub recording: Option<RecordingSummary>,
+    /// Decisions that took longer than the limit, and the slowest (robot, round, time).
+    pub slow_decisions: (u64, Option<(RobotId, u64, Duration)>),
 }
 
 /// What the recording of a run holds and cost.
@@ -100,6 +105,20 @@ impl std::fmt::Display for Summary {
             m.robots_alive, m.mean_energy
         )?;
         write!(f, "  distance          {:.1} m in all", m.distance_m)?;
+        if m.strategies_failed > 0 {
+            write!(
+                f,
+                "\n  failed            {} robots disabled because their strategy panicked (see the event log)",
+                m.strategies_failed
+            )?;
+        }
+        if let (n, Some((robot, round, took))) = self.slow_decisions {
+            write!(
+                f,
+                "\n  slow decisions    {n} over the limit; slowest: robot {robot}, round {round}, {:.3} s",
+                took.as_secs_f64()
+            )?;
+        }
         if let Some(r) = &self.recording {
             write!(
                 f,
@@ -125,7 +144,9 @@ impl std::fmt::Display for Summary {
 pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
     let started = Instant::now();
     let scenario = run.config.scenario(registry)?;
-    let mut sim = Simulation::new(scenario).with_context(|| format!("setting up {}", run.config.path.display()))?;
+    let mut sim = Simulation::new(scenario)
+        .with_context(|| format!("setting up {}", run.config.path.display()))?
+        .with_decide_limit(run.decide_limit);
     let setup = started.elapsed();
 
     let mut metrics = match &run.metrics {
@@ -149,7 +170,8 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         None => None,
     };
     let mut progress = Progress::new(run.progress, sim.total_rounds());
-    let mut observers: Vec<&mut dyn Observer> = Vec::new();
+    let mut faults = Faults::default();
+    let mut observers: Vec<&mut dyn Observer> = vec![&mut faults];
     if let Some(m) = metrics.as_mut() {
         observers.push(m);
     }
@@ -194,7 +216,47 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
             sim_thread: r.busy(),
             logging_thread: r.worker_busy(),
         }),
+        slow_decisions: (faults.slow, faults.slowest),
     })
+}
+
+/// Tells the user, on stderr, about robots whose strategy failed or was slow (the first
+/// few of each; the summary counts them all).
+#[derive(Default)]
+struct Faults {
+    failed: u64,
+    slow: u64,
+    slowest: Option<(RobotId, u64, Duration)>,
+}
+
+/// Faults of each kind told one by one before only counting.
+const FAULTS_TOLD: u64 = 5;
+
+impl Observer for Faults {
+    fn on_round(&mut self, _sim: &Simulation, report: &RoundReport) -> Result<(), sim_core::io::ObserverError> {
+        for e in &report.events {
+            if let Event::StrategyFailed { .. } = e {
+                self.failed += 1;
+                if self.failed <= FAULTS_TOLD {
+                    eprintln!("warning: round {}: {e}; the run goes on", report.round);
+                }
+            }
+        }
+        for &(robot, took) in &report.slow_decisions {
+            self.slow += 1;
+            if self.slow <= FAULTS_TOLD {
+                eprintln!(
+                    "warning: round {}: robot {robot}'s strategy took {:.3} s to decide",
+                    report.round,
+                    took.as_secs_f64()
+                );
+            }
+            if self.slowest.is_none_or(|(_, _, t)| took > t) {
+                self.slowest = Some((robot, report.round, took));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// Show the map at `path` alone in Rerun (`smartteams view`).

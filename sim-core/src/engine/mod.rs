@@ -8,4 +8,4 @@ mod simulation;
 
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
-pub use simulation::Simulation;
+pub use simulation::{DEFAULT_DECIDE_LIMIT, Simulation};

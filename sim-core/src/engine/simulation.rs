@@ -4,6 +4,7 @@
 
 use std::collections::HashMap;
 use std::sync::Arc;
+use std::time::Duration;
 
 use glam::DVec2;
 use rand::SeedableRng;
@@ -37,6 +38,10 @@ pub(super) struct Agent {
     /// With a planned move: the robots that could be in its way (see
     /// `Bodies::near_move` in step 3), also listed in step 2.
     pub(super) planned_near: Vec<u32>,
+    /// Why its strategy failed this round (it panicked): step 3 disables the robot.
+    pub(super) failure: Option<String>,
+    /// How long its strategy took to decide this round, when over the limit.
+    pub(super) slow: Option<Duration>,
 }
 
 /// A move's obstacle test done ahead of step 3: the robot standing at `from` moving by `d`
@@ -76,6 +81,10 @@ pub(super) struct Outgoing {
 pub struct Simulation {
     pub(super) name: String,
     pub(super) seed: u64,
+    /// Robots disabled because their strategy failed.
+    pub(super) strategies_failed: u32,
+    /// Decisions slower than this are reported (`None`: not timed).
+    pub(super) decide_limit: Option<Duration>,
     pub(super) rounds: u64,
     pub(super) round: u64,
     pub(super) map: Arc<MapData>,
@@ -171,6 +180,8 @@ impl Simulation {
                     new_squares: Vec::new(),
                     planned_move: None,
                     planned_near: Vec::new(),
+                    failure: None,
+                    slow: None,
                 });
             }
         }
@@ -180,6 +191,8 @@ impl Simulation {
         let mut sim = Self {
             name,
             seed,
+            strategies_failed: 0,
+            decide_limit: Some(DEFAULT_DECIDE_LIMIT),
             rounds,
             round: 0,
             nav: LazyNavGraph::new(),
@@ -223,6 +236,13 @@ impl Simulation {
     pub fn seed(&self) -> u64 {
         self.seed
     }
+    /// Report decisions that take longer than `limit` (in the round report's
+    /// `slow_decisions`); `None` does not time them. Default: [`DEFAULT_DECIDE_LIMIT`].
+    pub fn with_decide_limit(mut self, limit: Option<Duration>) -> Self {
+        self.decide_limit = limit;
+        self
+    }
+
     /// Rounds this run lasts.
     pub fn total_rounds(&self) -> u64 {
         self.rounds
@@ -321,6 +341,7 @@ impl Simulation {
             units_dug: self.robots.iter().map(|r| r.stats.units_dug).sum(),
             units_delivered: self.robots.iter().map(|r| r.stats.units_delivered).sum(),
             message_bytes,
+            strategies_failed: self.strategies_failed,
         }
     }
 
@@ -348,6 +369,11 @@ impl Simulation {
         self.body_index.rebuild(positions(), reach.clamp(0.25, 64.0));
     }
 }
+
+/// How long one strategy may take to decide one round before it is reported: a hundred
+/// milliseconds is thousands of times what the built-in strategies need, and long enough for
+/// a strategy that plans a route across a large map.
+pub const DEFAULT_DECIDE_LIMIT: Duration = Duration::from_millis(100);
 
 /// Cell size for the robot index: the typical query radius.
 pub(super) fn index_cell_m(types: &[RobotType]) -> f64 {

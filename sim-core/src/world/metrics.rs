@@ -33,7 +33,7 @@ macro_rules! metrics_table {
 }
 
 /// Number of metric columns (the round included).
-pub const METRICS_COUNT: usize = 12;
+pub const METRICS_COUNT: usize = 13;
 
 metrics_table! {
     /// Round number (1-based).
@@ -60,6 +60,8 @@ metrics_table! {
     units_delivered: u64, "{}", "totals/units_delivered";
     /// Payload bytes sent this round.
     message_bytes: u64, "{}", "messages/message_bytes";
+    /// Robots disabled since the start because their strategy failed (panicked).
+    strategies_failed: u32, "{}", "robots/strategies_failed";
 }
 
 impl RoundMetrics {

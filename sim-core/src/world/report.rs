@@ -12,6 +12,14 @@ pub enum Event {
         /// The robot.
         robot: RobotId,
     },
+    /// A robot's strategy failed (it panicked): the robot is disabled for good, the run
+    /// goes on.
+    StrategyFailed {
+        /// The robot.
+        robot: RobotId,
+        /// What went wrong (the panic's message).
+        reason: String,
+    },
     /// A treasure was seen for the first time.
     TreasureFound {
         /// The treasure.
@@ -84,6 +92,7 @@ impl std::fmt::Display for Event {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Event::RobotDisabled { robot } => write!(f, "robot {robot} is out of energy and disabled"),
+            Event::StrategyFailed { robot, reason } => write!(f, "robot {robot} is disabled: {reason}"),
             Event::TreasureFound { treasure, by } => write!(f, "treasure {treasure} found by robot {by}"),
             Event::TreasureExcavated { treasure, by } => {
                 write!(f, "treasure {treasure} fully excavated by robot {by}")
@@ -123,4 +132,9 @@ pub struct RoundReport {
     pub links: Vec<Link>,
     /// Robots whose known map changed this round.
     pub known_changed: Vec<RobotId>,
+    /// Robots whose strategy took longer than the limit to decide this round
+    /// ([`Simulation::with_decide_limit`](crate::engine::Simulation::with_decide_limit)),
+    /// with the time it took. Wall time, so unlike everything else here it is not the
+    /// same from run to run: observers report it, they do not record it.
+    pub slow_decisions: Vec<(RobotId, std::time::Duration)>,
 }

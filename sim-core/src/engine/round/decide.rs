@@ -1,6 +1,9 @@
 //! Step 2: every live robot's strategy decides one action and its messages, in parallel;
 //! each robot owns its strategy and data, nothing shared is written.
 
+use std::panic::AssertUnwindSafe;
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
@@ -24,6 +27,7 @@ impl Simulation {
         let types = &self.types;
         let obstacles = &self.map.obstacles;
         let bodies = Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m);
+        let limit = self.decide_limit;
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter())
@@ -39,9 +43,42 @@ impl Simulation {
                 perceive(agent, robot, kind, &snapshot, round);
                 let rng = Simulation::rng_for(seed, robot.id, round);
                 let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
-                agent.action = agent.strategy.decide(&mut ctx);
-                agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
+                // A strategy that panics takes down its robot, not the run (issue 13): step 3
+                // disables the robot and logs why. Nothing it did this round is kept.
+                let strategy = &mut agent.strategy;
+                let started = limit.map(|_| Instant::now());
+                let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
+                agent.slow = started
+                    .map(|t| t.elapsed())
+                    .filter(|&took| limit.is_some_and(|limit| took > limit));
+                match decided {
+                    Ok(action) => {
+                        agent.action = action;
+                        agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
+                    }
+                    Err(payload) => {
+                        agent.action = Action::Idle;
+                        agent.failure = Some(panic_message(payload.as_ref()));
+                    }
+                }
             });
+        if self.decide_limit.is_some() {
+            let slow = self
+                .agents
+                .iter()
+                .zip(&self.robots)
+                .filter_map(|(a, r)| a.slow.map(|t| (r.id, t)));
+            self.report.slow_decisions.extend(slow);
+        }
+    }
+}
+
+/// What a panic said (its message, when it was a string).
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    match (payload.downcast_ref::<&str>(), payload.downcast_ref::<String>()) {
+        (Some(s), _) => format!("its strategy panicked: {s}"),
+        (_, Some(s)) => format!("its strategy panicked: {s}"),
+        _ => "its strategy panicked".to_owned(),
     }
 }
 

@@ -37,6 +37,7 @@ impl Simulation {
         self.report.events.clear();
         self.report.links.clear();
         self.report.known_changed.clear();
+        self.report.slow_decisions.clear();
         // 1 + 2: perceive and decide, in parallel.
         self.deliver_messages();
         self.perceive_and_decide(round);

@@ -21,6 +21,10 @@ impl Simulation {
             if !self.robots[i].alive {
                 continue;
             }
+            if let Some(reason) = self.agents[i].failure.take() {
+                self.fail(i, reason);
+                continue;
+            }
             let types = Arc::clone(&self.types);
             let kind = &types[self.robots[i].type_index];
             let action = self.agents[i].action;
@@ -54,6 +58,16 @@ impl Simulation {
             r.path.extend_from_slice(output.path());
         }
         (messages, bytes)
+    }
+
+    /// Disable a robot whose strategy failed, for good, dropping what it queued this round.
+    fn fail(&mut self, i: usize, reason: String) {
+        drop(self.agents[i].mind.output.take_outbox());
+        let r = &mut self.robots[i];
+        r.alive = false;
+        r.last_action = (Action::Idle, Outcome::Refused);
+        self.strategies_failed += 1;
+        self.report.events.push(Event::StrategyFailed { robot: r.id, reason });
     }
 
     /// Charge energy; a robot that runs dry is disabled for good.
