@@ -15,7 +15,8 @@
 
 pub mod fig4;
 pub mod paths;
-pub mod plot;
+/// Charts (shared with `smartteams plot`).
+pub use viewer_bridge::plot;
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -48,7 +49,7 @@ pub enum Error {
     },
     /// A plot could not be drawn.
     #[error("plot: {0}")]
-    Plot(String),
+    Plot(#[from] viewer_bridge::plot::PlotError),
     /// An output file could not be written.
     #[error("{path}: {cause}")]
     Write {

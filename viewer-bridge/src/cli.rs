@@ -35,6 +35,53 @@ pub enum Command {
     Sweep(crate::sweep::SweepArgs),
     /// Join the CSVs of a sweep's shards into the CSV a single-machine sweep writes.
     Merge(crate::sweep::MergeArgs),
+    /// Draw explored fraction, treasures delivered, energy and known-map memory against
+    /// rounds from metrics or sweep CSVs (PNG or SVG): mean and spread over seeds.
+    Plot(PlotArgs),
+}
+
+/// Arguments of `smartteams plot`.
+#[derive(Debug, clap::Args)]
+pub struct PlotArgs {
+    /// Metrics CSVs (`run --metrics`) or sweep CSVs; a sweep's runs are grouped by the values
+    /// it varies, seeds pooled.
+    #[arg(required = true, value_name = "METRICS.csv")]
+    pub inputs: Vec<PathBuf>,
+    /// The figure (`.png` or `.svg`).
+    #[arg(short, long, value_name = "FIG.png")]
+    pub output: PathBuf,
+    /// Size in pixels, WIDTHxHEIGHT.
+    #[arg(long, value_name = "WxH", default_value = "1400x900", value_parser = parse_size)]
+    pub size: (u32, u32),
+}
+
+/// `1400x900` → (1400, 900).
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("a size is WIDTHxHEIGHT in pixels, e.g. 1400x900; got '{s}'");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    Ok((
+        w.trim().parse().map_err(|_| bad())?,
+        h.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+/// Draw a figure and say what it holds.
+fn plot(inputs: &[PathBuf], output: &std::path::Path, (width, height): (u32, u32)) -> Result<()> {
+    let s = crate::plot::metrics_figure(inputs, output, width, height)?;
+    println!(
+        "{}: {} charts, {} lines each ({} runs): {}{}",
+        output.display(),
+        s.charts,
+        s.groups.len(),
+        s.runs,
+        s.groups.join("; "),
+        if s.labelled {
+            ""
+        } else {
+            " (no font found: drawn without labels)"
+        }
+    );
+    Ok(())
 }
 
 /// Where a recording goes (shared by `run` and `view`).
@@ -233,8 +280,12 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
                     summary.manifest.display()
                 );
             }
+            if let Some(fig) = &args.plot {
+                plot(std::slice::from_ref(&summary.output), fig, (1400, 900))?;
+            }
             Ok(())
         }
+        Command::Plot(args) => plot(&args.inputs, &args.output, args.size),
         Command::Merge(args) => {
             let summary = crate::sweep::merge_parts(&args)?;
             let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));

@@ -19,6 +19,7 @@
 pub mod blueprint;
 pub mod cli;
 pub mod layers;
+pub mod plot;
 pub mod progress;
 pub mod rerun_observer;
 pub mod run;

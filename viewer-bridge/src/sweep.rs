@@ -29,6 +29,9 @@ pub struct SweepArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Also draw the sweep's standard figure (as `smartteams plot` does) into this file.
+    #[arg(long, value_name = "FIG.png")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Arguments of `smartteams merge`.

@@ -342,6 +342,7 @@ impl Simulation {
             units_delivered: self.robots.iter().map(|r| r.stats.units_delivered).sum(),
             message_bytes,
             strategies_failed: self.strategies_failed,
+            known_map_bytes: self.robot_memory_bytes() as u64,
         }
     }
 

@@ -33,7 +33,7 @@ macro_rules! metrics_table {
 }
 
 /// Number of metric columns (the round included).
-pub const METRICS_COUNT: usize = 13;
+pub const METRICS_COUNT: usize = 14;
 
 metrics_table! {
     /// Round number (1-based).
@@ -62,6 +62,8 @@ metrics_table! {
     message_bytes: u64, "{}", "messages/message_bytes";
     /// Robots disabled since the start because their strategy failed (panicked).
     strategies_failed: u32, "{}", "robots/strategies_failed";
+    /// Bytes held by all robots' known maps (what the paper's Fig. 4 plots).
+    known_map_bytes: u64, "{}", "memory/known_map_bytes";
 }
 
 impl RoundMetrics {

@@ -1,0 +1,109 @@
+//! `smartteams plot` as a user types it (issue 13): figures of the requested size and
+//! format from known CSVs, a line per group of runs, and clear errors for bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn smartteams(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// Width and height from a PNG's header (signature, then the IHDR chunk).
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "not a PNG");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |b: &[u8]| u32::from_be_bytes([b[0], b[1], b[2], b[3]]);
+    (be(&bytes[16..20]), be(&bytes[20..24]))
+}
+
+const SWEEP: &str = "run,seed,g.count,round,explored_fraction,treasures_delivered,mean_energy,known_map_bytes
+0,1,4,1,0.1,0,10,1000
+0,1,4,2,0.3,1,8,2000
+1,1,8,1,0.2,0,10,1000
+1,1,8,2,0.6,2,9,3000
+2,2,4,1,0.3,0,10,1000
+2,2,4,2,0.5,3,6,4000
+3,2,8,1,0.2,0,10,1000
+3,2,8,2,0.6,2,7,3000
+";
+
+#[test]
+fn issue13_plot_draws_a_line_per_group_at_the_requested_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
+    let out = smartteams(d, &["plot", "sweep.csv", "-o", "fig.png", "--size", "900x700"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        said.contains("4 charts, 2 lines each (4 runs): g.count=4 (2 runs); g.count=8 (2 runs)"),
+        "{said}"
+    );
+    assert_eq!(png_size(&std::fs::read(d.join("fig.png")).unwrap()), (900, 700));
+
+    // A run's own metrics CSV beside the sweep: one more line; SVG by the extension.
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/demo.xml");
+    let run = smartteams(
+        d,
+        &[
+            "run",
+            demo.to_str().unwrap(),
+            "--rounds",
+            "20",
+            "--no-viewer",
+            "-q",
+            "--metrics",
+            "demo.csv",
+        ],
+    );
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let out = smartteams(d, &["plot", "sweep.csv", "demo.csv", "-o", "fig.svg"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("4 charts, 3 lines each (5 runs)"), "{said}");
+    assert!(said.contains("; demo"), "{said}");
+    let svg = std::fs::read_to_string(d.join("fig.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("width=\"1400\"") && svg.contains("height=\"900\""));
+}
+
+#[test]
+fn issue13_plot_refuses_bad_input_naming_the_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
+    std::fs::write(d.join("old.csv"), "round,explored_fraction\n1,0.5\n").unwrap();
+    std::fs::write(
+        d.join("bad.csv"),
+        SWEEP.replace("1,1,8,2,0.6,2,9,3000", "1,1,8,2,lots,2,9,3000"),
+    )
+    .unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["old.csv", "-o", "f.png"],
+            "old.csv:1: no 'treasures_delivered' column",
+        ),
+        (
+            &["bad.csv", "-o", "f.png"],
+            "bad.csv:5: explored_fraction must be a number, got 'lots'",
+        ),
+        (
+            &["sweep.csv", "-o", "f.jpg"],
+            "f.jpg: the figure is written as .png or .svg",
+        ),
+        (&["missing.csv", "-o", "f.png"], "missing.csv"),
+        (
+            &["sweep.csv", "-o", "f.png", "--size", "90x5"],
+            "90 × 5 pixels makes no sense",
+        ),
+    ];
+    for (args, want) in cases {
+        let out = smartteams(d, &[&["plot"], args].concat());
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(want), "{args:?}: wanted '{want}', got: {err}");
+    }
+}
