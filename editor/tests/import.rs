@@ -359,3 +359,25 @@ fn real_stage_bitmap() {
     assert!(dark > 1000);
     assert_matches(&map, &img, |v| v < 128);
 }
+
+/// Found by `tests/tests/fuzz.rs`: a ROS YAML whose `image:` names a missing file was refused
+/// with an error naming only the image, not the YAML that asked for it.
+#[test]
+fn fuzz_found_a_ros_yaml_naming_a_missing_image_is_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let yaml = dir.path().join("site.yaml");
+    std::fs::write(
+        &yaml,
+        "image: gone.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n",
+    )
+    .unwrap();
+    let e = import(&yaml, &ImportOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("site.yaml") && e.contains("gone.pgm"), "{e}");
+    // And one whose image has no pixels: the error names the image and its size.
+    std::fs::write(dir.path().join("gone.pgm"), b"P5\n0 16\n255\n").unwrap();
+    let e = import(&yaml, &ImportOptions::default()).unwrap_err().to_string();
+    assert!(
+        e.contains("site.yaml") && e.contains("gone.pgm") && e.contains("0 × 16"),
+        "{e}"
+    );
+}

@@ -50,7 +50,7 @@ pub struct PlotArgs {
     /// The figure (`.png` or `.svg`).
     #[arg(short, long, value_name = "FIG.png")]
     pub output: PathBuf,
-    /// Size in pixels, WIDTHxHEIGHT.
+    /// Size in pixels, `WIDTHxHEIGHT`.
     #[arg(long, value_name = "WxH", default_value = "1400x900", value_parser = parse_size)]
     pub size: (u32, u32),
 }

@@ -242,7 +242,11 @@ fn read_groups(inputs: &[PathBuf], metrics: &[&str]) -> Result<Vec<(String, usiz
             let g = *index
                 .entry((if keys.is_empty() { f } else { 0 }, label.clone()))
                 .or_insert_with(|| {
-                    groups.push((label, Default::default(), vec![Samples::new(); metrics.len()]));
+                    groups.push((
+                        label,
+                        std::collections::BTreeSet::default(),
+                        vec![Samples::new(); metrics.len()],
+                    ));
                     groups.len() - 1
                 });
             let (_, runs, samples) = &mut groups[g];
@@ -406,7 +410,7 @@ mod tests {
         }
         // Team of 8: both seeds agree, so no spread; delivered 2 at round 2.
         assert_eq!(charts[1][1].points, [(1.0, 0.0), (2.0, 2.0)]);
-        assert!(charts[1][1].band.iter().all(|&(_, lo, hi)| lo == hi));
+        assert!(charts[1][1].band.iter().all(|&(_, lo, hi)| (hi - lo).abs() < 1e-12));
         // Memory in MB: team of 4 at round 2, mean of 2 and 4 MB.
         assert!((charts[3][0].points[1].1 - 3.0).abs() < 1e-12);
         // A lone run has no band.

@@ -113,10 +113,10 @@ pub fn sweep(args: &SweepArgs, registry: &StrategyRegistry, progress: bool) -> R
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    Ok(summary.with_context(|| format!("sweep {}", args.sweep.display()))?)
+    summary.with_context(|| format!("sweep {}", args.sweep.display()))
 }
 
 /// Run `smartteams merge`.
 pub fn merge_parts(args: &MergeArgs) -> Result<MergeSummary> {
-    Ok(merge(&args.parts, &args.output).with_context(|| format!("merging into {}", args.output.display()))?)
+    merge(&args.parts, &args.output).with_context(|| format!("merging into {}", args.output.display()))
 }

@@ -32,7 +32,7 @@ pub fn load_image(path: &Path) -> Result<DynamicImage> {
 pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let img = load_image(path)?.into_luma8();
     let (w, h) = img.dimensions();
-    check_raster_size(w, h, "this image")?;
+    check_raster_size(w, h, "this image").map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     let g = grid(opts.origin, opts.resolution_m.unwrap_or(1.0), w, h)
         .map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     map_from_top_rows(g, |col, row| {

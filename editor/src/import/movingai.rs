@@ -100,7 +100,7 @@ pub fn parse(text: &[u8]) -> Result<MovingAiMap, String> {
 pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = read(path)?;
     let m = parse(&text).map_err(|p| EditorError::bad_input(path, format!("malformed MovingAI map: {p}")))?;
-    check_raster_size(m.width, m.height, "this map")?;
+    check_raster_size(m.width, m.height, "this map").map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     let g = grid(opts.origin, opts.resolution_m.unwrap_or(1.0), m.width, m.height)
         .map_err(|e| EditorError::bad_input(path, e.to_string()))?;
     map_from_top_rows(g, |col, row| !passable(m.rows[row as usize][col as usize]))

@@ -163,11 +163,17 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = String::from_utf8(text).map_err(|_| EditorError::bad_input(path, "ROS map YAML is not UTF-8 text"))?;
     let ros = parse(&text).map_err(|p| EditorError::bad_input(path, p))?;
     let image_path = path.parent().unwrap_or(Path::new("")).join(&ros.image);
-    let img = load_image(&image_path)?.into_rgba8();
+    // The image's own errors name it; say which YAML asked for it too (found by fuzzing:
+    // a YAML naming a missing image gave an error that did not mention the YAML).
+    let img = load_image(&image_path)
+        .map_err(|e| EditorError::bad_input(path, format!("its image '{}': {e}", ros.image)))?
+        .into_rgba8();
     let (w, h) = img.dimensions();
-    check_raster_size(w, h, "this image")?;
-    let g = grid(ros.origin, opts.resolution_m.unwrap_or(ros.resolution), w, h)
-        .map_err(|e| EditorError::bad_input(path, e.to_string()))?;
+    // Size problems come from the image: name it beside the YAML.
+    let sized =
+        |e: EditorError| EditorError::bad_input(path, format!("its image '{}' ({w} × {h} pixels): {e}", ros.image));
+    check_raster_size(w, h, "this image").map_err(sized)?;
+    let g = grid(ros.origin, opts.resolution_m.unwrap_or(ros.resolution), w, h).map_err(sized)?;
     map_from_top_rows(g, |col, row| {
         let [r, gr, b, a] = img.get_pixel(col, row).0;
         let v = (f64::from(r) + f64::from(gr) + f64::from(b)) / 3.0;

@@ -203,40 +203,79 @@ fn list(s: &str) -> Vec<String> {
     s.split(',').map(|v| v.trim().to_owned()).collect()
 }
 
-impl Sweep {
-    /// Read and parse a sweep file (and the base config it names).
-    pub fn load(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|cause| Error::Io {
-            path: path.to_path_buf(),
-            cause,
-        })?;
-        Self::parse(&text, path)
+/// An element of a sweep file: its name, attributes and byte offset.
+struct Element {
+    name: String,
+    attributes: Vec<(String, String)>,
+    at: usize,
+}
+
+impl Element {
+    fn get(&self, key: &str) -> Option<&str> {
+        self.attributes.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
-    /// Parse sweep text read from `path` (relative paths inside resolve against its folder).
-    pub fn parse(text: &str, path: &Path) -> Result<Self> {
-        let error = |offset: usize, message: String| {
-            let (line, column) = line_col(text, offset);
-            Error::Config {
-                path: path.to_path_buf(),
-                line,
-                column,
-                message,
-            }
-        };
-        let base_dir = path.parent().unwrap_or(Path::new(""));
-        let resolve = |p: &str| {
-            let p = PathBuf::from(p);
-            if p.is_absolute() { p } else { base_dir.join(p) }
-        };
+    /// An error unless every attribute is one of `allowed`.
+    fn only(&self, allowed: &[&str], file: &SweepText) -> Result<()> {
+        match self.attributes.iter().find(|(k, _)| !allowed.contains(&k.as_str())) {
+            Some((k, _)) => Err(file.error(
+                self.at,
+                format!(
+                    "<{}> has no attribute '{k}' (it takes: {})",
+                    self.name,
+                    allowed.join(", ")
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    fn values(&self, file: &SweepText) -> Result<Vec<String>> {
+        let v = self
+            .get("values")
+            .ok_or_else(|| file.error(self.at, format!("<{}> needs values=\"a,b,…\"", self.name)))?;
+        Ok(list(v))
+    }
+}
+
+/// A sweep file's text, for reading it with errors that point into it.
+struct SweepText<'a> {
+    text: &'a str,
+    path: &'a Path,
+}
+
+impl SweepText<'_> {
+    fn error(&self, offset: usize, message: impl Into<String>) -> Error {
+        let (line, column) = line_col(self.text, offset);
+        Error::Config {
+            path: self.path.to_path_buf(),
+            line,
+            column,
+            message: message.into(),
+        }
+    }
+
+    /// A path in the file, relative to its folder.
+    fn resolve(&self, p: &str) -> PathBuf {
+        let p = PathBuf::from(p);
+        if p.is_absolute() {
+            p
+        } else {
+            self.path.parent().unwrap_or(Path::new("")).join(p)
+        }
+    }
+
+    /// The root `<sweep>` and the axis elements inside it, checked for well-formedness.
+    fn scan(&self) -> Result<(Element, Vec<Element>)> {
+        let text = self.text;
         let mut reader = quick_xml::Reader::from_str(text);
         let mut depth = 0usize;
-        let mut root: Option<(Vec<(String, String)>, usize)> = None;
-        let mut elements: Vec<(String, Vec<(String, String)>, usize)> = Vec::new();
+        let mut root = None;
+        let mut elements = Vec::new();
         loop {
             let before = usize::try_from(reader.buffer_position()).unwrap_or(usize::MAX);
             let event = reader.read_event().map_err(|e| {
-                error(
+                self.error(
                     usize::try_from(reader.error_position()).unwrap_or(usize::MAX),
                     format!("malformed XML: {e}"),
                 )
@@ -251,31 +290,35 @@ impl Sweep {
                     continue;
                 }
                 XmlEvent::Text(t) if !AsRef::<str>::as_ref(&t).trim().is_empty() => {
-                    return Err(error(before, "unexpected text (values go in attributes)".into()));
+                    return Err(self.error(before, "unexpected text (values go in attributes)"));
                 }
                 _ => continue,
             };
             let name = e.name().as_ref().to_owned();
             let mut attributes = Vec::new();
             for a in e.attributes() {
-                let a = a.map_err(|err| error(at, format!("malformed XML: {err}")))?;
+                let a = a.map_err(|err| self.error(at, format!("malformed XML: {err}")))?;
                 let value = a
                     .normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                    .map_err(|err| error(at, format!("malformed XML: {err}")))?;
+                    .map_err(|err| self.error(at, format!("malformed XML: {err}")))?;
                 attributes.push((a.key.as_ref().to_owned(), value.into_owned()));
             }
+            let element = Element { name, attributes, at };
             match depth {
                 0 if root.is_none() => {
-                    if name != "sweep" {
-                        return Err(error(at, format!("the root element must be <sweep>, found <{name}>")));
+                    if element.name != "sweep" {
+                        return Err(self.error(
+                            at,
+                            format!("the root element must be <sweep>, found <{}>", element.name),
+                        ));
                     }
-                    root = Some((attributes, at));
+                    root = Some(element);
                 }
-                1 => elements.push((name, attributes, at)),
+                1 => elements.push(element),
                 _ => {
-                    return Err(error(
+                    return Err(self.error(
                         at,
-                        format!("<{name}> cannot stand here (axes go directly in <sweep>)"),
+                        format!("<{}> cannot stand here (axes go directly in <sweep>)", element.name),
                     ));
                 }
             }
@@ -283,168 +326,176 @@ impl Sweep {
                 depth += 1;
             }
         }
-        let Some((root_attributes, root_at)) = root else {
-            return Err(error(0, "no <sweep> element".into()));
+        let root = root.ok_or_else(|| self.error(0, "no <sweep> element"))?;
+        Ok((root, elements))
+    }
+
+    /// The group an axis names.
+    fn group(&self, e: &Element, base: &SimConfig) -> Result<usize> {
+        let g = e
+            .get("group")
+            .ok_or_else(|| self.error(e.at, format!("<{}> needs a group attribute", e.name)))?;
+        base.groups.iter().position(|c| c.name == g).ok_or_else(|| {
+            let known: Vec<_> = base.groups.iter().map(|c| c.name.as_str()).collect();
+            self.error(
+                e.at,
+                format!(
+                    "no group '{g}' in {} (its groups: {})",
+                    base.path.display(),
+                    known.join(", ")
+                ),
+            )
+        })
+    }
+
+    /// Seeds: `values="1,2"` or `from="1" to="9"`.
+    fn seeds(&self, e: &Element) -> Result<Vec<String>> {
+        e.only(&["values", "from", "to"], self)?;
+        match (e.get("values"), e.get("from"), e.get("to")) {
+            (Some(v), None, None) => Ok(list(v)),
+            (None, Some(from), Some(to)) => {
+                let parse = |s: &str| {
+                    s.trim()
+                        .parse::<u64>()
+                        .map_err(|_| self.error(e.at, format!("seeds are whole numbers ≥ 0, got '{s}'")))
+                };
+                let (a, b) = (parse(from)?, parse(to)?);
+                if b < a || b - a >= MAX_RUNS as u64 {
+                    return Err(self.error(
+                        e.at,
+                        format!("from=\"{a}\" to=\"{b}\" is no range of at most {MAX_RUNS} seeds"),
+                    ));
+                }
+                Ok((a..=b).map(|s| s.to_string()).collect())
+            }
+            _ => Err(self.error(e.at, "<seed> takes values=\"…\" or from=\"…\" to=\"…\"")),
+        }
+    }
+
+    /// One axis element.
+    fn axis(&self, e: &Element, base: &SimConfig) -> Result<Axis> {
+        let at = e.at;
+        let (vary, column, values) = match e.name.as_str() {
+            "seed" => (Vary::Seed, "seed".to_owned(), self.seeds(e)?),
+            "rounds" => {
+                e.only(&["values"], self)?;
+                (Vary::Rounds, "rounds".to_owned(), e.values(self)?)
+            }
+            "map" => {
+                e.only(&["values"], self)?;
+                let values = e.values(self)?;
+                let paths: Vec<PathBuf> = values.iter().map(|v| self.resolve(v)).collect();
+                if let Some(missing) = paths.iter().find(|p| !p.is_file()) {
+                    return Err(self.error(at, format!("map file {} does not exist", missing.display())));
+                }
+                (Vary::Map(paths), "map".to_owned(), values)
+            }
+            "count" | "strategy" => {
+                e.only(&["group", "values"], self)?;
+                let g = self.group(e, base)?;
+                let column = format!("{}.{}", base.groups[g].name, e.name);
+                let vary = if e.name == "count" {
+                    Vary::Count(g)
+                } else {
+                    Vary::Strategy(g)
+                };
+                (vary, column, e.values(self)?)
+            }
+            "param" => {
+                e.only(&["group", "name", "values"], self)?;
+                let g = self.group(e, base)?;
+                let p = e
+                    .get("name")
+                    .ok_or_else(|| self.error(at, "<param> needs a name attribute (the parameter)"))?;
+                (
+                    Vary::Param(g, p.to_owned()),
+                    format!("{}.{p}", base.groups[g].name),
+                    e.values(self)?,
+                )
+            }
+            other => {
+                return Err(self.error(
+                    at,
+                    format!("unknown axis <{other}> (axes: seed, count, strategy, param, map, rounds)"),
+                ));
+            }
         };
-        let get = |attributes: &[(String, String)], key: &str| {
-            attributes.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone())
-        };
-        let only = |attributes: &[(String, String)], allowed: &[&str], what: &str, at: usize| match attributes
-            .iter()
-            .find(|(k, _)| !allowed.contains(&k.as_str()))
-        {
-            Some((k, _)) => Err(error(
-                at,
-                format!("<{what}> has no attribute '{k}' (it takes: {})", allowed.join(", ")),
-            )),
+        if let Some(empty) = values.iter().position(String::is_empty) {
+            return Err(self.error(at, format!("value {} of <{}> is empty", empty + 1, e.name)));
+        }
+        let whole = |kind: &str, ok: &dyn Fn(&str) -> bool| match values.iter().find(|v| !ok(v)) {
+            Some(v) => Err(self.error(at, format!("{kind} must be whole numbers, got '{v}'"))),
             None => Ok(()),
         };
-        only(&root_attributes, &["name", "config", "rounds"], "sweep", root_at)?;
-        let config = get(&root_attributes, "config").ok_or_else(|| {
-            error(
-                root_at,
-                "<sweep> needs a config attribute (the base config file)".into(),
-            )
+        match vary {
+            Vary::Seed | Vary::Rounds => whole(&e.name, &|v| v.parse::<u64>().is_ok())?,
+            Vary::Count(_) => whole("robot counts", &|v| v.parse::<u32>().is_ok())?,
+            _ => {}
+        }
+        let mut seen = BTreeSet::new();
+        if let Some(v) = values.iter().find(|v| !seen.insert(v.as_str())) {
+            return Err(self.error(at, format!("value '{v}' is listed twice in <{}>", e.name)));
+        }
+        Ok(Axis {
+            column,
+            values,
+            vary,
+            at: line_col(self.text, at),
+        })
+    }
+}
+
+impl Sweep {
+    /// Read and parse a sweep file (and the base config it names).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|cause| Error::Io {
+            path: path.to_path_buf(),
+            cause,
         })?;
-        let base = SimConfig::load(&resolve(&config))?;
-        let rounds = match get(&root_attributes, "rounds") {
+        Self::parse(&text, path)
+    }
+
+    /// Parse sweep text read from `path` (relative paths inside resolve against its folder).
+    pub fn parse(text: &str, path: &Path) -> Result<Self> {
+        let file = SweepText { text, path };
+        let (root, elements) = file.scan()?;
+        root.only(&["name", "config", "rounds"], &file)?;
+        let config = root
+            .get("config")
+            .ok_or_else(|| file.error(root.at, "<sweep> needs a config attribute (the base config file)"))?;
+        let base =
+            SimConfig::load(&file.resolve(config)).map_err(|e| file.error(root.at, format!("its base config: {e}")))?;
+        let rounds = match root.get("rounds") {
             None => base.rounds,
             Some(r) => r
                 .trim()
                 .parse()
-                .map_err(|_| error(root_at, format!("rounds must be a whole number ≥ 0, got '{r}'")))?,
+                .map_err(|_| file.error(root.at, format!("rounds must be a whole number ≥ 0, got '{r}'")))?,
         };
-        let name = get(&root_attributes, "name")
+        let name = root
+            .get("name")
+            .map(str::to_owned)
             .or_else(|| path.file_stem().map(|s| s.to_string_lossy().into_owned()))
             .unwrap_or_else(|| "sweep".into());
-        let group_index = |attributes: &[(String, String)], what: &str, at: usize| {
-            let g = get(attributes, "group").ok_or_else(|| error(at, format!("<{what}> needs a group attribute")))?;
-            base.groups.iter().position(|c| c.name == g).ok_or_else(|| {
-                let known: Vec<_> = base.groups.iter().map(|c| c.name.as_str()).collect();
-                error(
-                    at,
-                    format!(
-                        "no group '{g}' in {} (its groups: {})",
-                        base.path.display(),
-                        known.join(", ")
-                    ),
-                )
-            })
-        };
         let mut axes: Vec<Axis> = Vec::new();
-        for (what, attributes, at) in &elements {
-            let at = *at;
-            let (vary, column, values) = match what.as_str() {
-                "seed" => {
-                    only(attributes, &["values", "from", "to"], what, at)?;
-                    let values = match (
-                        get(attributes, "values"),
-                        get(attributes, "from"),
-                        get(attributes, "to"),
-                    ) {
-                        (Some(v), None, None) => list(&v),
-                        (None, Some(from), Some(to)) => {
-                            let parse = |s: &str| {
-                                s.trim()
-                                    .parse::<u64>()
-                                    .map_err(|_| error(at, format!("seeds are whole numbers ≥ 0, got '{s}'")))
-                            };
-                            let (a, b) = (parse(&from)?, parse(&to)?);
-                            if b < a || b - a >= MAX_RUNS as u64 {
-                                return Err(error(
-                                    at,
-                                    format!("from=\"{a}\" to=\"{b}\" is no range of at most {MAX_RUNS} seeds"),
-                                ));
-                            }
-                            (a..=b).map(|s| s.to_string()).collect()
-                        }
-                        _ => {
-                            return Err(error(at, "<seed> takes values=\"…\" or from=\"…\" to=\"…\"".into()));
-                        }
-                    };
-                    (Vary::Seed, "seed".to_owned(), values)
-                }
-                "rounds" => {
-                    only(attributes, &["values"], what, at)?;
-                    (Vary::Rounds, "rounds".to_owned(), Vec::new())
-                }
-                "map" => {
-                    only(attributes, &["values"], what, at)?;
-                    let values = get(attributes, "values").map(|v| list(&v)).unwrap_or_default();
-                    let paths: Vec<PathBuf> = values.iter().map(|v| resolve(v)).collect();
-                    if let Some(missing) = paths.iter().find(|p| !p.is_file()) {
-                        return Err(error(at, format!("map file {} does not exist", missing.display())));
-                    }
-                    (Vary::Map(paths), "map".to_owned(), values)
-                }
-                "count" | "strategy" => {
-                    only(attributes, &["group", "values"], what, at)?;
-                    let g = group_index(attributes, what, at)?;
-                    let column = format!("{}.{what}", base.groups[g].name);
-                    let vary = if what == "count" {
-                        Vary::Count(g)
-                    } else {
-                        Vary::Strategy(g)
-                    };
-                    (vary, column, Vec::new())
-                }
-                "param" => {
-                    only(attributes, &["group", "name", "values"], what, at)?;
-                    let g = group_index(attributes, what, at)?;
-                    let p = get(attributes, "name")
-                        .ok_or_else(|| error(at, "<param> needs a name attribute (the parameter)".into()))?;
-                    (
-                        Vary::Param(g, p.clone()),
-                        format!("{}.{p}", base.groups[g].name),
-                        Vec::new(),
-                    )
-                }
-                other => {
-                    return Err(error(
-                        at,
-                        format!("unknown axis <{other}> (axes: seed, count, strategy, param, map, rounds)"),
-                    ));
-                }
-            };
-            let values = if values.is_empty() {
-                list(&get(attributes, "values").ok_or_else(|| error(at, format!("<{what}> needs values=\"a,b,…\"")))?)
-            } else {
-                values
-            };
-            if let Some(empty) = values.iter().position(String::is_empty) {
-                return Err(error(at, format!("value {} of <{what}> is empty", empty + 1)));
-            }
-            let whole = |kind: &str, ok: &dyn Fn(&str) -> bool| match values.iter().find(|v| !ok(v)) {
-                Some(v) => Err(error(at, format!("{kind} must be whole numbers, got '{v}'"))),
-                None => Ok(()),
-            };
-            match vary {
-                Vary::Seed | Vary::Rounds => whole(what, &|v| v.parse::<u64>().is_ok())?,
-                Vary::Count(_) => whole("robot counts", &|v| v.parse::<u32>().is_ok())?,
-                _ => {}
-            }
-            if let Some(twice) = axes.iter().find(|a| a.column == column) {
-                return Err(error(
-                    at,
-                    format!("column '{column}' is varied twice (first at line {})", twice.at.0),
+        for element in &elements {
+            let axis = file.axis(element, &base)?;
+            if let Some(twice) = axes.iter().find(|a| a.column == axis.column) {
+                return Err(file.error(
+                    element.at,
+                    format!(
+                        "column '{}' is varied twice (first at line {})",
+                        axis.column, twice.at.0
+                    ),
                 ));
             }
-            let mut seen = BTreeSet::new();
-            if let Some(v) = values.iter().find(|v| !seen.insert(v.as_str())) {
-                return Err(error(at, format!("value '{v}' is listed twice in <{what}>")));
-            }
-            axes.push(Axis {
-                column,
-                values,
-                vary,
-                at: line_col(text, at),
-            });
+            axes.push(axis);
         }
         let runs = axes
             .iter()
             .try_fold(1usize, |n, a| n.checked_mul(a.values.len()).filter(|&n| n <= MAX_RUNS));
         if runs.is_none() {
-            return Err(error(root_at, format!("the grid has more than {MAX_RUNS} runs")));
+            return Err(file.error(root.at, format!("the grid has more than {MAX_RUNS} runs")));
         }
         let mut hasher = crc32fast::Hasher::new();
         hasher.update(text.as_bytes());
@@ -666,6 +717,28 @@ pub fn run_sweep(
     })?;
 
     // All there: assemble in run order.
+    let (rows, manifest) = assemble(sweep, shard, &runs, &part, &seconds_file, output)?;
+    std::fs::remove_dir_all(&parts).map_err(io_error(&parts))?;
+    Ok(SweepSummary {
+        runs_total: sweep.run_count(),
+        runs: runs.len(),
+        resumed,
+        rows,
+        output: output.to_path_buf(),
+        manifest,
+    })
+}
+
+/// Join the parts of `runs` into `output` (header, then the runs in order) and write the
+/// manifest beside it. Returns the rows written and the manifest's path.
+fn assemble(
+    sweep: &Sweep,
+    shard: Shard,
+    runs: &[usize],
+    part: &dyn Fn(usize) -> PathBuf,
+    seconds_file: &dyn Fn(usize) -> PathBuf,
+    output: &Path,
+) -> Result<(usize, PathBuf)> {
     let mut out = csv::Writer::from_writer(Vec::new());
     out.write_record(sweep.columns())
         .map_err(|e| Error::Malformed(format!("writing CSV: {e}")))?;
@@ -674,15 +747,16 @@ pub fn run_sweep(
         .map_err(|e| Error::Malformed(format!("writing CSV: {}", e.error())))?;
     let mut manifest_runs = Vec::with_capacity(runs.len());
     let mut rows = 0;
-    for &run in &runs {
+    for &run in runs {
         let path = part(run);
-        let part_bytes = std::fs::read(&path).map_err(io_error(&path))?;
-        rows += part_bytes.iter().filter(|&&b| b == b'\n').count();
+        bytes.extend_from_slice(&std::fs::read(&path).map_err(io_error(&path))?);
         let seconds = std::fs::read_to_string(seconds_file(run))
             .ok()
             .and_then(|s| s.trim().parse().ok())
             .unwrap_or(f64::NAN);
         let (config, _) = sweep.config(run);
+        // One row a round.
+        rows += usize::try_from(config.rounds).unwrap_or(usize::MAX);
         manifest_runs.push(ManifestRun {
             run,
             values: sweep
@@ -694,7 +768,6 @@ pub fn run_sweep(
             rounds: config.rounds,
             seconds,
         });
-        bytes.extend_from_slice(&part_bytes);
     }
     let manifest = Manifest {
         smartteams_version: env!("CARGO_PKG_VERSION").to_owned(),
@@ -711,15 +784,7 @@ pub fn run_sweep(
     let manifest_file = manifest_path(output);
     write_manifest(&manifest_file, &manifest)?;
     write_atomically(output, &bytes)?;
-    std::fs::remove_dir_all(&parts).map_err(io_error(&parts))?;
-    Ok(SweepSummary {
-        runs_total: sweep.run_count(),
-        runs: runs.len(),
-        resumed,
-        rows,
-        output: output.to_path_buf(),
-        manifest: manifest_file,
-    })
+    Ok((rows, manifest_file))
 }
 
 fn write_manifest(path: &Path, manifest: &Manifest) -> Result<()> {
@@ -727,6 +792,37 @@ fn write_manifest(path: &Path, manifest: &Manifest) -> Result<()> {
         .map_err(|e| Error::Malformed(format!("{}: cannot write the manifest: {e}", path.display())))?;
     json.push('\n');
     write_atomically(path, json.as_bytes())
+}
+
+/// The manifests beside `parts`, merged, when every part has one; an error if runs of the
+/// sweep they describe are in none of the parts (`owner`: which part holds each run).
+fn merged_manifest(parts: &[PathBuf], owner: &BTreeMap<usize, &Path>) -> Result<Option<Manifest>> {
+    let manifests: Option<Vec<Manifest>> = parts
+        .iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(manifest_path(p)).ok()?;
+            serde_json::from_str(&text).ok()
+        })
+        .collect();
+    let Some(all) = manifests else {
+        return Ok(None);
+    };
+    let total = all[0].runs_total;
+    let missing: Vec<usize> = (0..total).filter(|r| !owner.contains_key(r)).collect();
+    if !missing.is_empty() {
+        let shown: Vec<String> = missing.iter().take(10).map(ToString::to_string).collect();
+        return Err(Error::InvalidParameter(format!(
+            "the sweep has {total} runs but {} are in none of the parts (runs {}{}); a shard missing?",
+            missing.len(),
+            shown.join(", "),
+            if missing.len() > 10 { ", …" } else { "" }
+        )));
+    }
+    let mut m = all[0].clone();
+    m.shards = all.iter().flat_map(|m| m.shards.clone()).collect();
+    m.runs = all.into_iter().flat_map(|m| m.runs).collect();
+    m.runs.sort_by_key(|r| r.run);
+    Ok(Some(m))
 }
 
 /// What [`merge`] joined.
@@ -807,34 +903,7 @@ pub fn merge(parts: &[PathBuf], output: &Path) -> Result<MergeSummary> {
     rows.sort_by_key(|(run, _)| *run);
     let (header, _) = header.expect("at least one part");
 
-    // Manifests, when all parts have one: check the sweep is whole and merge them.
-    let manifests: Vec<Option<Manifest>> = parts
-        .iter()
-        .map(|p| {
-            let m = manifest_path(p);
-            let text = std::fs::read_to_string(&m).ok()?;
-            serde_json::from_str(&text).ok()
-        })
-        .collect();
-    let mut merged_manifest = None;
-    if let Some(all) = manifests.into_iter().collect::<Option<Vec<Manifest>>>() {
-        let total = all[0].runs_total;
-        let missing: Vec<usize> = (0..total).filter(|r| !owner.contains_key(r)).collect();
-        if !missing.is_empty() {
-            let shown: Vec<String> = missing.iter().take(10).map(ToString::to_string).collect();
-            return Err(Error::InvalidParameter(format!(
-                "the sweep has {total} runs but {} are in none of the parts (runs {}{}); a shard missing?",
-                missing.len(),
-                shown.join(", "),
-                if missing.len() > 10 { ", …" } else { "" }
-            )));
-        }
-        let mut m = all[0].clone();
-        m.shards = all.iter().flat_map(|m| m.shards.clone()).collect();
-        m.runs = all.into_iter().flat_map(|m| m.runs).collect();
-        m.runs.sort_by_key(|r| r.run);
-        merged_manifest = Some(m);
-    }
+    let merged_manifest = merged_manifest(parts, &owner)?;
 
     let mut out = csv::Writer::from_writer(Vec::new());
     let write_error = |e: csv::Error| Error::Malformed(format!("{}: writing CSV: {e}", output.display()));

@@ -315,7 +315,7 @@ impl Disc {
             let (a, b) = (grid.corner(0, k).y, grid.corner(0, k + 1).y);
             let (ny, fy) = edge_distances(self.center.y, a, b);
             let inside = |i: usize| far_x[i] + fy <= r2 && near_x[i] + ny < r2;
-            if !(clip.min.y <= a && b <= clip.max.y) || !inside(mid) {
+            if !(clip.min.y <= a && b <= clip.max.y && inside(mid)) {
                 continue;
             }
             if inside(lo) {
