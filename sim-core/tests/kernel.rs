@@ -617,3 +617,157 @@ fn issue13_a_slow_decision_is_reported_with_its_robot_and_time() {
     );
     assert!(run(None).is_empty());
 }
+
+/// The state bytes of a simulation (`write_state`).
+fn state_bytes(sim: &Simulation) -> Vec<u8> {
+    let mut out = Vec::new();
+    sim.write_state(&mut out).unwrap();
+    out
+}
+
+/// Issue 13: a run saved after k rounds and restored into a simulation set up afresh from
+/// the same scenario plays on exactly as the run that was never stopped (every round's
+/// metrics, events and robot bits, and the final state byte for byte), for every built-in
+/// strategy at once, with known maps and sightings in flight and a finite radio budget, on
+/// one thread and on two.
+#[test]
+fn issue13_a_restored_run_plays_on_bit_for_bit() {
+    const ROUNDS: u64 = 160;
+    let registry = StrategyRegistry::with_builtins();
+    let setup = || {
+        let treasures = vec![
+            TreasureSpec {
+                position: DVec2::new(12.5, 30.5),
+                quantity: 4,
+            },
+            TreasureSpec {
+                position: DVec2::new(30.5, 14.5),
+                quantity: 3,
+            },
+        ];
+        let radio = RobotType::explorer().with_radio_bytes_per_round(600);
+        scenario(
+            rooms_map(treasures),
+            11,
+            ROUNDS,
+            vec![
+                (5, RobotType::explorer(), "cooperative"),
+                (3, radio, "cooperative"),
+                (2, RobotType::explorer(), "frontier"),
+                (4, RobotType::explorer(), "team"),
+                (3, RobotType::explorer(), "random_walk"),
+                (2, RobotType::excavator(), "excavator"),
+                (2, RobotType::transporter(), "transporter"),
+            ],
+        )
+    };
+    // Plays to round `until`; returns the messages sent.
+    let play = |sim: &mut Simulation, until: u64, trace: &mut Trace| {
+        let mut messages = 0;
+        while sim.round() < until {
+            sim.step();
+            let report = sim.report().clone();
+            messages += report.metrics.messages;
+            trace.on_round(sim, &report).unwrap();
+        }
+        messages
+    };
+    let mut whole = Trace::default();
+    let mut sim = new_sim(setup(), &registry).unwrap();
+    let messages = play(&mut sim, ROUNDS, &mut whole);
+    let end = state_bytes(&sim);
+    let m = sim.report().metrics;
+    // The run does what the checkpoint must carry: messages sent, treasures dug.
+    assert!(messages > 100, "{messages} messages");
+    assert!(m.units_dug > 0, "{m:?}");
+    for (k, threads) in [(0, 1), (1, 2), (37, 1), (90, 2), (ROUNDS, 1)] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut first = new_sim(setup(), &registry).unwrap();
+            let mut before = Trace::default();
+            play(&mut first, k, &mut before);
+            let saved = state_bytes(&first);
+            drop(first);
+            let mut resumed = new_sim(setup(), &registry).unwrap();
+            resumed.read_state(&saved).unwrap();
+            assert_eq!(resumed.round(), k);
+            // Saving what was restored gives the same bytes: nothing is lost or reordered.
+            assert_eq!(
+                state_bytes(&resumed),
+                saved,
+                "k = {k}: the restored state saves differently"
+            );
+            let mut after = Trace::default();
+            play(&mut resumed, ROUNDS, &mut after);
+            let k = usize::try_from(k).unwrap();
+            assert_eq!(before.0.len(), k);
+            for (round, (a, b)) in whole.0[k..].iter().zip(&after.0).enumerate() {
+                assert_eq!(a, b, "resumed after {k} rounds: round {} differs", k + round + 1);
+            }
+            assert_eq!(
+                state_bytes(&resumed),
+                end,
+                "resumed after {k} rounds: the final state differs"
+            );
+        });
+    }
+}
+
+/// Issue 13: a state that does not fit the scenario is refused with a reason, and a
+/// strategy that cannot save its state makes the run refuse to checkpoint, naming its group.
+#[test]
+fn issue13_states_that_do_not_fit_are_refused() {
+    let registry = StrategyRegistry::with_builtins();
+    let mut sim = new_sim(
+        scenario(
+            rooms_map(Vec::new()),
+            1,
+            50,
+            vec![(4, RobotType::explorer(), "cooperative")],
+        ),
+        &registry,
+    )
+    .unwrap();
+    for _ in 0..20 {
+        sim.step();
+    }
+    let saved = state_bytes(&sim);
+    // Another robot count.
+    let mut other = new_sim(
+        scenario(
+            rooms_map(Vec::new()),
+            1,
+            50,
+            vec![(5, RobotType::explorer(), "cooperative")],
+        ),
+        &registry,
+    )
+    .unwrap();
+    let e = other.read_state(&saved).unwrap_err().to_string();
+    assert!(e.contains("4 robots saved, the scenario has 5"), "{e}");
+    // A run shorter than the saved round.
+    let mut short = new_sim(
+        scenario(
+            rooms_map(Vec::new()),
+            1,
+            10,
+            vec![(4, RobotType::explorer(), "cooperative")],
+        ),
+        &registry,
+    )
+    .unwrap();
+    let e = short.read_state(&saved).unwrap_err().to_string();
+    assert!(e.contains("round 20 is past the run's 10 rounds"), "{e}");
+    // Bytes that are not a state.
+    let e = other.read_state(&saved[..saved.len() / 2]).unwrap_err().to_string();
+    assert!(e.contains("does not decode"), "{e}");
+    // A strategy without `save_state`.
+    let cheats = new_sim(
+        scenario(rooms_map(Vec::new()), 1, 10, vec![(1, RobotType::explorer(), "dig")]),
+        &cheat_registry(),
+    )
+    .unwrap();
+    let e = cheats.check_checkpointable().unwrap_err().to_string();
+    assert!(e.contains("group 'g0': strategy 'dig' cannot save its state"), "{e}");
+    assert!(cheats.write_state(&mut Vec::new()).is_err());
+}

@@ -7,10 +7,10 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use sim_core::agent::StrategyRegistry;
-use sim_core::io::SimConfig;
+use sim_core::io::{Checkpoint, RunSource, SimConfig};
 
 use crate::rerun_observer::LogOptions;
-use crate::run::{RunConfig, execute};
+use crate::run::{CheckpointPlan, RunConfig, execute};
 use crate::viewer::{DEFAULT_CONNECT_URL, ViewerTarget, connect_url};
 
 /// Smart Teams: simulate robot swarms exploring unknown terrain.
@@ -27,6 +27,8 @@ pub struct Cli {
 pub enum Command {
     /// Run a simulation described by an XML config.
     Run(RunArgs),
+    /// Continue a run from its checkpoint (`run --checkpoint`) to the end it would have had.
+    Resume(ResumeArgs),
     /// Show a map alone in Rerun (obstacles, home, treasures; 2D and 3D).
     View(ViewArgs),
     /// List the strategies this build knows.
@@ -137,7 +139,7 @@ pub struct ViewArgs {
 }
 
 /// Arguments of `smartteams run`. `Default` gives an empty config path and the `.rrd` default
-/// viewer; library callers usually set `viewer.no_viewer`.
+/// viewer; library callers usually set `output.viewer.no_viewer`.
 #[derive(Debug, Default, clap::Args)]
 pub struct RunArgs {
     /// The simulation config (XML).
@@ -151,6 +153,39 @@ pub struct RunArgs {
     /// Run seed (overrides the config).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Write the whole state of the run to this file every `--checkpoint-every` rounds
+    /// (atomically: a run killed at any moment leaves the last checkpoint whole);
+    /// `smartteams resume FILE` continues it.
+    #[arg(long, value_name = "FILE")]
+    pub checkpoint: Option<PathBuf>,
+    /// Rounds between checkpoints (with `--checkpoint`).
+    #[arg(long, value_name = "K", default_value_t = 100, requires = "checkpoint",
+          value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: u64,
+    /// Outputs, viewer and threads.
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// Arguments of `smartteams resume`.
+#[derive(Debug, Default, clap::Args)]
+pub struct ResumeArgs {
+    /// The checkpoint (`run --checkpoint FILE`).
+    pub checkpoint: PathBuf,
+    /// Rounds between further checkpoints, written to the same file (default: as the run
+    /// that wrote it).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Outputs, viewer and threads, as for `run`. The metrics CSV holds every round, those
+    /// before the checkpoint included; a recording starts at the checkpoint's round (by
+    /// default `<run name>-from-<round>.rrd`).
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// What `run` and `resume` share: outputs, viewer, threads.
+#[derive(Debug, Default, clap::Args)]
+pub struct OutputArgs {
     /// Worker threads (default: one per core). Results do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
@@ -191,29 +226,15 @@ pub struct RunArgs {
     pub max_links: usize,
 }
 
-impl RunArgs {
-    /// Resolve into a validated run config (the config file is parsed and checked here).
-    pub fn resolve(self) -> Result<RunConfig> {
-        let mut config = SimConfig::load(&self.config)?;
-        if let Some(map) = self.map {
-            config = config.with_map_argument(map);
-        }
-        if let Some(r) = self.rounds {
-            config.rounds = r;
-        }
-        if let Some(s) = self.seed {
-            config.seed = s;
-        }
+impl OutputArgs {
+    /// The validated run settings for `config`; `default_rrd` names the recording when no
+    /// viewer option is given.
+    fn resolve(self, config: SimConfig, default_rrd: PathBuf, checkpoint: Option<CheckpointPlan>) -> Result<RunConfig> {
         if self.threads == Some(0) {
             bail!("--threads must be at least 1");
         }
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
-        let default_rrd = config
-            .outputs
-            .rrd
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("{}.rrd", config.name)));
         let viewer = self.viewer.target(default_rrd)?;
         Ok(RunConfig {
             config,
@@ -230,7 +251,58 @@ impl RunArgs {
                 known_per_robot_max: self.known_per_robot_max,
             },
             progress: !self.quiet && std::io::stderr().is_terminal(),
+            checkpoint,
         })
+    }
+}
+
+impl RunArgs {
+    /// Resolve into a validated run config (the config file is parsed and checked here).
+    pub fn resolve(self) -> Result<RunConfig> {
+        let mut config = SimConfig::load(&self.config)?;
+        if let Some(map) = self.map {
+            config = config.with_map_argument(map);
+        }
+        if let Some(r) = self.rounds {
+            config.rounds = r;
+        }
+        if let Some(s) = self.seed {
+            config.seed = s;
+        }
+        let default_rrd = config
+            .outputs
+            .rrd
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("{}.rrd", config.name)));
+        let checkpoint = match self.checkpoint {
+            Some(path) => Some(CheckpointPlan {
+                path,
+                every_rounds: self.checkpoint_every,
+                source: RunSource::of(&config)?,
+                resume_from: None,
+            }),
+            None => None,
+        };
+        self.output.resolve(config, default_rrd, checkpoint)
+    }
+}
+
+impl ResumeArgs {
+    /// Read and check the checkpoint, and resolve the run that continues it.
+    pub fn resolve(self) -> Result<RunConfig> {
+        let checkpoint = Checkpoint::read(&self.checkpoint)?;
+        let config = checkpoint
+            .source()
+            .config()
+            .with_context(|| format!("setting up the run of checkpoint {}", self.checkpoint.display()))?;
+        let default_rrd = PathBuf::from(format!("{}-from-{}.rrd", config.name, checkpoint.round()));
+        let plan = CheckpointPlan {
+            path: self.checkpoint,
+            every_rounds: self.checkpoint_every.unwrap_or(checkpoint.every_rounds()),
+            source: checkpoint.source().clone(),
+            resume_from: Some(std::sync::Arc::new(checkpoint)),
+        };
+        self.output.resolve(config, default_rrd, Some(plan))
     }
 }
 
@@ -298,15 +370,21 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             Ok(())
         }
         Command::Run(args) => {
-            let quiet = args.quiet;
-            let config_path = args.config.clone();
-            let run = args.resolve()?;
-            let summary =
-                execute(&run, registry, &mut []).with_context(|| format!("running {}", config_path.display()))?;
-            if !quiet {
-                println!("{summary}");
-            }
-            Ok(())
+            let (quiet, what) = (args.output.quiet, format!("running {}", args.config.display()));
+            run_and_report(&args.resolve()?, registry, quiet, &what)
+        }
+        Command::Resume(args) => {
+            let (quiet, what) = (args.output.quiet, format!("resuming {}", args.checkpoint.display()));
+            run_and_report(&args.resolve()?, registry, quiet, &what)
         }
     }
+}
+
+/// Execute a resolved run and print its summary (unless quiet).
+fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, what: &str) -> Result<()> {
+    let summary = execute(run, registry, &mut []).with_context(|| what.to_owned())?;
+    if !quiet {
+        println!("{summary}");
+    }
+    Ok(())
 }

@@ -11,10 +11,14 @@ pub struct Progress {
 }
 
 impl Progress {
-    /// A bar for `rounds` rounds; `enabled = false` (or no terminal) draws nothing.
-    pub fn new(enabled: bool, rounds: u64) -> Self {
+    /// A bar for `rounds` rounds, `done` of them already played (a resumed run);
+    /// `enabled = false` (or no terminal) draws nothing.
+    pub fn new(enabled: bool, done: u64, rounds: u64) -> Self {
         let bar = enabled.then(|| {
             let bar = ProgressBar::new(rounds);
+            bar.set_position(done);
+            // Rate and finish time from the rounds played here, not those before.
+            bar.reset_eta();
             bar.set_style(
                 ProgressStyle::with_template(
                     "{elapsed_precise} [{bar:40}] {pos}/{len} rounds ({per_sec}, eta {eta}) {msg}",

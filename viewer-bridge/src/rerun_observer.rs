@@ -833,7 +833,8 @@ impl Observer for RerunObserver {
         let world = self.snapshot_world(sim, None);
         self.send(
             Frame {
-                round: 0,
+                // A resumed run starts at its checkpoint's round.
+                round: sim.round(),
                 metrics: None,
                 events: Vec::new(),
                 world: Some(world),

@@ -3,13 +3,14 @@
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use sim_core::agent::StrategyRegistry;
 use sim_core::engine::Simulation;
 use sim_core::io::Observer;
-use sim_core::io::SimConfig;
+use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
 use sim_core::spatial::RobotId;
 use sim_core::world::{Event, MapData, RoundReport};
@@ -37,6 +38,21 @@ pub struct RunConfig {
     pub viewer: Option<ViewerTarget>,
     /// How much the recording holds.
     pub log: LogOptions,
+    /// Checkpoints to write, and the one this run resumes from.
+    pub checkpoint: Option<CheckpointPlan>,
+}
+
+/// Where and how often a run writes checkpoints, and the checkpoint it continues.
+#[derive(Clone, Debug)]
+pub struct CheckpointPlan {
+    /// The checkpoint file (replaced at every checkpoint).
+    pub path: PathBuf,
+    /// Rounds between checkpoints.
+    pub every_rounds: u64,
+    /// How the run was set up (stored in every checkpoint).
+    pub source: RunSource,
+    /// The checkpoint this run continues (`smartteams resume`), read and checked.
+    pub resume_from: Option<Arc<Checkpoint>>,
 }
 
 /// What a finished run reports.
@@ -44,8 +60,11 @@ pub struct RunConfig {
 pub struct Summary {
     /// Run name.
     pub name: String,
-    /// Rounds played.
+    /// Rounds played (those before a checkpoint it resumed from included).
     pub rounds: u64,
+    /// The checkpoint's round, for a resumed run (the rounds before it were played by
+    /// the run that wrote it; the rate counts only those played here).
+    pub resumed_at: Option<u64>,
     /// Robots.
     pub robots: usize,
     /// Final metrics.
@@ -79,14 +98,18 @@ impl std::fmt::Display for Summary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let m = &self.metrics;
         let secs = self.elapsed.as_secs_f64();
+        let played = self.rounds - self.resumed_at.unwrap_or(0);
+        let resumed = self.resumed_at.map_or(String::new(), |k| {
+            format!(" (resumed at round {k}: {played} played now)")
+        });
         writeln!(
             f,
-            "{}: {} rounds with {} robots in {:.2} s ({:.1} rounds/s; set-up {:.2} s)",
+            "{}: {} rounds{resumed} with {} robots in {:.2} s ({:.1} rounds/s; set-up {:.2} s)",
             self.name,
             self.rounds,
             self.robots,
             secs,
-            self.rounds as f64 / secs.max(1e-9),
+            played as f64 / secs.max(1e-9),
             self.setup.as_secs_f64()
         )?;
         writeln!(
@@ -143,18 +166,27 @@ impl std::fmt::Display for Summary {
 /// Run a resolved config with the built-in observers plus `extra` (viewers).
 pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
     let started = Instant::now();
-    let scenario = run.config.scenario(registry)?;
-    let mut sim = Simulation::new(scenario)
-        .with_context(|| format!("setting up {}", run.config.path.display()))?
-        .with_decide_limit(run.decide_limit);
+    let resumed = run.checkpoint.as_ref().and_then(|c| c.resume_from.as_deref());
+    let sim = match resumed {
+        Some(checkpoint) => checkpoint.resume(&run.config, registry)?,
+        None => Simulation::new(run.config.scenario(registry)?)
+            .with_context(|| format!("setting up {}", run.config.path.display()))?,
+    };
+    let mut sim = sim.with_decide_limit(run.decide_limit);
     let setup = started.elapsed();
+    let rows_before = resumed.map_or(&[][..], Checkpoint::metrics);
 
     let mut metrics = match &run.metrics {
-        Some(p) => Some(MetricsCsv::new(BufWriter::new(
-            File::create(p).with_context(|| format!("cannot create metrics file {}", p.display()))?,
-        ))?),
+        Some(p) => Some(MetricsCsv::with_rows(
+            BufWriter::new(File::create(p).with_context(|| format!("cannot create metrics file {}", p.display()))?),
+            rows_before,
+        )?),
         None => None,
     };
+    let mut checkpoints = run
+        .checkpoint
+        .as_ref()
+        .map(|c| CheckpointWriter::new(c.path.clone(), c.every_rounds, c.source.clone(), rows_before.to_vec()));
     let mut rerun = match &run.viewer {
         Some(target) => Some(
             RerunObserver::new(
@@ -169,11 +201,14 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         ),
         None => None,
     };
-    let mut progress = Progress::new(run.progress, sim.total_rounds());
+    let mut progress = Progress::new(run.progress, sim.round(), sim.total_rounds());
     let mut faults = Faults::default();
     let mut observers: Vec<&mut dyn Observer> = vec![&mut faults];
     if let Some(m) = metrics.as_mut() {
         observers.push(m);
+    }
+    if let Some(c) = checkpoints.as_mut() {
+        observers.push(c);
     }
     observers.push(&mut progress);
     if let Some(r) = rerun.as_mut() {
@@ -205,6 +240,7 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
     Ok(Summary {
         name: sim.name().to_owned(),
         rounds: sim.round(),
+        resumed_at: resumed.map(Checkpoint::round),
         robots: sim.robots().len(),
         metrics: sim.report().metrics,
         elapsed,

@@ -15,8 +15,9 @@ use sim_core::agent::{CollisionAvoidance, Ctx, Needs, Params, Strategy, Strategy
 use sim_core::glam::DVec2;
 use sim_core::world::Action;
 
-/// The paper's `MyStrategy`: go to the first treasure in view, else move north.
-#[derive(Default)]
+/// The paper's `MyStrategy`: go to the first treasure in view, else move north. Its state
+/// is serde-serializable, so runs using it can be checkpointed (`save_state`).
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub struct TreasureSeeker {
     coll: CollisionAvoidance,
     /// Direction of the sweep when nothing is in view.
@@ -24,6 +25,14 @@ pub struct TreasureSeeker {
 }
 
 impl Strategy for TreasureSeeker {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        sim_core::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> sim_core::Result<()> {
+        sim_core::agent::restore_state(self, state)
+    }
+
     fn needs(&self) -> Needs {
         Needs {
             treasures: true,

@@ -68,6 +68,12 @@ impl StrategyOutput {
         self.outbox.clear();
         self.events.clear();
     }
+
+    /// Put back the goal and path kept from round to round (a checkpoint restores them).
+    pub fn restore(&mut self, goal: Option<DVec2>, path: Vec<DVec2>) {
+        self.goal = goal;
+        self.path = path;
+    }
 }
 
 /// One robot's mind as the kernel keeps it: this round's perception, the data module and

@@ -16,7 +16,7 @@ pub use ctx::{Ctx, Mind, StrategyOutput, WorldView};
 pub use params::Params;
 pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{Factory, StrategyRegistry};
-pub use strategy::{Needs, Strategy};
+pub use strategy::{Needs, Strategy, restore_state, save_state};
 pub use tactics::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, SEARCH_BUDGET, Tactic, Team, blocked,
 };

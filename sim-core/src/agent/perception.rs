@@ -41,7 +41,7 @@ pub struct Perception {
 }
 
 /// The data module: what a robot remembers between rounds.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct DataModule {
     /// The explored region, if the strategy keeps one.
     pub known: Option<KnownMap>,

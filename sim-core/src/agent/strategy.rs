@@ -83,4 +83,34 @@ pub trait Strategy: Send {
     }
     /// Choose this round's action (and send messages through `ctx`).
     fn decide(&mut self, ctx: &mut Ctx) -> Action;
+
+    /// This strategy's state, serialized for a checkpoint (issue 13); `None` (the default)
+    /// if it cannot be saved, and then a run using it cannot be checkpointed. With serde,
+    /// `sim_core::agent::save_state(self)` is the whole implementation.
+    fn save_state(&self) -> Option<Vec<u8>> {
+        None
+    }
+
+    /// Take back the state [`save_state`](Self::save_state) gave, on a strategy built from
+    /// the same parameters. With serde, `sim_core::agent::restore_state(self, state)`.
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        let _ = state;
+        Err(crate::Error::InvalidParameter(
+            "this strategy keeps no checkpoint state".into(),
+        ))
+    }
+}
+
+/// [`Strategy::save_state`] for a strategy whose state is serde-serializable.
+pub fn save_state<T: serde::Serialize>(state: &T) -> Option<Vec<u8>> {
+    let mut out = Vec::new();
+    ciborium::into_writer(state, &mut out).ok()?;
+    Some(out)
+}
+
+/// [`Strategy::restore_state`] for a strategy whose state is serde-deserializable.
+pub fn restore_state<T: serde::de::DeserializeOwned>(slot: &mut T, state: &[u8]) -> crate::Result<()> {
+    *slot = ciborium::from_reader(state)
+        .map_err(|e| crate::Error::InvalidParameter(format!("strategy state does not read back: {e}")))?;
+    Ok(())
 }

@@ -2,6 +2,7 @@
 //! by round (perceive → decide → resolve, then the caller observes). Imports only from the
 //! layers below.
 
+mod checkpoint;
 mod round;
 mod scenario;
 mod simulation;

@@ -143,6 +143,9 @@ pub struct SimConfig {
     pub outputs: Outputs,
     map_at: (usize, usize),
     map_from_argument: bool,
+    /// The text parsed (a checkpoint keeps it, so that a resumed run is set up from the
+    /// config it started with, whatever became of the file).
+    text: String,
 }
 
 /// Line and column (1-based) of a byte offset.
@@ -277,6 +280,7 @@ impl SimConfig {
             outputs: Outputs::default(),
             map_at: scan.position(text, "map", 0),
             map_from_argument: false,
+            text: text.to_owned(),
         };
         let sim_at = scan.position(text, "simulation", 0);
         config.seed = config.whole(xml.seed.as_deref(), "seed", sim_at)?.unwrap_or(0);
@@ -388,6 +392,16 @@ impl SimConfig {
         self.map_path = path;
         self.map_from_argument = true;
         self
+    }
+
+    /// The map given on the command line in place of the `<map>` element, if any.
+    pub fn map_argument(&self) -> Option<&Path> {
+        self.map_from_argument.then_some(self.map_path.as_path())
+    }
+
+    /// The config text as parsed.
+    pub fn text(&self) -> &str {
+        &self.text
     }
 
     /// Where errors about the map point: the `--map` argument or the `<map>` element.

@@ -4,7 +4,7 @@ use std::io::Write;
 
 use crate::engine::Simulation;
 use crate::io::observer::{Observer, ObserverError};
-use crate::world::{METRICS_COLUMNS, RoundReport};
+use crate::world::{METRICS_COLUMNS, RoundMetrics, RoundReport};
 
 /// Writes one CSV row of metrics per round.
 pub struct MetricsCsv<W: Write> {
@@ -17,6 +17,16 @@ impl<W: Write> MetricsCsv<W> {
         let mut out = csv::Writer::from_writer(out);
         out.write_record(METRICS_COLUMNS)?;
         Ok(Self { out })
+    }
+
+    /// A writer that emits the header and the rows of rounds already played (a resumed
+    /// run's, from its checkpoint), so that its file is the one an uninterrupted run writes.
+    pub fn with_rows(out: W, rows: &[RoundMetrics]) -> Result<Self, csv::Error> {
+        let mut this = Self::new(out)?;
+        for r in rows {
+            this.out.write_record(r.csv_record())?;
+        }
+        Ok(this)
     }
 
     /// Flush and hand back the writer (for example the bytes written to a `Vec<u8>`).

@@ -217,7 +217,7 @@ impl<S: Shape + ?Sized> Shape for &S {
 }
 
 /// An open disc.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Disc {
     /// Centre.
     pub center: DVec2,
@@ -227,7 +227,7 @@ pub struct Disc {
 
 /// A rectangle of grid cells as row masks: bit `i` of `rows[j]` is cell `(x0 + i, y0 + j)`
 /// (at most 64 columns and 64 rows).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct CellRows {
     /// Column of bit 0.
     pub x0: u32,
@@ -236,7 +236,23 @@ pub struct CellRows {
     /// Number of rows in use.
     pub len: usize,
     /// The rows, south to north.
+    #[serde(with = "rows_serde")]
     pub rows: [u64; 64],
+}
+
+/// `[u64; 64]` as a sequence (serde derives arrays up to 32 only).
+mod rows_serde {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(rows: &[u64; 64], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(rows)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[u64; 64], D::Error> {
+        let v = Vec::<u64>::deserialize(d)?;
+        v.try_into()
+            .map_err(|v: Vec<u64>| serde::de::Error::invalid_length(v.len(), &"64 rows"))
+    }
 }
 
 impl CellRows {

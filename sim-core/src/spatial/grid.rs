@@ -11,7 +11,7 @@ pub const MAX_DEPTH: u8 = 24;
 /// The map's cell grid: `width_cells × height_cells` square cells of `cell_m` metres, with
 /// cell (0, 0) at the lower-left corner `origin` (x right, y up). The quadtrees cover the
 /// smallest power-of-two square of cells holding the grid; cells beyond the grid are padding.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Grid {
     origin: DVec2,
     cell_m: f64,

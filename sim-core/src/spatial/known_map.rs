@@ -12,7 +12,7 @@ use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::{CellSet, PartialCells};
 
 /// The explored part of the map, as seen by one robot (or a team).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct KnownMap {
     tree: RegionQuadtree,
     /// Cells known, kept up to date by every mutation (maps only grow).
@@ -238,6 +238,11 @@ impl KnownMap {
         let counted = self.tree.count_cells(true);
         if counted != self.known_cells {
             return Err(format!("cached known cells {} ≠ {counted} counted", self.known_cells));
+        }
+        if let Some(rows) = &self.last_rows
+            && rows.len > rows.rows.len()
+        {
+            return Err(format!("the last view's {} rows exceed {}", rows.len, rows.rows.len()));
         }
         Ok(())
     }

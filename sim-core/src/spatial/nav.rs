@@ -17,7 +17,7 @@ use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::Square;
 
 /// A node of the navigation graph (a free quadtree leaf).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub struct NavNodeId(pub u32);
 
 /// A [`NavGraph`] built on first use: most strategies never plan a route, and building the
@@ -72,7 +72,7 @@ fn morton(x: u32, y: u32) -> u64 {
 }
 
 /// A route found on the graph.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Route {
     /// Nodes from start to goal.
     pub nodes: Vec<NavNodeId>,

@@ -9,7 +9,7 @@ use std::hash::Hash;
 type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 
 /// How much a [`MemoryList`] keeps.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Retention {
     /// The `n` most recently seen items.
     LastN(usize),
@@ -23,7 +23,7 @@ const NIL: u32 = u32::MAX;
 const FREED: u32 = u32::MAX - 1;
 
 /// One remembered item, a link in the list from oldest to newest sighting.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 struct Slot<K, T> {
     key: K,
     round: u64,
@@ -36,15 +36,63 @@ struct Slot<K, T> {
 ///
 /// A doubly linked list in a slab, oldest sighting first, plus a map from key to slot:
 /// recording, forgetting and evicting are O(1) each (no stale entries, no scans).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(bound(serialize = "K: serde::Serialize, T: serde::Serialize"))]
+#[serde(bound(deserialize = "K: serde::Deserialize<'de>, T: serde::Deserialize<'de>"))]
+#[serde(try_from = "ListState<K, T>")]
 pub struct MemoryList<K: Eq + Hash + Copy, T> {
     retention: Retention,
     slots: Vec<Slot<K, T>>,
     /// Slots of forgotten items, reused first.
     free: Vec<u32>,
+    /// Rebuilt from the slots when a checkpoint is read.
+    #[serde(skip)]
     index: FastMap<K, u32>,
     oldest: u32,
     newest: u32,
+}
+
+/// A [`MemoryList`] as a checkpoint stores it (the index is rebuilt from the slots).
+#[derive(serde::Deserialize)]
+struct ListState<K, T> {
+    retention: Retention,
+    slots: Vec<Slot<K, T>>,
+    free: Vec<u32>,
+    oldest: u32,
+    newest: u32,
+}
+
+impl<K: Eq + Hash + Copy, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
+    type Error = String;
+
+    fn try_from(s: ListState<K, T>) -> Result<Self, String> {
+        let n = s.slots.len();
+        let link_ok = |i: u32| i == NIL || (i as usize) < n;
+        if !(link_ok(s.oldest) && link_ok(s.newest) && s.free.iter().all(|&i| (i as usize) < n)) {
+            return Err("a memory list links to a slot it does not have".into());
+        }
+        let mut index = FastMap::default();
+        // Live slots are those on the list from oldest to newest.
+        let mut at = s.oldest;
+        let mut steps = 0;
+        while at != NIL {
+            let slot = s.slots.get(at as usize).ok_or("a memory list links out of its slots")?;
+            if !link_ok(slot.newer) || steps > n {
+                return Err("a memory list's links are broken".into());
+            }
+            index.insert(slot.key, at);
+            at = slot.newer;
+            steps += 1;
+        }
+        Ok(Self {
+            retention: s.retention,
+            slots: s.slots,
+            free: s.free,
+            index,
+            oldest: s.oldest,
+            newest: s.newest,
+        })
+    }
 }
 
 impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {

@@ -10,7 +10,7 @@ use crate::spatial::RobotId;
 use crate::spatial::TreasureId;
 
 /// A treasure sighting: where, how much, when.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sighting {
     /// The treasure.
     pub treasure: TreasureId,
@@ -25,7 +25,7 @@ pub struct Sighting {
 }
 
 /// What a message carries.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub enum Payload {
     /// Treasure sightings (added to the receiver's treasure memory).
     Sightings(Vec<Sighting>),
@@ -61,7 +61,7 @@ impl Payload {
 }
 
 /// Who a message is for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Recipient {
     /// Every robot in range.
     Broadcast,
@@ -70,7 +70,7 @@ pub enum Recipient {
 }
 
 /// A message as delivered.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Message {
     /// Sender.
     pub from: RobotId,

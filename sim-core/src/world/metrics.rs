@@ -6,7 +6,7 @@
 macro_rules! metrics_table {
     ($($(#[$doc:meta])* $field:ident: $ty:ty, $fmt:literal, $chart:literal;)*) => {
         /// The state of a run after a round.
-        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
         pub struct RoundMetrics {
             $($(#[$doc])* pub $field: $ty,)*
         }

@@ -247,7 +247,7 @@ impl RobotType {
 }
 
 /// One elementary action for one round. The physical unit refuses or trims what is illegal.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Action {
     /// Do nothing (still costs idle energy).
     Idle,
@@ -285,7 +285,7 @@ impl Action {
 }
 
 /// What the physical unit made of a requested action.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Outcome {
     /// Carried out as asked.
     Done,
@@ -296,7 +296,7 @@ pub enum Outcome {
 }
 
 /// Per-robot counters for the robot-stats output.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RobotStats {
     /// Metres travelled.
     pub distance_m: f64,
@@ -317,7 +317,7 @@ pub struct RobotStats {
 }
 
 /// A robot's physical state, owned by the kernel.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Robot {
     /// Its id.
     pub id: RobotId,
@@ -368,7 +368,7 @@ impl Robot {
 }
 
 /// A treasure's state: every unit is buried, lying dug at the site, carried or delivered.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TreasureState {
     /// Its id.
     pub id: TreasureId,

@@ -10,7 +10,7 @@ use crate::spatial::KnownMap;
 use crate::world::{Action, Payload, Sighting};
 
 /// How a cooperative robot shares what it knows.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Sharing {
     pub(super) every_rounds: u64,
     pub(super) avoid_radius_m: f64,
@@ -28,7 +28,7 @@ impl Sharing {
 }
 
 /// Exploration of the nearest frontier, with energy management and collision avoidance.
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Explorer {
     pub(super) nav: Navigator,
     coll: CollisionAvoidance,

@@ -1,6 +1,6 @@
 //! `frontier` and `cooperative`.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 
 use glam::DVec2;
 
@@ -9,13 +9,16 @@ use crate::agent::{Ctx, Needs, Strategy};
 use crate::world::{Action, Payload};
 
 /// `frontier` and `cooperative`.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Frontier {
     core: Explorer,
     sharing: Option<Sharing>,
     /// Team mates' announced goals, with the round heard (forgotten after 50 rounds). A
     /// fast fixed-seed hash map: in a crowd hundreds arrive a round, and only their set
     /// matters (goals near any of them are avoided), not their order.
-    claims: HashMap<u32, (DVec2, u64), foldhash::fast::FixedState>,
+    /// By robot id: read in id order, whatever the history of the map (issue 13: a
+    /// resumed run must read them in the order the uninterrupted one did).
+    claims: BTreeMap<u32, (DVec2, u64)>,
     announced: Option<DVec2>,
     shared_area: f64,
 }
@@ -25,7 +28,7 @@ impl Frontier {
         Self {
             core: Explorer::default(),
             sharing,
-            claims: HashMap::default(),
+            claims: BTreeMap::new(),
             announced: None,
             shared_area: 0.0,
         }
@@ -33,6 +36,13 @@ impl Frontier {
 }
 
 impl Strategy for Frontier {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        crate::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        crate::agent::restore_state(self, state)
+    }
     fn needs(&self) -> Needs {
         Needs {
             // Other robots are never looked at: the physical unit prevents collisions and

@@ -8,6 +8,7 @@ use crate::agent::{CollisionAvoidance, Ctx, Needs, Params, Strategy, Tactic, blo
 use crate::world::Action;
 
 /// Walks straight; turns with `turn_probability` per round or when a move is refused.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct RandomWalk {
     turn_probability: f64,
     heading: Option<DVec2>,
@@ -15,6 +16,13 @@ pub(super) struct RandomWalk {
 }
 
 impl Strategy for RandomWalk {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        crate::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        crate::agent::restore_state(self, state)
+    }
     fn needs(&self) -> Needs {
         // The known map answers `can_move` for the collision tactic; other robots are
         // never looked at (the physical unit keeps bodies apart), so they are not perceived.

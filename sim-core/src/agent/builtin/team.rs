@@ -8,12 +8,20 @@ use crate::world::Action;
 
 /// Team behaviour: leaders explore frontiers, followers keep close to their leader; groups
 /// form and break up as robots come into and out of radio range (events in the log).
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct TeamExplorer {
     core: Explorer,
     team: Team,
 }
 
 impl Strategy for TeamExplorer {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        crate::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        crate::agent::restore_state(self, state)
+    }
     fn needs(&self) -> Needs {
         Needs {
             treasures: false,

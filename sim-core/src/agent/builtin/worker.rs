@@ -9,6 +9,7 @@ use crate::agent::{Ctx, Params, Strategy};
 use crate::world::{Action, REACH_M, Sighting};
 
 /// The part excavators and transporters share: exploration, sharing and going places.
+#[derive(serde::Serialize, serde::Deserialize)]
 struct Worker {
     explorer: Explorer,
     share_every: u64,
@@ -74,11 +75,19 @@ impl Worker {
 }
 
 /// Digs out known treasures.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Excavator {
     core: Worker,
 }
 
 impl Strategy for Excavator {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        crate::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        crate::agent::restore_state(self, state)
+    }
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
             return a;
@@ -95,11 +104,19 @@ impl Strategy for Excavator {
 }
 
 /// Fetches dug units and delivers them.
+#[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Transporter {
     core: Worker,
 }
 
 impl Strategy for Transporter {
+    fn save_state(&self) -> Option<Vec<u8>> {
+        crate::agent::save_state(self)
+    }
+
+    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
+        crate::agent::restore_state(self, state)
+    }
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
             return a;

@@ -6,7 +6,7 @@ use crate::agent::ctx::Ctx;
 
 /// Slides along an obstacle: when the desired heading is blocked, turns (to the left) in
 /// steps of 30° until the way is free in known terrain.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BoundaryFollowing;
 
 impl BoundaryFollowing {

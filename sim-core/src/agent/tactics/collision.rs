@@ -11,7 +11,7 @@ use crate::world::{Action, Outcome};
 /// other robots) for `patience_rounds`: it heads off in a random free direction for
 /// `escape_rounds`, then the strategy takes over again. (Overlaps themselves can never
 /// happen: the physical unit refuses them.)
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct CollisionAvoidance {
     /// Rounds without progress before escaping (default 3).
     pub patience_rounds: u32,

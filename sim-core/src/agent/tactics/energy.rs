@@ -9,7 +9,7 @@ use crate::world::Action;
 /// Keeps enough energy to get home along a known path: when what is left falls to the cost
 /// of the way home plus a reserve, it takes over and walks home, then waits there until
 /// recharged.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EnergyManagement {
     /// Extra energy kept beyond the way home, as a fraction of capacity (default 0.1).
     pub reserve_fraction: f64,

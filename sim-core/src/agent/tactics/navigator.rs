@@ -10,7 +10,7 @@ use crate::spatial::{Aabb, KnownMap, Overlap, Route, Shape};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Navigator {
     waypoints: Vec<DVec2>,
     next: usize,

@@ -1,0 +1,154 @@
+//! `smartteams run --checkpoint` and `smartteams resume` as a user types them (issue 13): a
+//! run killed with SIGKILL and resumed ends in the same state, with the same metrics and
+//! robot statistics, byte for byte, as a run that was never stopped; damaged checkpoints,
+//! checkpoints of another version and checkpoints whose map changed are refused by name.
+
+use std::path::Path;
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+mod common;
+
+use common::{err, ok, smartteams, workspace};
+
+/// `run` of the demo config with outputs and checkpoints named after `tag`.
+fn run_args(config: &Path, tag: &str, rounds: &str) -> Vec<String> {
+    [
+        "run",
+        &config.display().to_string(),
+        "--quiet",
+        "--no-viewer",
+        "--threads",
+        "1",
+        "--rounds",
+        rounds,
+        "--metrics",
+        &format!("{tag}.csv"),
+        "--robot-stats",
+        &format!("{tag}-robots.csv"),
+        "--checkpoint",
+        &format!("{tag}.ckpt"),
+        "--checkpoint-every",
+        "25",
+    ]
+    .iter()
+    .map(ToString::to_string)
+    .collect()
+}
+
+fn strs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+fn read(dir: &Path, name: &str) -> Vec<u8> {
+    std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+#[test]
+fn issue13_a_killed_run_resumes_to_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let config = workspace().join("configs/demo.xml");
+    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
+
+    // The same run, killed (SIGKILL, no clean-up) once it has written a checkpoint.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .args(run_args(&config, "cut", "600"))
+        .current_dir(d)
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !d.join("cut.ckpt").exists() {
+        assert!(started.elapsed() < Duration::from_mins(2), "no checkpoint written");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before it was killed"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let checkpoint = sim_core::io::Checkpoint::read(&d.join("cut.ckpt")).unwrap();
+    let at = checkpoint.round();
+    assert!(at > 0 && at < 600 && at.is_multiple_of(25), "checkpoint at round {at}");
+    // The killed run's metrics stop short of the end.
+    let cut = String::from_utf8(read(d, "cut.csv")).unwrap_or_default();
+    assert!(cut.lines().count() < 601, "the killed run wrote every round");
+
+    // Resume with the same outputs: every file is the uninterrupted run's, byte for byte.
+    let out = ok(&smartteams(
+        d,
+        &[
+            "resume",
+            "cut.ckpt",
+            "--no-viewer",
+            "--metrics",
+            "cut.csv",
+            "--robot-stats",
+            "cut-robots.csv",
+        ],
+    ));
+    assert!(out.contains("600 rounds"), "{out}");
+    assert_eq!(read(d, "cut.csv"), read(d, "whole.csv"), "metrics CSV differs");
+    assert_eq!(
+        read(d, "cut-robots.csv"),
+        read(d, "whole-robots.csv"),
+        "robot stats differ"
+    );
+    // Both wrote a last checkpoint at round 600: the whole final state, the same bytes.
+    assert_eq!(read(d, "cut.ckpt"), read(d, "whole.ckpt"), "final state differs");
+    assert!(!d.join("cut.ckpt.tmp").exists());
+}
+
+#[test]
+fn issue13_damaged_and_foreign_checkpoints_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A config and map of our own, so the map can change under the checkpoint.
+    std::fs::copy(workspace().join("maps/demo.stmap"), d.join("map.stmap")).unwrap();
+    let demo = std::fs::read_to_string(workspace().join("configs/demo.xml")).unwrap();
+    let start = demo.find("<map").unwrap();
+    let end = start + demo[start..].find("/>").unwrap() + 2;
+    std::fs::write(
+        d.join("run.xml"),
+        format!("{}<map file=\"map.stmap\"/>{}", &demo[..start], &demo[end..]),
+    )
+    .unwrap();
+    ok(&smartteams(d, &strs(&run_args(&d.join("run.xml"), "good", "50"))));
+    let good = read(d, "good.ckpt");
+    let resume = |name: &str, bytes: &[u8]| {
+        std::fs::write(d.join(name), bytes).unwrap();
+        err(&smartteams(d, &["resume", name, "--no-viewer", "--quiet"]))
+    };
+
+    let mut flipped = good.clone();
+    let mid = flipped.len() / 2;
+    flipped[mid] ^= 0x10;
+    let e = resume("flipped.ckpt", &flipped);
+    assert!(e.contains("checkpoint flipped.ckpt: corrupt: checksum"), "{e}");
+
+    let e = resume("short.ckpt", &good[..good.len() - 100]);
+    assert!(e.contains("checkpoint short.ckpt:") && e.contains("cut short"), "{e}");
+
+    let mut other_format = good.clone();
+    other_format[16] = other_format[16].wrapping_add(1);
+    let e = resume("old.ckpt", &other_format);
+    assert!(
+        e.contains("checkpoint old.ckpt: written by Smart Teams") && e.contains("checkpoint format 2"),
+        "{e}"
+    );
+
+    let e = resume("notes.ckpt", b"round 50, all fine\n");
+    assert!(e.contains("checkpoint notes.ckpt: not a Smart Teams checkpoint"), "{e}");
+
+    let e = err(&smartteams(d, &["resume", "missing.ckpt", "--no-viewer"]));
+    assert!(e.contains("missing.ckpt"), "{e}");
+
+    // The map changed since: refused, naming the map.
+    std::fs::copy(workspace().join("maps/rooms.stmap"), d.join("map.stmap")).unwrap();
+    let e = resume("good.ckpt", &good);
+    assert!(
+        e.contains("checkpoint good.ckpt: the map file") && e.contains("changed since the checkpoint was written"),
+        "{e}"
+    );
+}
