@@ -132,8 +132,8 @@ pub struct RoundReport {
     pub links: Vec<Link>,
     /// Robots whose known map changed this round.
     pub known_changed: Vec<RobotId>,
-    /// Robots whose strategy took longer than the limit to decide this round
-    /// ([`Simulation::with_decide_limit`](crate::engine::Simulation::with_decide_limit)),
+    /// Robots whose strategy took longer than the limit to decide this round (set with
+    /// `Simulation::with_decide_limit` in the engine layer, above this one),
     /// with the time it took. Wall time, so unlike everything else here it is not the
     /// same from run to run: observers report it, they do not record it.
     pub slow_decisions: Vec<(RobotId, std::time::Duration)>,
