@@ -33,6 +33,8 @@ pub enum Command {
     View(ViewArgs),
     /// List the strategies this build knows.
     Strategies,
+    /// List the tactics a `strategy="tactics"` group can be composed of.
+    Tactics,
     /// Run every combination of a sweep file's values headless, on all cores, into one CSV.
     Sweep(crate::sweep::SweepArgs),
     /// Join the CSVs of a sweep's shards into the CSV a single-machine sweep writes.
@@ -323,6 +325,16 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
     match cli.command {
         Command::Strategies => {
             for (name, description) in registry.describe() {
+                println!("{name:14} {description}");
+            }
+            Ok(())
+        }
+        Command::Tactics => {
+            println!(
+                "compose with strategy=\"tactics\" and <param name=\"tactics\" value=\"NAME,NAME,...\"/> (priority order);"
+            );
+            println!("a tactic's parameters are NAME.PARAM, the goal of boundary and shortest_path is goal=\"X,Y\"\n");
+            for (name, description) in registry.tactics().describe() {
                 println!("{name:14} {description}");
             }
             Ok(())

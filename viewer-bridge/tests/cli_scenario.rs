@@ -105,3 +105,53 @@ fn issue10_a_bad_map_argument_is_named_as_the_argument() {
     assert!(err.contains("--map no-such-map.stmap: map file"), "{err}");
     assert!(!err.contains("demo.xml:2"), "blamed the XML for the argument: {err}");
 }
+
+/// Issue 12: `smartteams tactics` lists the tactics by name, and the shipped config that
+/// composes strategies of them runs through the binary: the explorers explore and come
+/// home to recharge, the courier gets to its corner and stays there.
+#[test]
+fn issue12_tactics_listed_and_composed_by_name_in_a_config() {
+    let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .arg("tactics")
+        .output()
+        .unwrap();
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for name in ["collision", "energy", "boundary", "shortest_path", "frontier", "team"] {
+        assert!(
+            listed.lines().any(|l| l.starts_with(name)),
+            "{name} not listed:\n{listed}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .arg("run")
+        .arg(workspace().join("configs/tactics.xml"))
+        .args(["--no-viewer", "-q", "--robot-stats", "robots.csv", "--metrics", "m.csv"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stats = std::fs::read_to_string(dir.path().join("robots.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = stats.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 8);
+    // robot, group, type, strategy, alive, distance_m, explored_m2, …, energy_used (10), …
+    for r in &rows {
+        assert_eq!(r[3], "tactics");
+        assert_eq!(r[4], "true", "{r:?}");
+    }
+    // The explorers used more than a tank (300) each: they recharged on the way.
+    for r in rows.iter().filter(|r| r[1] == "explorers") {
+        let used: f64 = r[10].parse().unwrap();
+        assert!(used > 300.0, "{r:?}");
+    }
+    // The courier's corner is 89 m away by the shortest path; round obstacles through the
+    // unknown it walks more, then it stops there (600 rounds at 1 m would be 600 m).
+    let courier = rows.iter().find(|r| r[1] == "courier").unwrap();
+    let walked: f64 = courier[5].parse().unwrap();
+    assert!((89.0..200.0).contains(&walked), "{courier:?}");
+    let metrics = std::fs::read_to_string(dir.path().join("m.csv")).unwrap();
+    let last = metrics.lines().last().unwrap();
+    let explored: f64 = last.split(',').nth(1).unwrap().parse().unwrap();
+    assert!(explored > 0.5, "{last}");
+}

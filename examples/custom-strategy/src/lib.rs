@@ -25,13 +25,7 @@ pub struct TreasureSeeker {
 }
 
 impl Strategy for TreasureSeeker {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        sim_core::agent::save_state(self)
-    }
-
-    fn restore_state(&mut self, state: &[u8]) -> sim_core::Result<()> {
-        sim_core::agent::restore_state(self, state)
-    }
+    sim_core::serde_state!();
 
     fn needs(&self) -> Needs {
         Needs {
@@ -85,9 +79,45 @@ impl Strategy for MyRandomWalk {
     }
 }
 
-/// Register `treasure_seeker` (parameter `heading_deg`, default 90 = north) and
-/// `my_random_walk` (parameter `turn_probability`, default 0.05, in 0..=1).
+/// A tactic of our own: head for the nearest treasure in view. Configs compose it by name
+/// with the built-in tactics, e.g. `strategy="tactics"` with
+/// `tactics="collision,treasure_magnet,frontier"`.
+#[derive(Default, serde::Serialize, serde::Deserialize)]
+pub struct TreasureMagnet;
+
+impl Tactic for TreasureMagnet {
+    fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        let p = ctx.position();
+        let nearest = ctx
+            .treasures_in_view()
+            .iter()
+            .map(|t| t.position)
+            .min_by(|a, b| a.distance_squared(p).total_cmp(&b.distance_squared(p)))?;
+        (nearest.distance(p) > 0.1).then(|| ctx.move_towards(nearest))
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            treasures: true,
+            ..Needs::NONE
+        }
+    }
+
+    sim_core::serde_state!();
+}
+
+/// Register `treasure_seeker` (parameter `heading_deg`, default 90 = north),
+/// `my_random_walk` (parameter `turn_probability`, default 0.05, in 0..=1) and the tactic
+/// `treasure_magnet`.
 pub fn register(registry: &mut StrategyRegistry) {
+    registry.tactics_mut().register(
+        "treasure_magnet",
+        "example: heads for the nearest treasure in view",
+        |p: &Params| {
+            p.only(&[])?;
+            Ok(Box::new(TreasureMagnet))
+        },
+    );
     registry.register(
         "my_random_walk",
         "example: the built-in random_walk, re-implemented in a user crate",
@@ -126,10 +156,10 @@ mod tests {
 
     use super::*;
 
-    #[test]
-    fn a_user_strategy_runs_by_name_and_finds_the_treasure_north() {
+    /// A 32 m × 64 m open map, home in the south, one treasure at (18, 40).
+    fn north_map() -> MapData {
         let grid = Grid::new(DVec2::ZERO, 1.0, 32, 64).unwrap();
-        let map = MapData {
+        MapData {
             obstacles: ObstacleMap::empty(grid),
             home: HomeBase::Disc {
                 center: DVec2::new(16.0, 4.0),
@@ -139,11 +169,15 @@ mod tests {
                 position: DVec2::new(18.0, 40.0),
                 quantity: 1,
             }],
-        };
+        }
+    }
+
+    #[test]
+    fn a_user_strategy_runs_by_name_and_finds_the_treasure_north() {
         let mut registry = StrategyRegistry::with_builtins();
         register(&mut registry);
         assert!(registry.names().any(|n| n == "treasure_seeker"));
-        let scenario = ScenarioBuilder::new(map)
+        let scenario = ScenarioBuilder::new(north_map())
             .with_name("seek")
             .with_seed(1)
             .with_rounds(60)
@@ -161,6 +195,33 @@ mod tests {
             "{:?}",
             sim.robots()[0].position
         );
+    }
+
+    #[test]
+    fn issue12_a_user_tactic_composes_by_name_with_the_builtins() {
+        let mut registry = StrategyRegistry::with_builtins();
+        register(&mut registry);
+        // Go north (a goal far up the map) by the built-in shortest-path tactic, but let the
+        // user's magnet take over once the treasure is in view.
+        let params: Params = [
+            ("tactics", "collision,treasure_magnet,shortest_path"),
+            ("goal", "16,63"),
+            ("shortest_path.optimistic", "1"),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_owned(), v.to_owned()))
+        .collect();
+        let scenario = ScenarioBuilder::new(north_map())
+            .with_rounds(60)
+            .with_types(vec![RobotType::explorer()])
+            .with_group(Group::new("tactics", 0, 1).with_params(params))
+            .build(&registry)
+            .unwrap();
+        let mut sim = Simulation::new(scenario).unwrap();
+        sim.run(&mut []).unwrap();
+        assert_eq!(sim.report().metrics.treasures_found, 1);
+        let at = sim.robots()[0].position;
+        assert!(at.distance(DVec2::new(18.0, 40.0)) < 0.2, "{at:?}");
     }
 
     /// Metrics CSV and robot-stats CSV of 24 walkers of `strategy` crossing the demo map.

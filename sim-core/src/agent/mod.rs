@@ -15,9 +15,10 @@ mod testing;
 pub use ctx::{Ctx, Mind, StrategyOutput, WorldView};
 pub use params::Params;
 pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
-pub use registry::{Factory, StrategyRegistry};
+pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};
 pub use strategy::{Needs, Strategy, restore_state, save_state};
 pub use tactics::{
-    BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, SEARCH_BUDGET, Tactic, Team, blocked,
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, SEARCH_BUDGET, ShortestPath,
+    Tactic, Team, Teaming, blocked,
 };
 pub use testing::TestWorld;

@@ -5,6 +5,12 @@ use std::ops::RangeInclusive;
 
 use crate::{Error, Result};
 
+/// Longest distance a parameter may name (1,000 km: beyond any map).
+pub(crate) const MAX_DISTANCE_M: f64 = 1e6;
+/// Most rounds a parameter may name (a billion: beyond any run, and far from overflowing
+/// when added to a round number).
+pub(crate) const MAX_ROUNDS: u64 = 1_000_000_000;
+
 /// Named parameters of a strategy, from the config.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Params(BTreeMap<String, String>);
@@ -26,6 +32,38 @@ impl Params {
     /// Whether there are none.
     pub fn is_empty(&self) -> bool {
         self.0.is_empty()
+    }
+
+    /// A parameter's text, if given.
+    pub fn text(&self, name: &str) -> Option<&str> {
+        self.0.get(name).map(String::as_str)
+    }
+
+    /// A point `X,Y` in metres, if given.
+    pub fn point(&self, name: &str) -> Result<Option<glam::DVec2>> {
+        let Some(v) = self.0.get(name) else {
+            return Ok(None);
+        };
+        let xy: Option<Vec<f64>> = v.split(',').map(|c| c.trim().parse::<f64>().ok()).collect();
+        match xy.as_deref() {
+            Some(&[x, y]) if x.is_finite() && y.is_finite() => Ok(Some(glam::DVec2::new(x, y))),
+            _ => Err(invalid(format!(
+                "parameter '{name}' must be a point X,Y in metres, got '{v}'"
+            ))),
+        }
+    }
+
+    /// The parameters named `PREFIX.NAME`, as `NAME` (a composed strategy hands each of its
+    /// parts its own).
+    pub fn prefixed(&self, prefix: &str) -> Params {
+        self.0
+            .iter()
+            .filter_map(|(k, v)| {
+                k.strip_prefix(prefix)
+                    .and_then(|rest| rest.strip_prefix('.'))
+                    .map(|rest| (rest.to_owned(), v.clone()))
+            })
+            .collect()
     }
 
     /// A number in `range`, or `default` when absent.

@@ -65,6 +65,18 @@ impl Needs {
         messages: false,
     };
 
+    /// What either needs.
+    #[must_use]
+    pub fn union(self, other: Needs) -> Needs {
+        Needs {
+            known_map: self.known_map || other.known_map,
+            obstacles: self.obstacles || other.obstacles,
+            robots: self.robots || other.robots,
+            treasures: self.treasures || other.treasures,
+            messages: self.messages || other.messages,
+        }
+    }
+
     /// Whether any sensing happens (costs `energy_per_sense`).
     pub fn senses(&self) -> bool {
         self.known_map || self.obstacles || self.robots || self.treasures
@@ -99,6 +111,21 @@ pub trait Strategy: Send {
             "this strategy keeps no checkpoint state".into(),
         ))
     }
+}
+
+/// The checkpoint methods (`save_state`, `restore_state`) of a strategy or tactic whose
+/// state is serde-serializable: `impl Strategy for Mine { sim_core::serde_state!(); … }`.
+#[macro_export]
+macro_rules! serde_state {
+    () => {
+        fn save_state(&self) -> Option<Vec<u8>> {
+            $crate::agent::save_state(self)
+        }
+
+        fn restore_state(&mut self, state: &[u8]) -> $crate::Result<()> {
+            $crate::agent::restore_state(self, state)
+        }
+    };
 }
 
 /// [`Strategy::save_state`] for a strategy whose state is serde-serializable.

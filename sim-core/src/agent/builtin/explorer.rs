@@ -5,7 +5,7 @@ use glam::DVec2;
 
 use super::{MAX_DISTANCE_M, SHARE_EVERY};
 use crate::Result;
-use crate::agent::{BoundaryFollowing, CollisionAvoidance, Ctx, EnergyManagement, Navigator, Params, Tactic};
+use crate::agent::{BoundaryFollowing, CollisionAvoidance, Ctx, EnergyManagement, FrontierSeeking, Params, Tactic};
 use crate::spatial::KnownMap;
 use crate::world::{Action, Payload, Sighting};
 
@@ -30,12 +30,9 @@ impl Sharing {
 /// Exploration of the nearest frontier, with energy management and collision avoidance.
 #[derive(Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Explorer {
-    pub(super) nav: Navigator,
+    pub(super) frontier: FrontierSeeking,
     coll: CollisionAvoidance,
     energy: EnergyManagement,
-    target: Option<DVec2>,
-    /// Round of the last failed frontier search (retried every 20 rounds).
-    failed_at: Option<u64>,
 }
 
 impl Explorer {
@@ -46,48 +43,25 @@ impl Explorer {
             return Some(a);
         }
         if let Some(a) = self.coll.suggest(ctx) {
-            self.nav.clear();
+            self.frontier.navigator().clear();
             return Some(a);
         }
         None
     }
 
-    /// One step of frontier exploration; `avoid` gives the goals taken by others, asked for
-    /// only when a new target is chosen (in crowds they are hundreds, and most rounds keep
-    /// the target).
+    /// One step of frontier exploration (see [`FrontierSeeking::seek`]); home when nothing
+    /// is left to explore.
     pub(super) fn explore(&mut self, ctx: &mut Ctx, avoid: impl FnOnce() -> Vec<DVec2>, avoid_radius_m: f64) -> Action {
-        // Keep walking to a frontier target even once it is seen: the way on reveals more in
-        // the same direction, and a new search only every few metres keeps planning cheap.
-        // Re-plan on arrival, when the route is gone, or when the target was revealed from
-        // close by.
-        let p = ctx.position();
-        let revealed_near = self
-            .target
-            .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
-        let need_plan = self.nav.is_idle() || revealed_near;
-        if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            if let Some(route) = Navigator::frontier_route(ctx, &avoid(), avoid_radius_m)
-                .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
-            {
-                self.target = route.waypoints.last().copied();
-                self.nav.follow(route);
-                self.failed_at = None;
-            } else {
-                self.target = None;
-                self.nav.clear();
-                self.failed_at = Some(ctx.round);
-            }
-        }
-        ctx.set_goal(self.target);
-        if let Some(a) = self.nav.step(ctx) {
+        if let Some(a) = self.frontier.seek(ctx, avoid, avoid_radius_m) {
             return a;
         }
         // Nothing left to explore: go home and wait there.
         let home = ctx.home().center();
+        let nav = self.frontier.navigator();
         if ctx.home().contains(ctx.position()) {
             Action::Idle
-        } else if self.nav.go_to(ctx, home) {
-            self.nav.step(ctx).unwrap_or(Action::Idle)
+        } else if nav.go_to(ctx, home) {
+            nav.step(ctx).unwrap_or(Action::Idle)
         } else {
             let dir = BoundaryFollowing::heading(ctx, home - ctx.position()).unwrap_or(DVec2::ZERO);
             ctx.move_by(dir)

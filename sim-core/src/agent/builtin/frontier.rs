@@ -36,13 +36,8 @@ impl Frontier {
 }
 
 impl Strategy for Frontier {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        crate::agent::save_state(self)
-    }
+    crate::serde_state!();
 
-    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
-        crate::agent::restore_state(self, state)
-    }
     fn needs(&self) -> Needs {
         Needs {
             // Other robots are never looked at: the physical unit prevents collisions and

@@ -1,7 +1,8 @@
 //! The built-in strategies: `random_walk`, `frontier`, `cooperative`, `team`, `excavator`,
-//! `transporter`. They use only sim-core's public API (`crate::agent`, `crate::world`,
+//! `transporter`, and `tactics` (composed of tactics by name). They use only sim-core's public API (`crate::agent`, `crate::world`,
 //! `crate::spatial`), so a strategy in another crate can do all that they do.
 
+mod composed;
 mod explorer;
 mod frontier;
 mod random_walk;
@@ -12,11 +13,7 @@ use std::ops::RangeInclusive;
 
 use crate::agent::StrategyRegistry;
 
-/// Longest distance a strategy parameter may name (1,000 km: beyond any map).
-const MAX_DISTANCE_M: f64 = 1e6;
-/// Most rounds a strategy parameter may name (a billion: beyond any run, and far from
-/// overflowing when added to a round number).
-const MAX_ROUNDS: u64 = 1_000_000_000;
+use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
 const SHARE_EVERY: RangeInclusive<u64> = 1..=MAX_ROUNDS;
 
@@ -69,6 +66,12 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "excavator",
         "goes to known treasures and digs them out; explores when it knows none",
         |p| Ok(Box::new(worker::Excavator::from_params(p)?)),
+    );
+    r.register_composed(
+        "tactics",
+        "tactics named in 'tactics' (priority order; each sees every round, the first to suggest acts), \
+         with an optional goal=\"X,Y\" and TACTIC.PARAM parameters; see `smartteams tactics`",
+        |p, tactics| Ok(Box::new(composed::Composed::from_params(p, tactics)?)),
     );
     r.register(
         "transporter",

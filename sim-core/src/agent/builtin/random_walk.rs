@@ -16,13 +16,8 @@ pub(super) struct RandomWalk {
 }
 
 impl Strategy for RandomWalk {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        crate::agent::save_state(self)
-    }
+    crate::serde_state!();
 
-    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
-        crate::agent::restore_state(self, state)
-    }
     fn needs(&self) -> Needs {
         // The known map answers `can_move` for the collision tactic; other robots are
         // never looked at (the physical unit keeps bodies apart), so they are not perceived.

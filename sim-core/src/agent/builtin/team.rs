@@ -1,8 +1,8 @@
 //! `team`.
 
 use super::explorer::Explorer;
-use super::{MAX_DISTANCE_M, MAX_ROUNDS};
 use crate::Result;
+use crate::agent::tactics::team_from_params;
 use crate::agent::{Ctx, Needs, Params, Strategy, Tactic, Team};
 use crate::world::Action;
 
@@ -15,13 +15,8 @@ pub(super) struct TeamExplorer {
 }
 
 impl Strategy for TeamExplorer {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        crate::agent::save_state(self)
-    }
+    crate::serde_state!();
 
-    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
-        crate::agent::restore_state(self, state)
-    }
     fn needs(&self) -> Needs {
         Needs {
             treasures: false,
@@ -54,13 +49,9 @@ impl Strategy for TeamExplorer {
 
 impl TeamExplorer {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
-        p.only(&["spacing_m", "timeout_rounds"])?;
-        let mut team = Team::default();
-        team.spacing_m = p.f64_in("spacing_m", team.spacing_m, f64::MIN_POSITIVE..=MAX_DISTANCE_M)?;
-        team.timeout_rounds = p.u64_in("timeout_rounds", team.timeout_rounds, 0..=MAX_ROUNDS)?;
         Ok(Self {
             core: Explorer::default(),
-            team,
+            team: team_from_params(p)?,
         })
     }
 }

@@ -30,16 +30,20 @@ impl Worker {
     /// Walk to `to` along a known route (planned once per destination). With no known
     /// route yet, explore: that is how the robot learns a way there.
     fn go(&mut self, ctx: &mut Ctx, to: DVec2) -> Action {
-        if self.heading_to != Some(to) || self.explorer.nav.is_idle() {
+        if self.heading_to != Some(to) || self.explorer.frontier.navigator().is_idle() {
             self.heading_to = Some(to);
-            if !self.explorer.nav.go_to(ctx, to) {
-                self.explorer.nav.clear();
+            if !self.explorer.frontier.navigator().go_to(ctx, to) {
+                self.explorer.frontier.navigator().clear();
                 self.heading_to = None;
                 return self.explorer.explore(ctx, Vec::new, 0.0);
             }
         }
         ctx.set_goal(Some(to));
-        self.explorer.nav.step(ctx).unwrap_or(Action::MoveTo { to })
+        self.explorer
+            .frontier
+            .navigator()
+            .step(ctx)
+            .unwrap_or(Action::MoveTo { to })
     }
 
     /// The remembered treasure nearest to the robot that `want` accepts.
@@ -81,13 +85,8 @@ pub(super) struct Excavator {
 }
 
 impl Strategy for Excavator {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        crate::agent::save_state(self)
-    }
+    crate::serde_state!();
 
-    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
-        crate::agent::restore_state(self, state)
-    }
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
             return a;
@@ -110,13 +109,8 @@ pub(super) struct Transporter {
 }
 
 impl Strategy for Transporter {
-    fn save_state(&self) -> Option<Vec<u8>> {
-        crate::agent::save_state(self)
-    }
+    crate::serde_state!();
 
-    fn restore_state(&mut self, state: &[u8]) -> crate::Result<()> {
-        crate::agent::restore_state(self, state)
-    }
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
             return a;

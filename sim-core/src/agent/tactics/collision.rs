@@ -5,6 +5,7 @@ use rand::Rng;
 
 use super::Tactic;
 use crate::agent::ctx::Ctx;
+use crate::agent::strategy::Needs;
 use crate::world::{Action, Outcome};
 
 /// Escapes when a robot has been stuck (moves refused or trimmed to nothing, by walls or
@@ -44,6 +45,15 @@ impl CollisionAvoidance {
 }
 
 impl Tactic for CollisionAvoidance {
+    fn needs(&self) -> Needs {
+        Needs {
+            known_map: true,
+            ..Needs::NONE
+        }
+    }
+
+    crate::serde_state!();
+
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let p = ctx.position();
         let moved = self.last_position.map_or(f64::INFINITY, |q| q.distance(p));

@@ -1,8 +1,10 @@
 //! Energy management: keep a known way home, and go back in time.
 
+use super::boundary::BoundaryFollowing;
 use super::navigator::Navigator;
-use super::{SEARCH_BUDGET, Tactic};
+use super::{SEARCH_BUDGET, Tactic, blocked};
 use crate::agent::ctx::Ctx;
+use crate::agent::strategy::Needs;
 use crate::spatial::Route;
 use crate::world::Action;
 
@@ -20,6 +22,8 @@ pub struct EnergyManagement {
     returning: bool,
     home_route: Option<(u64, Route)>,
     nav: Navigator,
+    /// Rounds in a row its moves home were held back.
+    held: u32,
 }
 
 impl Default for EnergyManagement {
@@ -31,6 +35,7 @@ impl Default for EnergyManagement {
             returning: false,
             home_route: None,
             nav: Navigator::default(),
+            held: 0,
         }
     }
 }
@@ -50,6 +55,16 @@ impl EnergyManagement {
 }
 
 impl Tactic for EnergyManagement {
+    fn needs(&self) -> Needs {
+        Needs {
+            known_map: true,
+            obstacles: true,
+            ..Needs::NONE
+        }
+    }
+
+    crate::serde_state!();
+
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let home = ctx.home();
         let p = ctx.position();
@@ -87,11 +102,31 @@ impl Tactic for EnergyManagement {
             self.nav.follow(route.clone());
         }
         if self.returning {
+            self.held = if blocked(ctx) { self.held + 1 } else { 0 };
+            if self.held == 2 {
+                // The route was planned from elsewhere (or its next leg is too tight for
+                // this body): plan again from here.
+                self.nav.clear();
+                if let Some(route) = ctx
+                    .known()
+                    .and_then(|k| ctx.nav().route_within(k, p, home.center(), SEARCH_BUDGET))
+                {
+                    self.home_route = Some((ctx.round, route));
+                }
+            }
             if self.nav.is_idle() {
                 let route = self.home_route.as_ref().expect("planned").1.clone();
                 self.nav.follow(route);
             }
-            return Some(self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() }));
+            let step = self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() });
+            if self.held >= 3
+                && let Action::MoveTo { to } = step
+            {
+                // Still held back: slide along whatever is in the way towards the waypoint.
+                let dir = BoundaryFollowing::heading(ctx, to - p).unwrap_or(to - p);
+                return Some(ctx.move_by(dir * ctx.kind.speed_m_per_round));
+            }
+            return Some(step);
         }
         None
     }

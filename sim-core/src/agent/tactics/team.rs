@@ -4,6 +4,7 @@ use glam::DVec2;
 
 use super::Tactic;
 use crate::agent::ctx::Ctx;
+use crate::agent::strategy::Needs;
 use crate::spatial::RobotId;
 use crate::world::{Action, Payload, StrategyEvent};
 
@@ -46,6 +47,16 @@ impl Team {
 }
 
 impl Tactic for Team {
+    fn needs(&self) -> Needs {
+        Needs {
+            robots: true,
+            messages: true,
+            ..Needs::NONE
+        }
+    }
+
+    crate::serde_state!();
+
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let my_type = ctx.me.type_index;
         let me = ctx.me.id;
@@ -88,4 +99,28 @@ impl Tactic for Team {
         }
         None
     }
+}
+
+/// [`Team`] as a tactic by name (`team`): it also announces the robot's position every
+/// round (what a strategy using [`Team`] directly does with [`Team::announce`]), so a
+/// strategy composed of tactics needs nothing else to team up.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Teaming(pub Team);
+
+impl Tactic for Teaming {
+    fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        let action = self.0.suggest(ctx);
+        Team::announce(ctx);
+        action
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            robots: true,
+            messages: true,
+            ..Needs::NONE
+        }
+    }
+
+    crate::serde_state!();
 }

@@ -1,0 +1,74 @@
+//! Frontier seeking: walk to the nearest frontier.
+
+use glam::DVec2;
+
+use super::Tactic;
+use super::navigator::Navigator;
+use crate::agent::ctx::Ctx;
+use crate::agent::strategy::Needs;
+use crate::world::Action;
+
+/// Walks to the nearest frontier (by route: known free space bordering the unknown) and
+/// publishes it as the goal; quiet once nothing is left to explore (a failed search is
+/// retried every 20 rounds, as merged maps may open new frontiers).
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct FrontierSeeking {
+    nav: Navigator,
+    target: Option<DVec2>,
+    /// Round of the last failed frontier search.
+    failed_at: Option<u64>,
+}
+
+impl FrontierSeeking {
+    /// The route follower (strategies that also go elsewhere share it).
+    pub fn navigator(&mut self) -> &mut Navigator {
+        &mut self.nav
+    }
+
+    /// One step towards the nearest frontier whose target lies more than `avoid_radius_m`
+    /// from every point `avoid` gives (team mates' goals; asked for only when a new
+    /// target is chosen: in crowds they are hundreds, and most rounds keep the target), or
+    /// the nearest frontier at all if every one is taken. `None` when none is known.
+    pub fn seek(&mut self, ctx: &mut Ctx, avoid: impl FnOnce() -> Vec<DVec2>, avoid_radius_m: f64) -> Option<Action> {
+        // Keep walking to a frontier target even once it is seen: the way on reveals more in
+        // the same direction, and a new search only every few metres keeps planning cheap.
+        // Re-plan on arrival, when the route is gone, or when the target was revealed from
+        // close by.
+        let p = ctx.position();
+        let revealed_near = self
+            .target
+            .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
+        let need_plan = self.nav.is_idle() || revealed_near;
+        if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
+            if let Some(route) = Navigator::frontier_route(ctx, &avoid(), avoid_radius_m)
+                .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
+            {
+                self.target = route.waypoints.last().copied();
+                self.nav.follow(route);
+                self.failed_at = None;
+            } else {
+                self.target = None;
+                self.nav.clear();
+                self.failed_at = Some(ctx.round);
+            }
+        }
+        ctx.set_goal(self.target);
+        self.nav.step(ctx)
+    }
+}
+
+impl Tactic for FrontierSeeking {
+    fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
+        self.seek(ctx, Vec::new, 0.0)
+    }
+
+    fn needs(&self) -> Needs {
+        Needs {
+            known_map: true,
+            obstacles: true,
+            ..Needs::NONE
+        }
+    }
+
+    crate::serde_state!();
+}
