@@ -89,7 +89,8 @@ fn issue10_no_file_imports_from_a_layer_above_its_own() {
                         LAYERS[other]
                     ));
                 }
-            } else if !matches!(name.as_str(), "Error" | "Result") {
+            } else if !matches!(name.as_str(), "Error" | "Result" | "serde_state") {
+                // (`serde_state!` is exported at the crate root, as every exported macro is.)
                 violations.push(format!("{}:{line}: crate::{name} is not a layer", rel.display()));
             }
         }

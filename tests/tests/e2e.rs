@@ -167,8 +167,19 @@ fn config_errors_name_file_line_column_and_what_was_expected() {
     assert!(e.contains("bad.xml:3:3"), "{e}");
     assert!(
         e.contains(
-            "unknown strategy 'frontir' (known: cooperative, excavator, frontier, random_walk, team, transporter)"
+            "unknown strategy 'frontir' (known: cooperative, excavator, frontier, random_walk, tactics, team, transporter)"
         ),
+        "{e}"
+    );
+
+    // Issue 12: an unknown tactic in a composed strategy, listing the known ones.
+    let e = config_error(
+        "<simulation>\n  <map file=\"small.stmap\"/>\n  <group count=\"2\" type=\"explorer\" strategy=\"tactics\">\n    <param name=\"tactics\" value=\"collision,jump\"/>\n  </group>\n</simulation>",
+        &dir,
+    );
+    assert!(e.contains("bad.xml:3:3"), "{e}");
+    assert!(
+        e.contains("strategy 'tactics': unknown tactic 'jump' (known: boundary, collision, energy, frontier, shortest_path, team)"),
         "{e}"
     );
 
