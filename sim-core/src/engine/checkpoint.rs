@@ -52,6 +52,8 @@ struct State {
 
 #[derive(Serialize)]
 struct AgentRef<'a> {
+    /// One byte string, not a list of numbers (a CBOR item per byte made checkpoints slow).
+    #[serde(with = "serde_bytes")]
     strategy: Vec<u8>,
     data: &'a DataModule,
     goal: Option<DVec2>,
@@ -62,6 +64,7 @@ struct AgentRef<'a> {
 
 #[derive(Deserialize)]
 struct AgentState {
+    #[serde(with = "serde_bytes")]
     strategy: Vec<u8>,
     data: DataModule,
     goal: Option<DVec2>,

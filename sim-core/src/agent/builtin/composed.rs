@@ -68,12 +68,16 @@ impl Strategy for Composed {
     }
 
     fn save_state(&self) -> Option<Vec<u8>> {
-        let parts: Option<Vec<Vec<u8>>> = self.tactics.iter().map(|(_, t)| t.save_state()).collect();
+        let parts: Option<Vec<serde_bytes::ByteBuf>> = self
+            .tactics
+            .iter()
+            .map(|(_, t)| t.save_state().map(serde_bytes::ByteBuf::from))
+            .collect();
         crate::agent::save_state(&parts?)
     }
 
     fn restore_state(&mut self, state: &[u8]) -> Result<()> {
-        let mut parts: Vec<Vec<u8>> = Vec::new();
+        let mut parts: Vec<serde_bytes::ByteBuf> = Vec::new();
         crate::agent::restore_state(&mut parts, state)?;
         if parts.len() != self.tactics.len() {
             return Err(crate::Error::InvalidParameter(format!(

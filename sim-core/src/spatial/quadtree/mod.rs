@@ -27,6 +27,7 @@ mod build;
 mod codec;
 mod components;
 mod query;
+mod state;
 #[cfg(test)]
 mod tests;
 mod update;
@@ -59,87 +60,6 @@ pub(crate) fn is_leaf(n: NodeRef) -> bool {
     n >= FULL
 }
 
-/// A [`RegionQuadtree`] as checkpoints store it: its vectors with their capacities, so
-/// that a restored tree costs what the saved one did (its memory is a metric) and grows as
-/// it would have (issue 13: a resumed run must be the same, byte for byte). Written from
-/// borrowed vectors (a checkpoint never copies a tree); restored trees are checked with
-/// `validate` by whoever reads them.
-#[derive(serde::Serialize)]
-struct TreeStateRef<'a> {
-    grid: Grid,
-    root: NodeRef,
-    groups: (&'a [[NodeRef; 4]], usize),
-    free_groups: (&'a [u32], usize),
-    blocks: (&'a [u64], usize),
-    free_blocks: (&'a [u32], usize),
-    block_internal: usize,
-    packed: bool,
-}
-
-/// [`TreeStateRef`] read back.
-#[derive(serde::Deserialize)]
-struct TreeState {
-    grid: Grid,
-    root: NodeRef,
-    groups: (Vec<[NodeRef; 4]>, usize),
-    free_groups: (Vec<u32>, usize),
-    blocks: (Vec<u64>, usize),
-    free_blocks: (Vec<u32>, usize),
-    block_internal: usize,
-    packed: bool,
-}
-
-impl serde::Serialize for RegionQuadtree {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        fn with_capacity<T>(v: &Vec<T>) -> (&[T], usize) {
-            (v, v.capacity())
-        }
-        TreeStateRef {
-            grid: self.grid,
-            root: self.root,
-            groups: with_capacity(&self.groups),
-            free_groups: with_capacity(&self.free_groups),
-            blocks: with_capacity(&self.blocks),
-            free_blocks: with_capacity(&self.free_blocks),
-            block_internal: self.block_internal,
-            packed: self.packed,
-        }
-        .serialize(s)
-    }
-}
-
-/// The vector, grown to the capacity it had. Vectors grow by doubling, so a capacity far
-/// beyond `bound` (the length of the vector it belongs to) comes from a corrupt file, and
-/// is refused rather than allocated.
-fn restored<T>((mut v, capacity): (Vec<T>, usize), bound: usize, what: &str) -> Result<Vec<T>, String> {
-    if capacity > 4 * bound + 1024 {
-        return Err(format!(
-            "a quadtree's {what} claim a capacity of {capacity} for {} entries",
-            v.len()
-        ));
-    }
-    v.reserve_exact(capacity.saturating_sub(v.len()));
-    Ok(v)
-}
-
-impl TryFrom<TreeState> for RegionQuadtree {
-    type Error = String;
-
-    fn try_from(s: TreeState) -> Result<Self, String> {
-        let (groups_len, blocks_len) = (s.groups.0.len(), s.blocks.0.len());
-        Ok(Self {
-            grid: s.grid,
-            root: s.root,
-            groups: restored(s.groups, groups_len, "groups")?,
-            free_groups: restored(s.free_groups, groups_len, "free groups")?,
-            blocks: restored(s.blocks, blocks_len, "blocks")?,
-            free_blocks: restored(s.free_blocks, blocks_len, "free blocks")?,
-            block_internal: s.block_internal,
-            packed: s.packed,
-        })
-    }
-}
-
 /// Whether a node reference is a block (an 8 × 8 square stored as bits).
 #[inline]
 pub(crate) fn is_block(n: NodeRef) -> bool {
@@ -154,7 +74,7 @@ pub(crate) fn leaf(value: bool) -> NodeRef {
 
 /// A region quadtree of boolean cells over a [`Grid`].
 #[derive(Clone, Debug, serde::Deserialize)]
-#[serde(try_from = "TreeState")]
+#[serde(try_from = "state::TreeState")]
 pub struct RegionQuadtree {
     grid: Grid,
     root: NodeRef,
