@@ -8,7 +8,7 @@ use sim_core::agent::{
 };
 use sim_core::glam::DVec2;
 use sim_core::spatial::RobotId;
-use sim_core::world::{Action, Message, Outcome, Payload, Recipient, StrategyEvent};
+use sim_core::world::{Action, Inbox, Message, Outcome, Payload, Recipient, StrategyEvent};
 
 const EPS: f64 = 1e-9;
 
@@ -323,7 +323,7 @@ fn team_golden_angle_slot_by_hand() {
 fn team_follows_a_lower_id() {
     let mut w = team_world();
     let mut t = Team::default();
-    w.mind.perception.inbox.push(position_message(1, LEADER_AT, 1));
+    w.mind.perception.inbox = Inbox::from(vec![position_message(1, LEADER_AT, 1)]);
     let to = move_target(t.suggest(&mut w.ctx()));
     assert!((to - slot()).length() < EPS, "{to}");
     assert_eq!(t.leader(), Some(RobotId::new(1)));
@@ -334,7 +334,7 @@ fn team_follows_a_lower_id() {
 fn team_ignores_a_higher_id() {
     let mut w = team_world();
     let mut t = Team::default();
-    w.mind.perception.inbox.push(position_message(7, LEADER_AT, 1));
+    w.mind.perception.inbox = Inbox::from(vec![position_message(7, LEADER_AT, 1)]);
     assert_eq!(t.suggest(&mut w.ctx()), None);
     assert_eq!(t.leader(), None);
     assert!(w.mind.output.events().is_empty());
@@ -346,9 +346,9 @@ fn team_leaves_after_timeout() {
     let mut t = Team::default();
     assert_eq!(t.timeout_rounds, 5);
     // Heard at round 1.
-    w.mind.perception.inbox.push(position_message(1, LEADER_AT, 1));
+    w.mind.perception.inbox = Inbox::from(vec![position_message(1, LEADER_AT, 1)]);
     assert!(t.suggest(&mut w.ctx()).is_some());
-    w.mind.perception.inbox.clear();
+    w.mind.perception.inbox = Inbox::default();
     // Rounds 2..=6: 6 − 1 = 5, not more than 5: still following, no new event.
     for round in 2..=6 {
         w.round = round;
@@ -370,9 +370,9 @@ fn issue10_team_timeout_near_u64_max_does_not_overflow() {
     let mut w = team_world();
     let mut t = Team::default();
     t.timeout_rounds = u64::MAX;
-    w.mind.perception.inbox.push(position_message(1, LEADER_AT, 1));
+    w.mind.perception.inbox = Inbox::from(vec![position_message(1, LEADER_AT, 1)]);
     assert!(t.suggest(&mut w.ctx()).is_some());
-    w.mind.perception.inbox.clear();
+    w.mind.perception.inbox = Inbox::default();
     // (u64::MAX − 1) − 1 and u64::MAX − 1 are both ≤ u64::MAX: still following.
     for round in [u64::MAX - 1, u64::MAX] {
         w.round = round;

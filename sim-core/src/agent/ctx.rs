@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::agent::perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId};
-use crate::world::{Action, HomeBase, Message, Outcome, Payload, Recipient, Robot, RobotType, StrategyEvent};
+use crate::world::{Action, HomeBase, Inbox, Outcome, Payload, Recipient, Robot, RobotType, StrategyEvent};
 
 /// The unchanging world a strategy may consult.
 #[derive(Clone, Copy, Debug)]
@@ -154,7 +154,7 @@ impl<'a> Ctx<'a> {
         &self.perception.treasures
     }
     /// Messages delivered this round (empty unless the strategy needs messages).
-    pub fn messages(&self) -> &'a [Message] {
+    pub fn messages(&self) -> &'a Inbox {
         &self.perception.inbox
     }
     /// Own position.

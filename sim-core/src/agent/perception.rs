@@ -3,7 +3,7 @@
 use glam::DVec2;
 
 use crate::spatial::{KnownMap, RobotId, TreasureId};
-use crate::world::{MemoryList, Message, Retention, Sighting};
+use crate::world::{Inbox, MemoryList, Retention, Sighting};
 
 /// A robot seen in the view radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,7 +37,7 @@ pub struct Perception {
     /// Treasures in view, by id.
     pub treasures: Vec<SeenTreasure>,
     /// Messages delivered this round, in sending order.
-    pub inbox: Vec<Message>,
+    pub inbox: Inbox,
 }
 
 /// The data module: what a robot remembers between rounds.

@@ -123,10 +123,11 @@ impl Simulation {
         let inboxes = self
             .inboxes
             .iter()
-            .map(|inbox| {
-                inbox
+            .map(|picks| {
+                picks
                     .iter()
-                    .map(|m| {
+                    .map(|&k| {
+                        let m = &self.mailbag[k as usize];
                         let payload = *ids.entry(Arc::as_ptr(&m.payload)).or_insert_with(|| {
                             payloads.push(&*m.payload);
                             u32::try_from(payloads.len() - 1).unwrap_or(u32::MAX)
@@ -178,14 +179,21 @@ impl Simulation {
             agent.mind.output.restore(saved.goal, saved.path);
             agent.merged_from = saved.merged_from.into_iter().collect();
         }
-        for (inbox, saved) in self.inboxes.iter_mut().zip(state.inboxes) {
-            inbox.clear();
-            inbox.extend(saved.into_iter().map(|m| Message {
-                from: m.from,
-                sent_round: m.sent_round,
-                to: m.to,
-                payload: Arc::clone(&payloads[m.payload as usize]),
-            }));
+        // Each saved message back in the bag once per receiver (they share its payload), so
+        // that it saves to the same bytes again.
+        self.mailbag.clear();
+        for (picks, saved) in self.inboxes.iter_mut().zip(state.inboxes) {
+            picks.clear();
+            for m in saved {
+                picks
+                    .push(u32::try_from(self.mailbag.len()).map_err(|_| Error::Malformed("too many messages".into()))?);
+                self.mailbag.push(Message {
+                    from: m.from,
+                    sent_round: m.sent_round,
+                    to: m.to,
+                    payload: Arc::clone(&payloads[m.payload as usize]),
+                });
+            }
         }
         self.round = state.round;
         self.robots = state.robots;

@@ -102,8 +102,10 @@ pub struct Simulation {
     /// The same positions in cells of the widest body-contact reach (collisions): in a
     /// crowd, a 20 m cell holds hundreds of robots that a 0.75 m contact test need not see.
     pub(super) body_index: RobotIndex,
-    /// Messages to deliver at the start of the next round, per robot.
-    pub(super) inboxes: Vec<Vec<Message>>,
+    /// Messages sent this round, each once, to deliver at the start of the next.
+    pub(super) mailbag: Vec<Message>,
+    /// Per robot, the messages of `mailbag` it will read (indices, in sending order).
+    pub(super) inboxes: Vec<Vec<u32>>,
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
@@ -204,6 +206,7 @@ impl Simulation {
             treasure_index,
             robot_index: RobotIndex::new(),
             body_index: RobotIndex::new(),
+            mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
@@ -304,8 +307,11 @@ impl Simulation {
         &self.report
     }
     /// Messages waiting for delivery at the start of the next round, per robot.
-    pub fn pending_messages(&self) -> &[Vec<Message>] {
-        &self.inboxes
+    pub fn pending_messages(&self) -> Vec<Vec<&Message>> {
+        self.inboxes
+            .iter()
+            .map(|picks| picks.iter().map(|&k| &self.mailbag[k as usize]).collect())
+            .collect()
     }
 
     /// Total memory held by the robots' known maps, bytes (what the paper's Fig. 4 plots).

@@ -81,3 +81,86 @@ pub struct Message {
     /// Content (shared, not copied, between receivers).
     pub payload: Arc<Payload>,
 }
+
+/// The messages one robot reads in a round, in sending order: picks from the round's mail
+/// bag, which every receiver shares. A broadcast heard by hundreds is stored once, and
+/// delivering it to a receiver costs an index (issue 11: copying each message into every
+/// receiver's list was most of the sequential step in a crowd). Iterate it with `for m in
+/// ctx.messages()` or [`iter`](Self::iter).
+#[derive(Clone, Debug, Default)]
+pub struct Inbox {
+    bag: Arc<Vec<Message>>,
+    picks: Vec<u32>,
+}
+
+impl Inbox {
+    /// The messages `picks` names in `bag`, in that order. Every pick must index `bag`.
+    pub fn new(bag: Arc<Vec<Message>>, picks: Vec<u32>) -> Self {
+        debug_assert!(picks.iter().all(|&k| (k as usize) < bag.len()));
+        Self { bag, picks }
+    }
+
+    /// The messages, in sending order.
+    pub fn iter(&self) -> InboxIter<'_> {
+        InboxIter {
+            bag: &self.bag,
+            picks: self.picks.iter(),
+        }
+    }
+
+    /// How many.
+    pub fn len(&self) -> usize {
+        self.picks.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.picks.is_empty()
+    }
+
+    /// Empty it, handing back its list of picks (to be reused) and letting go of the bag.
+    pub fn take_picks(&mut self) -> Vec<u32> {
+        self.bag = Arc::default();
+        let mut picks = std::mem::take(&mut self.picks);
+        picks.clear();
+        picks
+    }
+}
+
+/// An inbox of exactly these messages, in this order (for tests of strategies and tactics).
+impl From<Vec<Message>> for Inbox {
+    fn from(messages: Vec<Message>) -> Self {
+        let picks = (0..u32::try_from(messages.len()).expect("fewer than 2^32 messages")).collect();
+        Self::new(Arc::new(messages), picks)
+    }
+}
+
+impl<'a> IntoIterator for &'a Inbox {
+    type Item = &'a Message;
+    type IntoIter = InboxIter<'a>;
+
+    fn into_iter(self) -> InboxIter<'a> {
+        self.iter()
+    }
+}
+
+/// The messages of an [`Inbox`], in sending order.
+#[derive(Clone, Debug)]
+pub struct InboxIter<'a> {
+    bag: &'a [Message],
+    picks: std::slice::Iter<'a, u32>,
+}
+
+impl<'a> Iterator for InboxIter<'a> {
+    type Item = &'a Message;
+
+    fn next(&mut self) -> Option<&'a Message> {
+        self.picks.next().map(|&k| &self.bag[k as usize])
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.picks.size_hint()
+    }
+}
+
+impl ExactSizeIterator for InboxIter<'_> {}

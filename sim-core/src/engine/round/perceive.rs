@@ -4,17 +4,23 @@
 use crate::agent::{SeenRobot, SeenTreasure};
 use crate::engine::simulation::{Agent, Simulation};
 use crate::spatial::{RobotIndex, TreasureIndex};
-use crate::world::{Event, Payload, Robot, RobotType, Sighting, TreasureState};
+use std::sync::Arc;
+
+use crate::world::{Event, Inbox, Payload, Robot, RobotType, Sighting, TreasureState};
 
 impl Simulation {
     /// Move last round's messages into the receivers' perception.
     pub(super) fn deliver_messages(&mut self) {
-        for (agent, inbox) in self.agents.iter_mut().zip(self.inboxes.iter_mut()) {
-            agent.mind.perception.inbox.clear();
-            if agent.needs.messages {
-                std::mem::swap(&mut agent.mind.perception.inbox, inbox);
+        let bag = Arc::new(std::mem::take(&mut self.mailbag));
+        for (agent, picks) in self.agents.iter_mut().zip(self.inboxes.iter_mut()) {
+            // Last round's inbox gives its list back, to be filled again in step 3.
+            let mut spare = agent.mind.perception.inbox.take_picks();
+            if agent.needs.messages && !picks.is_empty() {
+                std::mem::swap(picks, &mut spare);
+                agent.mind.perception.inbox = Inbox::new(Arc::clone(&bag), spare);
+            } else {
+                picks.clear();
             }
-            inbox.clear();
         }
     }
 

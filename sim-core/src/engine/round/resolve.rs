@@ -266,11 +266,18 @@ impl Simulation {
                 }
             }
         }
+        // Stored once, in the bag the receivers share; each gets its index.
+        let k = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
+        let mut heard = false;
         for to in receivers {
             if self.robots[to.index()].alive {
-                self.inboxes[to.index()].push(message.clone());
+                self.inboxes[to.index()].push(k);
                 self.report.links.push(Link { from, to });
+                heard = true;
             }
+        }
+        if heard {
+            self.mailbag.push(message);
         }
     }
 
@@ -280,7 +287,7 @@ impl Simulation {
     /// to the inbox in sender order, as unbudgeted delivery would put them. Work per
     /// receiver is bounded by its budget, not by the crowd around it.
     pub(super) fn deliver_within_budget(&mut self) {
-        let outgoing = std::mem::take(&mut self.outgoing);
+        let mut outgoing = std::mem::take(&mut self.outgoing);
         if outgoing.is_empty() {
             return;
         }
@@ -317,6 +324,8 @@ impl Simulation {
         // and read back in order: sender order, as a sort would give, at a word a 64
         // messages instead of a sort of each receiver's hundreds (16 % of a crowded round).
         let words = outgoing.len().div_ceil(64);
+        // Budgeted sends skip the bag until the end: picks are indices into `outgoing`.
+        debug_assert!(self.mailbag.is_empty());
         let links: Vec<Vec<Link>> = self
             .inboxes
             .par_iter_mut()
@@ -370,7 +379,7 @@ impl Simulation {
                         let k = w * 64 + bits.trailing_zeros() as usize;
                         bits &= bits - 1;
                         let o = &outgoing[k];
-                        inbox.push(o.message.clone());
+                        inbox.push(k as u32);
                         links.push(Link {
                             from: o.message.from,
                             to,
@@ -383,8 +392,9 @@ impl Simulation {
         for l in links {
             self.report.links.extend(l);
         }
+        // Into the bag in `outgoing` order, where the picks point (unaccepted ones unread).
+        self.mailbag.extend(outgoing.drain(..).map(|o| o.message));
         self.outgoing = outgoing;
-        self.outgoing.clear();
     }
 }
 
