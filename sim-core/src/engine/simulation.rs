@@ -38,6 +38,10 @@ pub(super) struct Agent {
     /// With a planned move: the robots that could be in its way (see
     /// `Bodies::near_move` in step 3), also listed in step 2.
     pub(super) planned_near: Vec<u32>,
+    /// If it broadcasts this round (and radios have no budget): the robots in its
+    /// communication range at the start of the round, by id, listed in parallel in step 2
+    /// (step 3 addresses the broadcasts to those still alive). Empty otherwise.
+    pub(super) hearers: Vec<RobotId>,
     /// Why its strategy failed this round (it panicked): step 3 disables the robot.
     pub(super) failure: Option<String>,
     /// How long its strategy took to decide this round, when over the limit.
@@ -182,6 +186,7 @@ impl Simulation {
                     new_squares: Vec::new(),
                     planned_move: None,
                     planned_near: Vec::new(),
+                    hearers: Vec::new(),
                     failure: None,
                     slow: None,
                 });

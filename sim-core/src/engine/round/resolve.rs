@@ -247,29 +247,23 @@ impl Simulation {
             });
             return;
         }
-        let mut receivers: Vec<RobotId> = Vec::new();
-        match to {
-            Recipient::Broadcast => {
-                self.robot_index.for_each_within(at, kind.comm_radius_m, |id, _| {
-                    if id != from {
-                        receivers.push(id);
-                    }
-                });
-                receivers.sort_unstable();
-            }
+        let direct: [RobotId; 1];
+        let receivers: &[RobotId] = match to {
+            // Listed in step 2 (see `Agent::hearers`).
+            Recipient::Broadcast => &self.agents[i].hearers,
             Recipient::Direct(target) => {
-                if let Some(&p) = self.start_positions.get(target.index())
-                    && target != from
-                    && p.distance(at) <= kind.comm_radius_m
-                {
-                    receivers.push(target);
-                }
+                direct = [target];
+                let in_range = self
+                    .start_positions
+                    .get(target.index())
+                    .is_some_and(|p| target != from && p.distance(at) <= kind.comm_radius_m);
+                if in_range { &direct } else { &[] }
             }
-        }
+        };
         // Stored once, in the bag the receivers share; each gets its index.
         let k = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
         let mut heard = false;
-        for to in receivers {
+        for &to in receivers {
             if self.robots[to.index()].alive {
                 self.inboxes[to.index()].push(k);
                 self.report.links.push(Link { from, to });
