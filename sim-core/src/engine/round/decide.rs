@@ -58,7 +58,12 @@ impl Simulation {
                         agent.action = action;
                         agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
                         agent.hearers.clear();
-                        let broadcasts = agent.mind.output.outbox().iter().any(|(to, _)| *to == Recipient::Broadcast);
+                        let broadcasts = agent
+                            .mind
+                            .output
+                            .outbox()
+                            .iter()
+                            .any(|(to, _)| *to == Recipient::Broadcast);
                         if broadcasts && !radio_limited {
                             hearers(robot_index, robot, kind.comm_radius_m, &mut agent.hearers);
                         }
