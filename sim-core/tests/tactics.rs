@@ -185,6 +185,28 @@ fn energy_management_below_the_threshold_heads_home() {
     assert!(e.is_returning());
 }
 
+/// Issue 12: between measures, the way home is bounded by the last measure plus the
+/// distance walked since. Here the robot measured 9 m, then walked 4 m (back and forth, so
+/// it stands where it was): the bound is 13 m, the true way still 9 m. With energy between
+/// the two thresholds, a recent measure lets the bound decide (home, early and safe); once
+/// `replan_every` rounds have passed, it measures again and carries on.
+#[test]
+fn issue12_energy_management_bounds_the_way_home_between_measures() {
+    for (round, returns) in [(5, true), (10, false)] {
+        let mut w = TestWorld::from_ascii(CORRIDOR, 1.0).unwrap().knowing_all();
+        let mut e = EnergyManagement::default();
+        w.round = 0;
+        assert_eq!(e.suggest(&mut w.ctx()), None);
+        w.round = round;
+        w.robot.stats.distance_m += 4.0;
+        // Threshold for 13 m: 13 + 14·0.15 + 2.6 + 500 = 517.7; for 9 m, 513.1.
+        w.robot.energy = 515.0;
+        let action = e.suggest(&mut w.ctx());
+        assert_eq!(e.is_returning(), returns, "round {round}: {action:?}");
+        assert_eq!(action.is_some(), returns);
+    }
+}
+
 #[test]
 fn energy_management_recharges_at_home_until_leave_fraction() {
     // No 'H': home is a disc of 0.5 m around the robot.

@@ -11,16 +11,24 @@ use crate::world::Action;
 /// Keeps enough energy to get home along a known path: when what is left falls to the cost
 /// of the way home plus a reserve, it takes over and walks home, then waits there until
 /// recharged.
+///
+/// The way home is measured (a shortest route within the known map) once an excursion
+/// starts, and again only when the energy left nears what it costs: in between, the last
+/// measure plus the distance walked since bounds it from above (the robot can always walk
+/// back the way it came), and while that bound leaves room, nothing needs measuring. (Issue
+/// 12: measuring every robot's way home every 10 rounds was 84 % of a round on a large map.)
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EnergyManagement {
     /// Extra energy kept beyond the way home, as a fraction of capacity (default 0.1).
     pub reserve_fraction: f64,
     /// Recharge until this fraction of capacity before leaving home again (default 0.95).
     pub leave_at_fraction: f64,
-    /// Re-measure the way home every this many rounds (default 10).
+    /// Near the line, re-measure the way home at most every this many rounds (default 10);
+    /// in between, the bound decides (erring on the side of turning back early).
     pub replan_every: u64,
     returning: bool,
-    home_route: Option<(u64, Route)>,
+    /// The last measured way home: the round, the route and the robot's odometer then.
+    home_route: Option<(u64, Route, f64)>,
     nav: Navigator,
     /// Rounds in a row its moves home were held back.
     held: u32,
@@ -76,13 +84,12 @@ impl Tactic for EnergyManagement {
                 return Some(Action::Idle);
             }
             self.returning = false;
+            // The next excursion measures its way home afresh.
+            self.home_route = None;
             return None;
         }
-        let stale = self
-            .home_route
-            .as_ref()
-            .is_none_or(|(at, _)| ctx.round >= at + self.replan_every);
-        if stale {
+        let odometer = ctx.me.stats.distance_m;
+        let measure = |ctx: &Ctx| {
             let target = home.center();
             let route = ctx
                 .known()
@@ -92,14 +99,26 @@ impl Tactic for EnergyManagement {
                     waypoints: vec![target],
                     length_m: 1.5 * p.distance(target),
                 });
-            self.home_route = Some((ctx.round, route));
-        }
-        let (_, route) = self.home_route.as_ref().expect("planned above");
+            (ctx.round, route, odometer)
+        };
         // Walking one more round away costs up to two rounds of travel on the way back.
         let margin = 2.0 * Self::cost(ctx, ctx.kind.speed_m_per_round);
-        if !self.returning && ctx.me.energy <= Self::cost(ctx, route.length_m) + margin + self.reserve_fraction * cap {
-            self.returning = true;
-            self.nav.follow(route.clone());
+        let needed = |length_m: f64| Self::cost(ctx, length_m) + margin + self.reserve_fraction * cap;
+        let measured = self.home_route.get_or_insert_with(|| measure(ctx));
+        if !self.returning && ctx.me.energy <= needed(measured.1.length_m + (odometer - measured.2)) {
+            // Near the line: measure again, at most every `replan_every` rounds (in between,
+            // the bound decides).
+            if ctx.round >= measured.0 + self.replan_every {
+                *measured = measure(ctx);
+            }
+            if ctx.me.energy <= needed(measured.1.length_m + (odometer - measured.2)) {
+                self.returning = true;
+                // Home from here, not from where the way was last measured.
+                if measured.0 != ctx.round {
+                    *measured = measure(ctx);
+                }
+                self.nav.follow(measured.1.clone());
+            }
         }
         if self.returning {
             self.held = if blocked(ctx) { self.held + 1 } else { 0 };
@@ -111,11 +130,11 @@ impl Tactic for EnergyManagement {
                     .known()
                     .and_then(|k| ctx.nav().route_within(k, p, home.center(), SEARCH_BUDGET))
                 {
-                    self.home_route = Some((ctx.round, route));
+                    self.home_route = Some((ctx.round, route, odometer));
                 }
             }
             if self.nav.is_idle() {
-                let route = self.home_route.as_ref().expect("planned").1.clone();
+                let route = self.home_route.as_ref().expect("measured above").1.clone();
                 self.nav.follow(route);
             }
             let step = self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() });
