@@ -45,11 +45,6 @@ pub(super) struct Frontier {
     /// merged in one pass (as a hash map they cost 14 % of a `bench-1000` run; as a B-tree
     /// 15 %).
     claims: Claims,
-    /// Scratch for this round's announcements and the merge.
-    #[serde(skip)]
-    updates: Vec<Update>,
-    #[serde(skip)]
-    merged: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
 }
@@ -60,8 +55,6 @@ impl Frontier {
             core: Explorer::default(),
             sharing,
             claims: Claims::default(),
-            updates: Vec::new(),
-            merged: Claims::default(),
             announced: None,
             shared_area: 0.0,
         }
@@ -90,21 +83,25 @@ impl Strategy for Frontier {
             // Only claims near enough to matter are kept, so crowds stay cheap.
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();
-            self.updates.clear();
-            for m in ctx.messages() {
-                if let Payload::Position { goal, .. } = *m.payload {
-                    self.updates
-                        .push((m.from.get(), goal.filter(|g| g.distance(p) <= near)));
-                }
-            }
+            // This round's announcements (no buffers kept between rounds: with a crowd of
+            // robots each holding hundreds of claims, spare copies cost megabytes).
+            let mut updates: Vec<Update> = ctx
+                .messages()
+                .iter()
+                .filter_map(|m| match *m.payload {
+                    Payload::Position { goal, .. } => Some((m.from.get(), goal.filter(|g| g.distance(p) <= near))),
+                    _ => None,
+                })
+                .collect();
             let round = ctx.round;
-            if !self.updates.is_empty() {
+            if !updates.is_empty() {
                 // Inboxes come in sender order; sort (stably: a sender's last word wins) if not.
-                if !self.updates.is_sorted_by_key(|u| u.0) {
-                    self.updates.sort_by_key(|u| u.0);
+                if !updates.is_sorted_by_key(|u| u.0) {
+                    updates.sort_by_key(|u| u.0);
                 }
-                merge_claims(&self.claims, &self.updates, round, &mut self.merged);
-                std::mem::swap(&mut self.claims, &mut self.merged);
+                let mut merged = Claims::with_capacity(self.claims.len() + updates.len());
+                merge_claims(&self.claims, &updates, round, &mut merged);
+                self.claims = merged;
             }
             if round.is_multiple_of(10) {
                 self.claims

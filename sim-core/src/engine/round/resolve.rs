@@ -386,9 +386,34 @@ impl Simulation {
         for l in links {
             self.report.links.extend(l);
         }
-        // Into the bag in `outgoing` order, where the picks point (unaccepted ones unread).
-        self.mailbag.extend(outgoing.drain(..).map(|o| o.message));
+        self.bag_accepted(&mut outgoing);
         self.outgoing = outgoing;
+    }
+
+    /// Move the messages that someone accepted from `outgoing` into the bag, in order, and
+    /// point the inboxes' picks (indices into `outgoing`) at them there. The rest are
+    /// dropped now: their payloads (whole known maps, often) are not kept for a round.
+    fn bag_accepted(&mut self, outgoing: &mut Vec<Outgoing>) {
+        const UNUSED: u32 = u32::MAX;
+        let mut place = vec![UNUSED; outgoing.len()];
+        for picks in &self.inboxes {
+            for &k in picks {
+                place[k as usize] = 0;
+            }
+        }
+        let mut next = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
+        for (slot, o) in place.iter_mut().zip(outgoing.drain(..)) {
+            if *slot != UNUSED {
+                *slot = next;
+                next += 1;
+                self.mailbag.push(o.message);
+            }
+        }
+        self.inboxes.par_iter_mut().for_each(|picks| {
+            for k in picks.iter_mut() {
+                *k = place[*k as usize];
+            }
+        });
     }
 }
 
