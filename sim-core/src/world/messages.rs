@@ -108,6 +108,11 @@ impl Inbox {
         }
     }
 
+    /// The `i`-th message, in sending order.
+    pub fn get(&self, i: usize) -> Option<&Message> {
+        self.picks.get(i).map(|&k| &self.bag[k as usize])
+    }
+
     /// How many.
     pub fn len(&self) -> usize {
         self.picks.len()
@@ -163,4 +168,53 @@ impl<'a> Iterator for InboxIter<'a> {
     }
 }
 
+impl DoubleEndedIterator for InboxIter<'_> {
+    fn next_back(&mut self) -> Option<Self::Item> {
+        self.picks.next_back().map(|&k| &self.bag[k as usize])
+    }
+}
+
 impl ExactSizeIterator for InboxIter<'_> {}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+
+    use glam::DVec2;
+
+    use super::{Inbox, Message, Payload, Recipient};
+    use crate::spatial::RobotId;
+
+    fn message(from: u32) -> Message {
+        Message {
+            from: RobotId::new(from),
+            sent_round: 1,
+            to: Recipient::Broadcast,
+            payload: Arc::new(Payload::Position {
+                position: DVec2::splat(f64::from(from)),
+                goal: None,
+            }),
+        }
+    }
+
+    /// Receivers share the bag: each sees its picks, in its order, and nothing else.
+    #[test]
+    fn inboxes_read_their_picks_of_a_shared_bag_in_order() {
+        let bag = Arc::new((0..5).map(message).collect::<Vec<_>>());
+        let a = Inbox::new(Arc::clone(&bag), vec![1, 3, 4]);
+        let b = Inbox::new(Arc::clone(&bag), vec![0, 3]);
+        let senders = |i: &Inbox| i.iter().map(|m| m.from.get()).collect::<Vec<_>>();
+        assert_eq!(senders(&a), [1, 3, 4]);
+        assert_eq!(senders(&b), [0, 3]);
+        assert_eq!(a.iter().rev().map(|m| m.from.get()).collect::<Vec<_>>(), [4, 3, 1]);
+        assert_eq!((a.len(), a.iter().len(), b.len()), (3, 3, 2));
+        assert_eq!(a.get(1).map(|m| m.from.get()), Some(3));
+        assert!(a.get(3).is_none());
+        // One copy of each message, whoever reads it.
+        assert!(std::ptr::eq(a.get(1).unwrap(), b.get(1).unwrap()));
+        let mut own = Inbox::from(vec![message(7), message(2)]);
+        assert_eq!(senders(&own), [7, 2]);
+        assert!(own.take_picks().is_empty() && own.is_empty());
+        assert!(Inbox::default().iter().next().is_none());
+    }
+}
