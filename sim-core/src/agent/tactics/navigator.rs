@@ -1,12 +1,12 @@
 //! Shortest paths on the navigation graph within known terrain, and frontier search.
 
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, KnownMap, Overlap, Route, Shape};
+use crate::spatial::{Aabb, KnownMap, NavNodeId, Overlap, Route, Shape};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -80,21 +80,35 @@ impl Navigator {
         let p = ctx.position();
         let step_in = 0.5 * known.grid().cell_m();
         let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
+        // The goal test of a node asks its neighbours whether the known map touches them,
+        // and the search asks again right after, when it expands the node: the answers are
+        // kept in between (each is a descent of the known map's tree).
+        let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
+        let touches = |m: NavNodeId| known.touches_square(nav.square(m));
         nav.search(
             p,
-            |n| known.touches_square(nav.square(n)),
+            |m| {
+                let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
+                hit.unwrap_or_else(|| touches(m))
+            },
             |n| {
+                touched.borrow_mut().clear();
                 if !known.covers_square(nav.square(n)) {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
-                nav.neighbors(n)
-                    .filter(|&m| !known.touches_square(nav.square(m)))
-                    .map(|m| {
-                        let portal = nav.portal(n, m);
-                        let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
-                        portal + inward * step_in
-                    })
-                    .find(|t| clear(*t))
+                let mut cache = touched.borrow_mut();
+                let mut found = None;
+                for m in nav.neighbors(n) {
+                    let t = touches(m);
+                    cache.push((m, t));
+                    if t || found.is_some() {
+                        continue;
+                    }
+                    let portal = nav.portal(n, m);
+                    let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
+                    found = Some(portal + inward * step_in).filter(|t| clear(*t));
+                }
+                found
             },
             SEARCH_BUDGET,
         )

@@ -1,6 +1,7 @@
 //! Step 2: every live robot's strategy decides one action and its messages, in parallel;
 //! each robot owns its strategy and data, nothing shared is written.
 
+use std::cell::RefCell;
 use std::panic::AssertUnwindSafe;
 use std::time::Instant;
 
@@ -89,12 +90,39 @@ impl Simulation {
 /// index), by id: who hears its broadcasts. In step 2, in parallel, rather than in the
 /// sequential step 3, where the look-up and sort were a tenth of a crowded round.
 fn hearers(index: &RobotIndex, robot: &Robot, range_m: f64, out: &mut Vec<RobotId>) {
+    thread_local! {
+        /// A bit per robot, all clear between calls.
+        static HEARD: RefCell<Vec<u64>> = const { RefCell::new(Vec::new()) };
+    }
     index.for_each_within(robot.position, range_m, |id, _| {
         if id != robot.id {
             out.push(id);
         }
     });
-    out.sort_unstable();
+    if out.len() <= 32 {
+        out.sort_unstable();
+        return;
+    }
+    // In a crowd, hundreds: put them in order by a bit per robot, read back word by word
+    // (callgrind: sorting them was 14 % of bench-1000's instructions).
+    HEARD.with(|heard| {
+        let mut bits = heard.borrow_mut();
+        let words = out.iter().map(|id| id.index() / 64 + 1).max().unwrap_or(0);
+        if bits.len() < words {
+            bits.resize(words, 0);
+        }
+        for id in out.iter() {
+            bits[id.index() / 64] |= 1 << (id.index() % 64);
+        }
+        out.clear();
+        for (w, word) in bits.iter_mut().enumerate().take(words) {
+            while *word != 0 {
+                let b = word.trailing_zeros() as usize;
+                *word &= *word - 1;
+                out.push(RobotId::new(u32::try_from(w * 64 + b).expect("robot ids are u32")));
+            }
+        }
+    });
 }
 
 /// What a panic said (its message, when it was a string).
