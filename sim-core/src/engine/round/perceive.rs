@@ -1,11 +1,11 @@
 //! Step 1: every live robot perceives the start-of-round state, only what its strategy
 //! declared in [`Needs`](crate::agent::Needs), and digests the messages delivered to it.
 
+use std::sync::Arc;
+
 use crate::agent::{SeenRobot, SeenTreasure};
 use crate::engine::simulation::{Agent, Simulation};
 use crate::spatial::{RobotIndex, TreasureIndex};
-use std::sync::Arc;
-
 use crate::world::{Event, Inbox, Payload, Robot, RobotType, Sighting, TreasureState};
 
 impl Simulation {
