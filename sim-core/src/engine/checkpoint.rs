@@ -87,36 +87,43 @@ impl Simulation {
     pub fn check_checkpointable(&self) -> Result<()> {
         for (a, r) in self.agents.iter().zip(&self.robots) {
             if a.strategy.save_state().is_none() {
-                let g = &self.groups[r.group];
-                return Err(Error::InvalidParameter(format!(
-                    "group '{}': strategy '{}' cannot save its state (it does not implement \
-                     Strategy::save_state), so this run cannot be checkpointed",
-                    g.name, g.strategy
-                )));
+                return Err(self.not_checkpointable(r));
             }
         }
         Ok(())
     }
 
+    /// The error for a robot whose strategy cannot save its state.
+    fn not_checkpointable(&self, r: &Robot) -> Error {
+        let g = &self.groups[r.group];
+        Error::InvalidParameter(format!(
+            "group '{}': strategy '{}' cannot save its state (it does not implement \
+             Strategy::save_state), so this run cannot be checkpointed",
+            g.name, g.strategy
+        ))
+    }
+
     /// Append the state of the run after the rounds played so far to `out` (CBOR). Fails
     /// if a robot's strategy cannot save its state.
     pub fn write_state(&self, out: &mut Vec<u8>) -> Result<()> {
-        self.check_checkpointable()?;
+        // Each strategy saves its state once (not once to check, then again to write).
         let agents = self
             .agents
             .iter()
-            .map(|a| {
+            .zip(&self.robots)
+            .map(|(a, r)| {
+                let strategy = a.strategy.save_state().ok_or_else(|| self.not_checkpointable(r))?;
                 let mut merged_from: Vec<(RobotId, u64)> = a.merged_from.iter().map(|(&k, &v)| (k, v)).collect();
                 merged_from.sort_unstable();
-                AgentRef {
-                    strategy: a.strategy.save_state().unwrap_or_default(),
+                Ok(AgentRef {
+                    strategy,
                     data: &a.mind.data,
                     goal: a.mind.output.goal(),
                     path: a.mind.output.path(),
                     merged_from,
-                }
+                })
             })
-            .collect();
+            .collect::<Result<Vec<_>>>()?;
         // Shared payloads once each, by identity.
         let mut ids: HashMap<*const Payload, u32> = HashMap::new();
         let mut payloads = Vec::new();

@@ -19,7 +19,6 @@
 //! A file from another format or version, cut short, or changed by one bit is refused
 //! with an error that names it and says why.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -28,6 +27,7 @@ use crate::agent::StrategyRegistry;
 use crate::engine::Simulation;
 use crate::io::config::SimConfig;
 use crate::io::observer::{Observer, ObserverError};
+use crate::io::write_atomically;
 use crate::world::{RoundMetrics, RoundReport};
 use crate::{Error, Result};
 
@@ -279,20 +279,7 @@ pub fn write_checkpoint(
     drop(body);
     let crc = crc32fast::hash(&out);
     out.extend_from_slice(&crc.to_le_bytes());
-    let io = |cause| Error::Io {
-        path: path.to_path_buf(),
-        cause,
-    };
-    let mut tmp_name = path.file_name().map(std::ffi::OsStr::to_os_string).unwrap_or_default();
-    tmp_name.push(".tmp");
-    let tmp = path.with_file_name(tmp_name);
-    let mut file = std::fs::File::create(&tmp).map_err(|cause| Error::Io {
-        path: tmp.clone(),
-        cause,
-    })?;
-    file.write_all(&out).and_then(|()| file.sync_all()).map_err(io)?;
-    drop(file);
-    std::fs::rename(&tmp, path).map_err(io)
+    write_atomically(path, &out)
 }
 
 /// The observer that writes a checkpoint every `every_rounds` rounds (the round count a

@@ -34,6 +34,7 @@ use serde::{Deserialize, Serialize};
 use crate::agent::StrategyRegistry;
 use crate::engine::Simulation;
 use crate::io::config::{SimConfig, line_col};
+use crate::io::write_atomically;
 use crate::world::{METRICS_COLUMNS, MapData};
 use crate::{Error, Result};
 
@@ -642,16 +643,6 @@ fn io_error(path: &Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
         path: path.to_path_buf(),
         cause,
     }
-}
-
-/// Write `bytes` to `path` atomically: a temporary file beside it, then a rename, so that
-/// a reader (or a resumed sweep) never sees half a file.
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).map_err(io_error(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(io_error(path))
 }
 
 /// Run the runs of `shard` (all of them with [`Shard::ALL`]) on the current rayon pool,
