@@ -56,6 +56,12 @@ impl Needs {
         treasures: true,
         messages: true,
     };
+    /// A known map and the obstacles in it: what finding routes in known terrain needs.
+    pub const NAVIGATION: Needs = Needs {
+        known_map: true,
+        obstacles: true,
+        ..Needs::NONE
+    };
     /// Nothing: a blind robot (no sensing energy either).
     pub const NONE: Needs = Needs {
         known_map: false,

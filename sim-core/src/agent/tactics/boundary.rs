@@ -168,11 +168,7 @@ impl Tactic for BoundaryFollowing {
     }
 
     fn needs(&self) -> Needs {
-        Needs {
-            known_map: true,
-            obstacles: true,
-            ..Needs::NONE
-        }
+        Needs::NAVIGATION
     }
 
     crate::serde_state!();

@@ -27,11 +27,27 @@ pub struct EnergyManagement {
     /// in between, the bound decides (erring on the side of turning back early).
     pub replan_every: u64,
     returning: bool,
-    /// The last measured way home: the round, the route and the robot's odometer then.
-    home_route: Option<(u64, Route, f64)>,
+    /// The last measured way home.
+    home_route: Option<WayHome>,
     nav: Navigator,
     /// Rounds in a row its moves home were held back.
     held: u32,
+}
+
+/// A way home as measured: when, the route, and the robot's odometer then.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+struct WayHome {
+    round: u64,
+    route: Route,
+    odometer_m: f64,
+}
+
+impl WayHome {
+    /// An upper bound on the way home once the odometer reads `odometer_m`: this route plus
+    /// the way back along what was walked since.
+    fn bound_m(&self, odometer_m: f64) -> f64 {
+        self.route.length_m + (odometer_m - self.odometer_m)
+    }
 }
 
 impl Default for EnergyManagement {
@@ -64,11 +80,7 @@ impl EnergyManagement {
 
 impl Tactic for EnergyManagement {
     fn needs(&self) -> Needs {
-        Needs {
-            known_map: true,
-            obstacles: true,
-            ..Needs::NONE
-        }
+        Needs::NAVIGATION
     }
 
     crate::serde_state!();
@@ -99,25 +111,29 @@ impl Tactic for EnergyManagement {
                     waypoints: vec![target],
                     length_m: 1.5 * p.distance(target),
                 });
-            (ctx.round, route, odometer)
+            WayHome {
+                round: ctx.round,
+                route,
+                odometer_m: odometer,
+            }
         };
         // Walking one more round away costs up to two rounds of travel on the way back.
         let margin = 2.0 * Self::cost(ctx, ctx.kind.speed_m_per_round);
         let needed = |length_m: f64| Self::cost(ctx, length_m) + margin + self.reserve_fraction * cap;
         let measured = self.home_route.get_or_insert_with(|| measure(ctx));
-        if !self.returning && ctx.me.energy <= needed(measured.1.length_m + (odometer - measured.2)) {
+        if !self.returning && ctx.me.energy <= needed(measured.bound_m(odometer)) {
             // Near the line: measure again, at most every `replan_every` rounds (in between,
             // the bound decides).
-            if ctx.round >= measured.0 + self.replan_every {
+            if ctx.round >= measured.round + self.replan_every {
                 *measured = measure(ctx);
             }
-            if ctx.me.energy <= needed(measured.1.length_m + (odometer - measured.2)) {
+            if ctx.me.energy <= needed(measured.bound_m(odometer)) {
                 self.returning = true;
                 // Home from here, not from where the way was last measured.
-                if measured.0 != ctx.round {
+                if measured.round != ctx.round {
                     *measured = measure(ctx);
                 }
-                self.nav.follow(measured.1.clone());
+                self.nav.follow(measured.route.clone());
             }
         }
         if self.returning {
@@ -130,11 +146,15 @@ impl Tactic for EnergyManagement {
                     .known()
                     .and_then(|k| ctx.nav().route_within(k, p, home.center(), SEARCH_BUDGET))
                 {
-                    self.home_route = Some((ctx.round, route, odometer));
+                    self.home_route = Some(WayHome {
+                        round: ctx.round,
+                        route,
+                        odometer_m: odometer,
+                    });
                 }
             }
             if self.nav.is_idle() {
-                let route = self.home_route.as_ref().expect("measured above").1.clone();
+                let route = self.home_route.as_ref().expect("measured above").route.clone();
                 self.nav.follow(route);
             }
             let step = self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() });

@@ -63,11 +63,7 @@ impl Tactic for FrontierSeeking {
     }
 
     fn needs(&self) -> Needs {
-        Needs {
-            known_map: true,
-            obstacles: true,
-            ..Needs::NONE
-        }
+        Needs::NAVIGATION
     }
 
     crate::serde_state!();

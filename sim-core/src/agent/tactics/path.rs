@@ -89,11 +89,7 @@ impl Tactic for ShortestPath {
     }
 
     fn needs(&self) -> Needs {
-        Needs {
-            known_map: true,
-            obstacles: true,
-            ..Needs::NONE
-        }
+        Needs::NAVIGATION
     }
 
     crate::serde_state!();

@@ -115,11 +115,7 @@ impl Tactic for Teaming {
     }
 
     fn needs(&self) -> Needs {
-        Needs {
-            robots: true,
-            messages: true,
-            ..Needs::NONE
-        }
+        self.0.needs()
     }
 
     crate::serde_state!();
