@@ -678,6 +678,42 @@ proptest! {
 }
 
 proptest! {
+    #![proptest_config(config(256))]
+
+    /// Issue 11: the cells of a small rectangle, visited by descents to its blocks (the
+    /// robots' move tests), are exactly the brute-force raster's; rectangles over more
+    /// than 2 × 2 blocks, and trees too small for blocks, are refused without a visit.
+    #[test]
+    fn issue11_cells_in_small_rectangles_match_the_raster(
+        w in world_strategy(),
+        corner in (0u32..64, 0u32..64),
+        size in (0u32..20, 0u32..20),
+        value in any::<bool>(),
+    ) {
+        let tree = RegionQuadtree::from_bitgrid(w.grid, &w.bits, true).unwrap();
+        let side = w.grid.side_cells();
+        let (x0, y0) = (corner.0 % side, corner.1 % side);
+        let (x1, y1) = ((x0 + size.0).min(side - 1), (y0 + size.1).min(side - 1));
+        let mut got = BTreeSet::new();
+        let flow = tree.visit_cells_in_rect((x0, y0), (x1, y1), value, |x, y| {
+            assert!(got.insert((x, y)), "({x}, {y}) visited twice");
+            std::ops::ControlFlow::Continue(())
+        });
+        let blocks = |a: u32, b: u32| (b >> 3) - (a >> 3) + 1;
+        if w.grid.depth() < 3 || blocks(x0, x1) > 2 || blocks(y0, y1) > 2 {
+            prop_assert!(flow.is_none() && got.is_empty());
+        } else {
+            prop_assert!(flow.is_some_and(|f| f.is_continue()));
+            let want: BTreeSet<(u32, u32)> = (y0..=y1)
+                .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+                .filter(|&(x, y)| w.blocked(x, y) == value)
+                .collect();
+            prop_assert_eq!(got, want);
+        }
+    }
+}
+
+proptest! {
     #![proptest_config(config(96))]
 
     #[test]

@@ -256,6 +256,40 @@ mod rows_serde {
 }
 
 impl CellRows {
+    /// No rows.
+    pub fn empty() -> Self {
+        Self {
+            x0: 0,
+            y0: 0,
+            len: 0,
+            rows: [0; 64],
+        }
+    }
+
+    /// Make these rows a copy of `other`, writing only the rows in use.
+    pub fn assign(&mut self, other: &CellRows) {
+        if self.len > other.len {
+            self.rows[other.len..self.len].fill(0);
+        }
+        (self.x0, self.y0, self.len) = (other.x0, other.y0, other.len);
+        self.rows[..other.len].copy_from_slice(&other.rows[..other.len]);
+    }
+
+    /// Row `y`'s cells with bit `i` for column `x0 + i` (none outside the rows).
+    #[inline]
+    pub fn row_from(&self, y: u32, x0: u32) -> u64 {
+        let Some(j) = y.checked_sub(self.y0).filter(|&j| (j as usize) < self.len) else {
+            return 0;
+        };
+        let row = self.rows[j as usize];
+        // Bit `i` here is column `self.x0 + i`.
+        match i64::from(self.x0) - i64::from(x0) {
+            d @ 0..=63 => row << d,
+            d @ -63..=-1 => row >> -d,
+            _ => 0,
+        }
+    }
+
     /// Take out of these rows every cell that `other` holds.
     pub fn remove(&mut self, other: &CellRows) {
         // Bit `i` of `other`'s row is column `other.x0 + i`, here bit `i - dx`.
@@ -280,29 +314,43 @@ impl Disc {
     /// The cells of `grid` that lie wholly inside the disc and inside `clip`, as row masks,
     /// if the disc's bounds span at most 64 cells a side of the covering square (else
     /// `None`). Exactly the cells that [`Shape::classify_cells`] of the disc (clipped by
-    /// `clip`) reports contained, worked out once for the whole disc: the distances along
-    /// each column and row of cell edges once, then one test per cell (issue 11: a robot's
-    /// view, classified block by block, repeated that work for every block it touched).
+    /// `clip`) reports contained, worked out once for the whole disc: each row's run of
+    /// contained cells found from the last row's by a few tests of its ends (issue 11: a
+    /// robot's view, classified block by block, repeated that work for every block it
+    /// touched).
     pub fn contained_rows(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb) -> Option<CellRows> {
+        let mut out = CellRows::empty();
+        self.contained_rows_into(grid, clip, &mut out).then_some(out)
+    }
+
+    /// [`contained_rows`](Self::contained_rows) into `out` (its rows past the new length
+    /// cleared), returning `false` for a disc too wide (then `out` holds no rows). Nothing
+    /// is allocated and only the rows in use are written (issue 11: zeroing and copying
+    /// 64-row buffers, and per-column tables, were a third of marking a robot's view).
+    pub fn contained_rows_into(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
+        let old_len = out.len;
+        let fits = self.contained_rows_unclean(grid, clip, out);
+        if out.len < old_len {
+            out.rows[out.len..old_len].fill(0);
+        }
+        fits
+    }
+
+    fn contained_rows_unclean(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
         let b = self.bounds();
         let side = grid.side_cells();
         let lo = (b.min - grid.origin()) / grid.cell_m();
         let hi = (b.max - grid.origin()) / grid.cell_m();
-        let mut out = CellRows {
-            x0: 0,
-            y0: 0,
-            len: 0,
-            rows: [0; 64],
-        };
+        (out.x0, out.y0, out.len) = (0, 0, 0);
         if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < f64::from(side) && lo.y < f64::from(side)) {
-            return Some(out);
+            return true;
         }
         // Saturating casts clamp to the covering square; a cell whose edge the bounds merely
         // touch is included, so no cell the disc may contain is left out.
-        let cell = |v: f64| (v.floor().max(0.0) as u32).min(side - 1);
+        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
         let (x0, x1, y0, y1) = (cell(lo.x), cell(hi.x), cell(lo.y), cell(hi.y));
         if x1 - x0 >= 64 || y1 - y0 >= 64 {
-            return None;
+            return false;
         }
         let r2 = self.radius * self.radius;
         // Per column (and row): squared distances to the nearest point and to the farthest
@@ -323,14 +371,13 @@ impl Disc {
         // around the view was a fifth of a walker's round).
         let mid = (1..width).fold(0, |m, i| if far_x[i] < far_x[m] { i } else { m });
         let (mut lo, mut hi) = (mid, mid);
-        out.x0 = x0;
-        out.y0 = y0;
-        out.len = len;
+        (out.x0, out.y0, out.len) = (x0, y0, len);
         for j in 0..len {
             let k = y0 + j as u32;
             let (a, b) = (grid.corner(0, k).y, grid.corner(0, k + 1).y);
             let (ny, fy) = edge_distances(self.center.y, a, b);
             let inside = |i: usize| far_x[i] + fy <= r2 && near_x[i] + ny < r2;
+            out.rows[j] = 0;
             if !(clip.min.y <= a && b <= clip.max.y && inside(mid)) {
                 continue;
             }
@@ -355,7 +402,7 @@ impl Disc {
             let run = (u64::MAX >> (63 - (hi - lo))) << lo;
             out.rows[j] = run & cols_within;
         }
-        Some(out)
+        true
     }
 }
 
@@ -596,6 +643,16 @@ impl<S: Shape> Shape for Clipped<S> {
             max: s.max.min(self.clip.max).max(s.min.max(self.clip.min)),
         }
     }
+}
+
+/// `v.floor()` for the cell arithmetic of hot paths, without the libm call that the
+/// baseline x86-64 target makes of it (issue 11: `floor` was 2 % of the dense random
+/// walk). Exact for |v| < 2⁶³; beyond that (and for NaN) the callers' saturating casts
+/// clamp anyway.
+#[inline]
+pub(crate) fn floor(v: f64) -> f64 {
+    let t = v as i64 as f64;
+    if t > v { t - 1.0 } else { t }
 }
 
 /// Squared distance from `p` to the segment `ab`.

@@ -86,26 +86,24 @@ impl KnownMap {
         // views take that walk, which skips what the last view marked.
         let clip = self.grid().extent();
         let mut added = 0;
-        let rows = disc.contained_rows(self.grid(), &clip);
-        let by_rows = rows.as_ref().is_some_and(|rows| {
-            // Only the cells the last view did not hold: a walker's view moves a fraction
-            // of itself a round, so most rounds that is a thin crescent, or nothing.
-            let mut fresh = rows.clone();
-            if let Some(last) = &self.last_rows {
-                fresh.remove(last);
-            }
-            self.tree.fill_rows_reporting(&fresh, true, |set| {
-                added += set.cells();
-                newly_known(set);
-            })
-        });
+        let mut rows = CellRows::empty();
+        // Only the cells the last view did not hold: a walker's view moves a fraction of
+        // itself a round, so most rounds that is a thin crescent, or nothing.
+        let by_rows = disc.contained_rows_into(self.grid(), &clip, &mut rows)
+            && self
+                .tree
+                .fill_new_rows_reporting(&rows, self.last_rows.as_deref(), true, |set| {
+                    added += set.cells();
+                    newly_known(set);
+                });
         self.known_cells += added;
-        match (by_rows, rows) {
-            (true, Some(rows)) => match &mut self.last_rows {
-                Some(last) => **last = rows,
+        if by_rows {
+            match &mut self.last_rows {
+                Some(last) => last.assign(&rows),
                 None => self.last_rows = Some(Box::new(rows)),
-            },
-            _ => self.last_rows = None,
+            }
+        } else {
+            self.last_rows = None;
         }
         if !by_rows {
             let beyond = DiscBeyond {

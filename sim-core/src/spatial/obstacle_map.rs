@@ -9,7 +9,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use crate::Result;
-use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_box_distance_squared};
+use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, floor, segment_box_distance_squared};
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
@@ -121,7 +121,64 @@ impl ObstacleMap {
     /// Whether a disc of `radius_m` can move in a straight line from `a` to `b` without
     /// overlapping an obstacle or leaving the map (the test behind every robot move).
     pub fn is_swept_disc_free(&self, a: DVec2, b: DVec2, radius_m: f64) -> bool {
-        self.shape_free(&Capsule { a, b, radius: radius_m })
+        let capsule = Capsule { a, b, radius: radius_m };
+        if !self.inside_map(&capsule) {
+            return false;
+        }
+        match self.capsule_free_by_cells(&capsule) {
+            Some(free) => free,
+            None => !self.tree.any_leaf_in(&capsule, true),
+        }
+    }
+
+    /// The swept-disc test from the blocked cells around a short move, when they are few
+    /// and none lies too close to the radius to call (`None` otherwise: the tree walk
+    /// decides). A capsule meets a blocked leaf exactly when it meets one of its cells, and
+    /// a distance more than a part in 10⁷ off the radius decides the same whatever the
+    /// rounding of either box's arithmetic, so the answer is the walk's. The capsule must
+    /// lie inside the map.
+    fn capsule_free_by_cells(&self, capsule: &Capsule) -> Option<bool> {
+        if capsule.radius <= 0.0 {
+            return None;
+        }
+        let r2 = capsule.radius * capsule.radius;
+        let (clearly_hit, clearly_clear) = (r2 * (1.0 - 1e-7), r2 * (1.0 + 1e-7));
+        let mut undecided = false;
+        let flow = self.visit_blocked_cells_near(&capsule.bounds(), |cell| {
+            let d = segment_box_distance_squared(capsule.a, capsule.b, &cell);
+            if d < clearly_hit {
+                return ControlFlow::Break(());
+            }
+            undecided |= d <= clearly_clear;
+            ControlFlow::Continue(())
+        })?;
+        if flow.is_break() {
+            Some(false)
+        } else if undecided {
+            None
+        } else {
+            Some(true)
+        }
+    }
+
+    /// Visit the world box of every blocked cell that `area` (inside the map), widened by
+    /// its rounding margin, touches, if they lie within 2 × 2 blocks of the tree (`None`
+    /// otherwise, visiting nothing; see [`RegionQuadtree::visit_cells_in_rect`]).
+    fn visit_blocked_cells_near(
+        &self,
+        area: &Aabb,
+        mut visit: impl FnMut(Aabb) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
+        let grid = self.grid();
+        let eps = DVec2::splat(area.rounding_margin());
+        let side = grid.side_cells();
+        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
+        let lo = (area.min - eps - grid.origin()) / grid.cell_m();
+        let hi = (area.max + eps - grid.origin()) / grid.cell_m();
+        self.tree
+            .visit_cells_in_rect((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y)), true, |x, y| {
+                visit(grid.square(x, y, 0))
+            })
     }
 
     /// How far along move `d` from `from` a disc of `radius_m` gets before an obstacle or the
@@ -146,10 +203,23 @@ impl ObstacleMap {
                 b: from + d,
                 radius: radius_m * (1.0 + 1e-6) + 1e-9,
             };
-            let _ = self.tree.visit_leaves_in(&reach, true, |_, b| {
-                near.push(b);
-                ControlFlow::Continue(())
-            });
+            // The blocked cells near a short move, or else the blocked leaves: a step meets
+            // a leaf exactly when it meets one of the leaf's cells.
+            let by_cells = self
+                .inside_map(&reach)
+                .then(|| {
+                    self.visit_blocked_cells_near(&reach.bounds(), |b| {
+                        near.push(b);
+                        ControlFlow::Continue(())
+                    })
+                })
+                .flatten();
+            if by_cells.is_none() {
+                let _ = self.tree.visit_leaves_in(&reach, true, |_, b| {
+                    near.push(b);
+                    ControlFlow::Continue(())
+                });
+            }
         }
         let r2 = radius_m * radius_m;
         // Distances this far from the radius decide a step whatever rounding the exact test's

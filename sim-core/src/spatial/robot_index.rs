@@ -10,6 +10,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec2;
 
+use crate::spatial::geometry::floor;
 use crate::spatial::ids::RobotId;
 
 #[derive(Clone, Copy, Debug)]
@@ -53,7 +54,7 @@ impl RobotIndex {
     #[inline]
     fn cell_of(&self, p: DVec2) -> (i32, i32) {
         // `as` saturates, so far-away or non-finite positions land in edge cells, never UB.
-        ((p.x / self.cell_m).floor() as i32, (p.y / self.cell_m).floor() as i32)
+        (floor(p.x / self.cell_m) as i32, floor(p.y / self.cell_m) as i32)
     }
 
     #[inline]

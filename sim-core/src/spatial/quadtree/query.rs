@@ -218,6 +218,68 @@ impl RegionQuadtree {
         n == super::FULL
     }
 
+    /// Visit the cells `(x, y)` holding `value` in the cell rectangle `x0..=x1` × `y0..=y1`
+    /// (inside the covering square), block by block, or return `None` (visiting nothing) if
+    /// the rectangle meets more than 2 × 2 blocks or the tree has none. One integer descent
+    /// per block and a mask, no shape tests: what a robot's move test needs to learn about
+    /// the few cells around it (issue 11: walking down from the root with box tests at every
+    /// level was a fifth of the dense random walk).
+    pub fn visit_cells_in_rect(
+        &self,
+        (x0, y0): (u32, u32),
+        (x1, y1): (u32, u32),
+        value: bool,
+        mut visit: impl FnMut(u32, u32) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
+        debug_assert!(x0 <= x1 && y0 <= y1 && x1 < self.grid.side_cells() && y1 < self.grid.side_cells());
+        if !self.packed
+            || (x1 >> BLOCK_LEVEL) - (x0 >> BLOCK_LEVEL) > 1
+            || (y1 >> BLOCK_LEVEL) - (y0 >> BLOCK_LEVEL) > 1
+        {
+            return None;
+        }
+        for by in (y0 >> BLOCK_LEVEL)..=(y1 >> BLOCK_LEVEL) {
+            for bx in (x0 >> BLOCK_LEVEL)..=(x1 >> BLOCK_LEVEL) {
+                let (ox, oy) = (bx << BLOCK_LEVEL, by << BLOCK_LEVEL);
+                let cells = match self.descend_to(Square {
+                    x: ox,
+                    y: oy,
+                    level: BLOCK_LEVEL,
+                }) {
+                    Node::Leaf(v) => {
+                        if v == value {
+                            u64::MAX
+                        } else {
+                            continue;
+                        }
+                    }
+                    Node::Bits { bits, .. } => {
+                        if value {
+                            bits
+                        } else {
+                            !bits
+                        }
+                    }
+                    Node::Group(_) => unreachable!("packed trees have blocks at their block level"),
+                };
+                // The rectangle's part of this block, row-major, then in the block's Z order.
+                let (cx0, cx1) = (x0.max(ox) - ox, x1.min(ox + 7) - ox);
+                let (cy0, cy1) = (y0.max(oy) - oy, y1.min(oy + 7) - oy);
+                let row = (0xFFu64 >> (7 - (cx1 - cx0))) << cx0;
+                let rows = (u64::MAX >> (8 * (7 - (cy1 - cy0)))) << (8 * cy0);
+                let mut hits = cells & block::z_order(rows & (row * 0x0101_0101_0101_0101));
+                while hits != 0 {
+                    let (dx, dy) = block::cell_at(hits.trailing_zeros());
+                    hits &= hits - 1;
+                    if visit(ox + dx, oy + dy).is_break() {
+                        return Some(ControlFlow::Break(()));
+                    }
+                }
+            }
+        }
+        Some(ControlFlow::Continue(()))
+    }
+
     /// The value at world point `p`, or `None` outside the covering square.
     pub fn value_at(&self, p: DVec2) -> Option<bool> {
         self.grid.cell_of(p).map(|(x, y)| self.cell_value(x, y))

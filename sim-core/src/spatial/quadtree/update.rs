@@ -53,9 +53,67 @@ impl RegionQuadtree {
     /// whole square's as whole squares, a block's as one set), by one descent along the
     /// square's coordinates (see [`fill_square_reporting`](Self::fill_square_reporting)).
     pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
+        if !set.is_whole() && self.packed {
+            self.fill_block_cells(set.square(), set.bits, value, &mut changed);
+            return;
+        }
         let root = self.root_square();
         let before = self.root;
         self.root = self.fill_cells_node(before, root, set, leaf(value), &mut changed);
+    }
+
+    /// Set the cells `cover` (Z order) of the block at `sq` to `value`: a loop down the
+    /// block's coordinates that remembers its way, then back up only as far as something
+    /// changed (issue 11: the recursive descent wrote back and tested for merging at every
+    /// level, ≈ 300 instructions a block, and marking a view touches several blocks a round).
+    /// A leaf of the other value on the way is split along the path, as the recursive
+    /// descent would. Packed trees only.
+    fn fill_block_cells(&mut self, sq: Square, cover: u64, value: bool, changed: &mut impl FnMut(CellSet)) {
+        debug_assert!(self.packed && sq.level == BLOCK_LEVEL);
+        let want = leaf(value);
+        let mut path = [(0u32, 0usize); MAX_DEPTH as usize];
+        let mut depth = 0;
+        let mut n = self.root;
+        let mut level = self.grid.depth();
+        while level > BLOCK_LEVEL && !is_leaf(n) {
+            level -= 1;
+            let i = (((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1)) as usize;
+            path[depth] = (n, i);
+            depth += 1;
+            n = self.groups[n as usize][i];
+        }
+        if n == want {
+            return;
+        }
+        // `n` is a block, or a leaf of the other value at `level` (≥ the block's).
+        let bits = self.bits_of(if level == BLOCK_LEVEL { n } else { leaf(!value) }, BLOCK_LEVEL);
+        let filled = if value { bits | cover } else { bits & !cover };
+        if filled == bits {
+            return;
+        }
+        changed(CellSet::of_block(sq, filled ^ bits));
+        let old = n;
+        let mut new = self.store_bits(if level == BLOCK_LEVEL { n } else { leaf(!value) }, filled);
+        // Split a leaf above the block: a group per level, the rest of each still that leaf.
+        for l in BLOCK_LEVEL + 1..=level {
+            let i = (((sq.x >> (l - 1)) & 1) | (((sq.y >> (l - 1)) & 1) << 1)) as usize;
+            let mut kids = [old; 4];
+            kids[i] = new;
+            new = self.make_node(kids);
+        }
+        // Back up: write the changed child, and merge groups that became one leaf.
+        let mut old = old;
+        while new != old {
+            let Some(d) = depth.checked_sub(1) else {
+                self.root = new;
+                break;
+            };
+            depth = d;
+            let (g, i) = path[d];
+            self.groups[g as usize][i] = new;
+            old = g;
+            new = if is_leaf(new) { self.merge_if_uniform(g) } else { g };
+        }
     }
 
     fn fill_cells_node(
@@ -103,112 +161,78 @@ impl RegionQuadtree {
         }
     }
 
-    /// Set the cells of `cells` to `value` in one walk that goes only where they are (integer
-    /// tests, no shapes), calling `changed` with each block's cells that switched. Trees
-    /// with blocks only (`false`, nothing done, otherwise).
+    /// Set the cells of `cells` to `value`, calling `changed` with each block's cells that
+    /// switched; see [`fill_new_rows_reporting`](Self::fill_new_rows_reporting). Trees with
+    /// blocks only (`false`, nothing done, otherwise).
+    pub fn fill_rows_reporting(&mut self, cells: &CellRows, value: bool, changed: impl FnMut(CellSet)) -> bool {
+        self.fill_new_rows_reporting(cells, None, value, changed)
+    }
+
+    /// Set the cells of `cells` that `seen` does not hold to `value`, calling `changed` with
+    /// each block's cells that switched: the rows cut into 8 × 8 block masks in one pass,
+    /// then one descent along coordinates per block with cells to set (integer steps, no
+    /// shapes), stopping at squares that hold `value` already. Trees with blocks only
+    /// (`false`, nothing done, otherwise).
     ///
     /// Issue 11: a robot's view, a few blocks across, was marked by a shape-driven walk
     /// from the root along its rim; with its cells worked out at once
-    /// ([`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows)) marking
-    /// is a few descents that stop at squares already known.
-    pub fn fill_rows_reporting(&mut self, cells: &CellRows, value: bool, mut changed: impl FnMut(CellSet)) -> bool {
+    /// ([`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows)) and the
+    /// last view's left out as the rows are cut, marking is a few descents. (A walk from
+    /// the deepest group holding every cell visited all four children at each level below
+    /// it, and a view near the middle of the map, where homes usually are, straddles the
+    /// root's own halves.)
+    pub fn fill_new_rows_reporting(
+        &mut self,
+        cells: &CellRows,
+        seen: Option<&CellRows>,
+        value: bool,
+        mut changed: impl FnMut(CellSet),
+    ) -> bool {
         if !self.packed {
             return false;
         }
-        let any = cells.rows[..cells.len].iter().fold(0, |a, &r| a | r);
-        if any == 0 {
+        if cells.len == 0 {
             return true;
         }
-        // The rectangle the cells span (a disc's outer rows and columns hold none).
-        let rows = &cells.rows[..cells.len];
-        let first = rows.iter().position(|&r| r != 0).unwrap_or(0);
-        let last = rows.iter().rposition(|&r| r != 0).unwrap_or(0);
-        let area = RowArea {
-            cells,
-            x_start: cells.x0 + any.trailing_zeros(),
-            x_end: cells.x0 + (64 - any.leading_zeros()),
-            y_start: cells.y0 + first as u32,
-            y_end: cells.y0 + last as u32 + 1,
-        };
-        // Down to the deepest group whose one child holds every cell, remembering the way
-        // (the walk would test all four children at each of these levels).
-        let want = leaf(value);
-        let mut path = [(0u32, 0usize); MAX_DEPTH as usize];
-        let mut depth = 0;
-        let (mut n, mut at) = (self.root, self.root_square());
-        while at.level > BLOCK_LEVEL && !is_leaf(n) && !is_block(n) {
-            let Some(i) = area.child_holding(at) else { break };
-            path[depth] = (n, i);
-            depth += 1;
-            n = self.groups[n as usize][i];
-            at = at.child(i);
-        }
-        if n == want {
-            return true;
-        }
-        let mut new = self.fill_rows_node(n, at, &area, value, &mut changed);
-        // Back up the way: write the changed child, and merge groups that became uniform.
-        let mut old = n;
-        while new != old {
-            let Some(d) = depth.checked_sub(1) else {
-                self.root = new;
-                break;
-            };
-            depth = d;
-            let (g, i) = path[d];
-            self.groups[g as usize][i] = new;
-            old = g;
-            new = self.merge_if_uniform(g);
-        }
-        true
-    }
-
-    fn fill_rows_node(
-        &mut self,
-        n: NodeRef,
-        at: Square,
-        area: &RowArea,
-        value: bool,
-        changed: &mut impl FnMut(CellSet),
-    ) -> NodeRef {
-        if at.level == BLOCK_LEVEL {
-            let cover = block::z_order(area.block_mask(at));
-            let bits = self.bits_of(n, BLOCK_LEVEL);
-            let set = if value { bits | cover } else { bits & !cover };
-            if set == bits {
-                return n;
-            }
-            changed(CellSet::of_block(at, set ^ bits));
-            return self.store_bits(n, set);
-        }
-        // Children the cells miss, or already `value`, are settled here without a call.
-        let want = leaf(value);
-        if is_leaf(n) {
-            // A leaf of the other value splits only if something changes below it.
-            let kids = [0, 1, 2, 3].map(|i| {
-                let c = at.child(i);
-                if area.meets(c) {
-                    self.fill_rows_node(n, c, area, value, changed)
-                } else {
-                    n
+        // Bit `i` of a row is column `x0 + i`; shifted by `lead`, bit `8 b + k` is column
+        // `k` of block column `b` from `base_x` (64 + 7 bits: nine blocks at most).
+        let base_x = cells.x0 & !7;
+        let lead = cells.x0 - base_x;
+        let (y0, y_end) = (cells.y0, cells.y0 + cells.len as u32);
+        for by in (y0 >> BLOCK_LEVEL)..=((y_end - 1) >> BLOCK_LEVEL) {
+            let mut masks = [0u64; 9];
+            let mut any = 0u128;
+            for y in (by << BLOCK_LEVEL).max(y0)..((by + 1) << BLOCK_LEVEL).min(y_end) {
+                let mut row = cells.rows[(y - y0) as usize];
+                if let Some(seen) = seen {
+                    row &= !seen.row_from(y, cells.x0);
                 }
-            });
-            return if kids == [n; 4] { n } else { self.make_node(kids) };
-        }
-        let mut any = false;
-        for i in 0..4 {
-            let k = self.groups[n as usize][i];
-            let c = at.child(i);
-            if k == want || !area.meets(c) {
+                if row == 0 {
+                    continue;
+                }
+                let wide = u128::from(row) << lead;
+                any |= wide;
+                let at = 8 * (y & 7);
+                for b in (wide.trailing_zeros() / 8)..=(wide.ilog2() / 8) {
+                    masks[b as usize] |= ((wide >> (8 * b)) as u64 & 0xFF) << at;
+                }
+            }
+            if any == 0 {
                 continue;
             }
-            let k2 = self.fill_rows_node(k, c, area, value, changed);
-            if k2 != k {
-                self.groups[n as usize][i] = k2;
-                any = true;
+            for b in (any.trailing_zeros() / 8)..=(any.ilog2() / 8) {
+                let mask = masks[b as usize];
+                if mask != 0 {
+                    let sq = Square {
+                        x: base_x + 8 * b,
+                        y: by << BLOCK_LEVEL,
+                        level: BLOCK_LEVEL,
+                    };
+                    self.fill_block_cells(sq, block::z_order(mask), value, &mut changed);
+                }
             }
         }
-        if any { self.merge_if_uniform(n) } else { n }
+        true
     }
 
     /// Set one cell of the covering square.
@@ -501,72 +525,5 @@ fn report_bits(bits: u64, sq: Square, changed: &mut impl FnMut(Square)) {
     }
     for i in 0..4 {
         report_bits(block::child_bits(bits, sq.level, i), sq.child(i), changed);
-    }
-}
-
-/// The cells of a [`CellRows`] with their extent, for [`RegionQuadtree::fill_rows_reporting`].
-struct RowArea<'a> {
-    cells: &'a CellRows,
-    /// The first column holding a cell.
-    x_start: u32,
-    /// The first row holding a cell.
-    y_start: u32,
-    /// One past the last column holding a cell.
-    x_end: u32,
-    /// One past the last row.
-    y_end: u32,
-}
-
-impl RowArea<'_> {
-    /// The child of `sq` that holds every cell of the rectangle, if one does.
-    #[inline]
-    fn child_holding(&self, sq: Square) -> Option<usize> {
-        let mid_x = sq.x + (1 << (sq.level - 1));
-        let mid_y = sq.y + (1 << (sq.level - 1));
-        let east = if self.x_start >= mid_x {
-            1
-        } else if self.x_end <= mid_x {
-            0
-        } else {
-            return None;
-        };
-        let north = if self.y_start >= mid_y {
-            2
-        } else if self.y_end <= mid_y {
-            0
-        } else {
-            return None;
-        };
-        Some(east | north)
-    }
-
-    /// Whether square `sq` shares cells with the rows' rectangle.
-    #[inline]
-    fn meets(&self, sq: Square) -> bool {
-        let side = sq.side_cells();
-        sq.x < self.x_end && self.x_start < sq.x + side && sq.y < self.y_end && self.y_start < sq.y + side
-    }
-
-    /// The cells of the block at `sq` (8 × 8) as a row-major mask (bit `8 j + i`).
-    #[inline]
-    fn block_mask(&self, sq: Square) -> u64 {
-        let mut mask = 0u64;
-        for j in 0..8 {
-            let y = sq.y + j;
-            if y < self.y_start || y >= self.y_end {
-                continue;
-            }
-            let row = self.cells.rows[(y - self.cells.y0) as usize];
-            // Columns sq.x .. sq.x + 8 of the row, whose bit 0 is column x0.
-            let byte = if sq.x >= self.cells.x0 {
-                let s = sq.x - self.cells.x0;
-                if s < 64 { (row >> s) & 0xFF } else { 0 }
-            } else {
-                let s = self.cells.x0 - sq.x;
-                if s < 8 { (row << s) & 0xFF } else { 0 }
-            };
-            mask |= byte << (8 * j);
-        }
-        mask
     }
 }
