@@ -12,7 +12,7 @@ mod strategy;
 mod tactics;
 mod testing;
 
-pub use ctx::{Ctx, Mind, StrategyOutput, WorldView};
+pub use ctx::{Ctx, Mind, RobotRng, StrategyOutput, WorldView};
 pub use params::Params;
 pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};

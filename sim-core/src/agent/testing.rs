@@ -3,9 +3,8 @@
 
 use glam::DVec2;
 use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
-use crate::agent::ctx::{Ctx, Mind, WorldView};
+use crate::agent::ctx::{Ctx, Mind, RobotRng, WorldView};
 use crate::agent::perception::DataModule;
 use crate::spatial::{Aabb, Grid, KnownMap, LazyNavGraph, ObstacleMap, RobotId};
 use crate::world::{Action, HomeBase, Outcome, Retention, Robot, RobotType};
@@ -133,7 +132,7 @@ impl TestWorld {
     /// world's seed and round).
     pub fn ctx(&mut self) -> Ctx<'_> {
         let world = WorldView::new(&self.obstacles, &self.nav, self.home, &self.types);
-        let rng = ChaCha8Rng::seed_from_u64(self.seed ^ self.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let rng = RobotRng::seed_from_u64(self.seed ^ self.round.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         Ctx::new(self.round, &self.robot, &self.types[0], world, rng, &mut self.mind)
     }
 

@@ -8,10 +8,9 @@ use std::time::Duration;
 
 use glam::DVec2;
 use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
 use crate::Result;
-use crate::agent::{DataModule, Mind, Needs, Strategy};
+use crate::agent::{DataModule, Mind, Needs, RobotRng, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
     CellSet, Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex,
@@ -358,7 +357,7 @@ impl Simulation {
     }
 
     /// The random generator of a robot in a round: a function of (seed, robot, round) only.
-    pub(super) fn rng_for(seed: u64, robot: RobotId, round: u64) -> ChaCha8Rng {
+    pub(super) fn rng_for(seed: u64, robot: RobotId, round: u64) -> RobotRng {
         let mut x = seed ^ 0x9E37_79B9_7F4A_7C15;
         for v in [u64::from(robot.get()), round] {
             // splitmix64 steps
@@ -367,7 +366,7 @@ impl Simulation {
             x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             x ^= x >> 31;
         }
-        ChaCha8Rng::seed_from_u64(x)
+        RobotRng::seed_from_u64(x)
     }
 }
 

@@ -247,6 +247,39 @@ impl ObstacleMap {
             }
             nearest > clearly_clear || exact(t)
         };
+        // The bisection ends at the largest k / 2²⁴ (0 < k < 2²⁴) that `free` accepts, or 0,
+        // as a longer step sweeps a superset of a shorter one. So start where the disc's
+        // centre first comes within the radius of a near box, and test the steps around it
+        // (issue 11: the bisection's 24 tests were a tenth of the dense random walk, where
+        // walkers run into walls all the time); only if that takes long, bisect.
+        if quick && !near.is_empty() {
+            const STEPS: f64 = (1u32 << 24) as f64;
+            const LAST: i64 = (1 << 24) - 1;
+            let touch = near
+                .iter()
+                .map(|b| first_touch(from, d, radius_m, b))
+                .fold(1.0, f64::min);
+            let at = |k: i64| k as f64 / STEPS;
+            let mut k = ((touch * STEPS) as i64).clamp(0, LAST);
+            let mut tests = 0;
+            if k >= 1 && free(at(k)) {
+                while k < LAST && tests < 4 && free(at(k + 1)) {
+                    k += 1;
+                    tests += 1;
+                }
+                if k == LAST || tests < 4 {
+                    return at(k);
+                }
+            } else {
+                while k >= 1 && tests < 4 && !free(at(k)) {
+                    k -= 1;
+                    tests += 1;
+                }
+                if k == 0 || tests < 4 {
+                    return at(k);
+                }
+            }
+        }
         let (mut lo, mut hi) = (0.0, 1.0);
         for _ in 0..24 {
             let mid = 0.5 * (lo + hi);
@@ -341,4 +374,46 @@ impl ObstacleMap {
             None => Ok(()),
         }
     }
+}
+
+/// Where a disc of `radius` whose centre moves from `from` by `d` first comes within the
+/// radius of box `b`, as a fraction of `d` (0 if it starts there, infinite if never): the
+/// entry of the ray into the box grown by the radius (two slabs and four corner discs). An
+/// estimate for [`ObstacleMap::swept_disc_free_fraction`], which checks it.
+fn first_touch(from: DVec2, d: DVec2, radius: f64, b: &Aabb) -> f64 {
+    if b.distance_squared_to(from) < radius * radius {
+        return 0.0;
+    }
+    let (rx, ry) = (DVec2::new(radius, 0.0), DVec2::new(0.0, radius));
+    let slabs = [
+        Aabb {
+            min: b.min - rx,
+            max: b.max + rx,
+        },
+        Aabb {
+            min: b.min - ry,
+            max: b.max + ry,
+        },
+    ];
+    let mut t = f64::INFINITY;
+    for slab in &slabs {
+        if let Some((t0, _)) = clip_line(from, d, 0.0, f64::INFINITY, slab) {
+            t = t.min(t0);
+        }
+    }
+    let a = d.length_squared();
+    if a > 0.0 {
+        for c in b.corners() {
+            let f = from - c;
+            let half_b = d.dot(f);
+            let disc = half_b * half_b - a * (f.length_squared() - radius * radius);
+            if disc >= 0.0 {
+                let t1 = (-half_b - disc.sqrt()) / a;
+                if t1 >= 0.0 {
+                    t = t.min(t1);
+                }
+            }
+        }
+    }
+    t
 }
