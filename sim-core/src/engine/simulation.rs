@@ -375,11 +375,11 @@ impl Simulation {
     pub(super) fn rebuild_robot_indexes(&mut self) {
         let positions = || self.robots.iter().map(|r| (r.id, r.position));
         self.robot_index.rebuild(positions(), index_cell_m(&self.types));
-        // Cells as wide as the widest contact query (`Bodies::near_move`: two radii and two
-        // moves from the start, both ways), so that a query covers at most 2 × 2 cells
-        // (issue 11: with cells a third of that, the 9 to 25 cells of each query were 15 %
-        // of the dense random walk).
-        let reach = 2.0 * (2.0 * self.max_radius_m + 2.0 * self.max_speed_m);
+        // Cells about the radius of the widest contact query (`Bodies::near_move`: two radii
+        // and a move around the middle of a move), so that a query covers about 3 × 3 cells
+        // (issue 11: the 9 to 25 cells of each query were 15 % of the dense random walk;
+        // with twice that size, crowds put a hundred robots in the 2 × 2 cells of a query).
+        let reach = 2.0 * self.max_radius_m + 2.0 * self.max_speed_m;
         self.body_index.rebuild(positions(), reach.clamp(0.25, 64.0));
     }
 }

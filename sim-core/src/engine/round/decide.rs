@@ -159,13 +159,7 @@ fn plan_move(
     }
     let d = move_within_means(from, to, kind, energy);
     let free = trim_to_obstacles(obstacles, from, d, kind.radius_m);
-    bodies.near_move(
-        robot.id.index(),
-        from,
-        free.length(),
-        kind.radius_m,
-        &mut agent.planned_near,
-    );
+    bodies.near_move(robot.id.index(), from, free, kind.radius_m, &mut agent.planned_near);
     Some(PlannedMove {
         from,
         d,

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::agent::Needs;
 use crate::engine::simulation::{Outgoing, Simulation};
-use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId};
+use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
 use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
 
 impl Simulation {
@@ -184,7 +184,7 @@ impl Simulation {
             }
             _ => {
                 let d = trim_to_obstacles(&self.map.obstacles, from, d, kind.radius_m);
-                self.bodies().near_move(i, from, d.length(), kind.radius_m, &mut near);
+                self.bodies().near_move(i, from, d, kind.radius_m, &mut near);
                 d
             }
         };
@@ -454,15 +454,20 @@ impl<'a> Bodies<'a> {
         }
     }
 
-    /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere
-    /// within `length` of `from`. Robots move at most `max_speed_m` a round, so one touching
+    /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere on
+    /// the move `d` from `from`. Robots move at most `max_speed_m` a round, so one touching
     /// an end point `p` now started within `radius + max_radius_m + max_speed_m` of `p`,
-    /// hence within that plus `length` of `from`.
-    pub(super) fn near_move(&self, i: usize, from: DVec2, length: f64, radius: f64, near: &mut Vec<u32>) {
+    /// hence within that of the move's segment (issue 11: in a crowd, a disc of that plus
+    /// the move's length around `from` held twice the robots, each then tested at every
+    /// halving of a blocked move).
+    pub(super) fn near_move(&self, i: usize, from: DVec2, d: DVec2, radius: f64, near: &mut Vec<u32>) {
         near.clear();
-        let reach = radius + self.max_radius_m + self.max_speed_m + length;
-        self.index.for_each_within(from, reach, |id, _| {
-            if id.index() != i {
+        let reach = radius + self.max_radius_m + self.max_speed_m;
+        // Wider by far more than any rounding: listing one robot too many changes nothing.
+        let within = (reach * (1.0 + 1e-9)).powi(2);
+        let (to, mid) = (from + d, from + 0.5 * d);
+        self.index.for_each_within(mid, reach + 0.5 * d.length(), |id, at| {
+            if id.index() != i && point_segment_distance_squared(at, from, to) <= within {
                 near.push(id.get());
             }
         });
