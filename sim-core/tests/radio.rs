@@ -103,3 +103,27 @@ fn issue11_a_full_radio_drops_the_rest() {
     // Sent counts are unaffected: 12 broadcasts and 11 direct messages.
     assert_eq!(sim.report().metrics.messages, 23);
 }
+
+/// Issue 11: the round's links, worked out from the inboxes when asked (no longer gathered
+/// into the report), are every pending delivery (sender → receiver), receiver by receiver,
+/// with or without radio budgets; counted by hand for the chatters.
+#[test]
+fn issue11_links_are_the_pending_deliveries() {
+    for budget in [u64::MAX, 70] {
+        let mut sim = chatters(budget);
+        sim.step();
+        let links: Vec<(u32, u32)> = sim.links().map(|l| (l.from.get(), l.to.get())).collect();
+        let from_inboxes: Vec<(u32, u32)> = inboxes(&sim)
+            .iter()
+            .enumerate()
+            .flat_map(|(r, inbox)| inbox.iter().map(move |&(s, _)| (s, r as u32)))
+            .collect();
+        assert_eq!(links, from_inboxes);
+        assert_eq!(sim.link_count(), links.len());
+        // Unlimited: 12 × 11 broadcasts and 11 direct messages to robot 0. With 70 bytes a
+        // round: 7 direct messages for robot 0, two broadcasts each for the other 11.
+        let want = if budget == u64::MAX { 12 * 11 + 11 } else { 7 + 11 * 2 };
+        assert_eq!(links.len(), want, "budget {budget}");
+        assert!(links.iter().all(|&(s, r)| s != r), "nobody hears itself");
+    }
+}

@@ -274,9 +274,9 @@ impl RerunObserver {
                 (r.type_index as u16, points)
             })
             .collect();
-        let links = report.map(|report| {
+        let links = report.map(|_| {
             let pos = |id: u32| sim.robots().get(id as usize).map(|r| to_2d(r.position));
-            sample_links(&report.links, self.opts.max_links)
+            sample_links(sim.links(), sim.link_count(), self.opts.max_links)
                 .into_iter()
                 .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
                 .collect()
@@ -467,14 +467,14 @@ struct KnownRegion {
 
 /// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
 /// evenly over them: a dense swarm delivers O(n²) messages a round, so deliveries are first
-/// thinned by a stride, then the distinct pairs by even spacing. Deterministic.
-pub fn sample_links(links: &[Link], max: usize) -> Vec<(u32, u32)> {
+/// thinned by a stride, then the distinct pairs by even spacing. Deterministic. `count` is
+/// how many `links` yields.
+pub fn sample_links(links: impl Iterator<Item = Link>, count: usize, max: usize) -> Vec<(u32, u32)> {
     if max == 0 {
         return Vec::new();
     }
-    let stride = links.len().div_ceil(2 * max).max(1);
+    let stride = count.div_ceil(2 * max).max(1);
     let mut pairs: Vec<(u32, u32)> = links
-        .iter()
         .step_by(stride)
         .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
         .collect();
@@ -940,9 +940,12 @@ mod tests {
     #[test]
     fn few_links_are_all_drawn_once() {
         let links = [link(3, 1), link(1, 3), link(2, 5), link(5, 2), link(2, 5)];
-        assert_eq!(sample_links(&links, 10), vec![(1, 3), (2, 5)]);
-        assert_eq!(sample_links(&links, 0), vec![]);
-        assert_eq!(sample_links(&[], 10), vec![]);
+        assert_eq!(
+            sample_links(links.iter().copied(), links.len(), 10),
+            vec![(1, 3), (2, 5)]
+        );
+        assert_eq!(sample_links(links.iter().copied(), links.len(), 0), vec![]);
+        assert_eq!(sample_links(std::iter::empty(), 0, 10), vec![]);
     }
 
     #[test]
@@ -954,7 +957,7 @@ mod tests {
             .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
             .collect();
         assert_eq!(all.len(), 19_900);
-        let sample = sample_links(&links, 1_000);
+        let sample = sample_links(links.iter().copied(), links.len(), 1_000);
         assert!(sample.len() <= 1_000 && sample.len() >= 900, "{} pairs", sample.len());
         let distinct: BTreeSet<_> = sample.iter().copied().collect();
         assert_eq!(distinct.len(), sample.len(), "no pair twice");
@@ -971,6 +974,6 @@ mod tests {
         }
         assert!(sample.iter().filter(|&&(a, _)| a == 0).count() < 100);
         // Deterministic.
-        assert_eq!(sample, sample_links(&links, 1_000));
+        assert_eq!(sample, sample_links(links.iter().copied(), links.len(), 1_000));
     }
 }

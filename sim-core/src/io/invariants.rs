@@ -56,11 +56,19 @@ impl InvariantChecker {
                 if !was_alive && (r.alive || moved > 0.0 || r.stats.units_dug != dug) {
                     return Err(format!("{who} acted after being disabled"));
                 }
-                for link in report.links.iter().filter(|l| l.from == r.id) {
-                    let to = self.previous[link.to.index()].0;
-                    if to.distance(before) > kind.comm_radius_m + 1e-9 {
-                        return Err(format!("{who} reached robot {} beyond its range", link.to));
-                    }
+            }
+        }
+        // Messages reach only robots in the sender's range when it sent them (the start of
+        // the round).
+        if !self.previous.is_empty() {
+            for link in sim.links() {
+                let (from, to) = (self.previous[link.from.index()].0, self.previous[link.to.index()].0);
+                let range = sim.types()[robots[link.from.index()].type_index].comm_radius_m;
+                if to.distance(from) > range + 1e-9 {
+                    return Err(format!(
+                        "round {round}: robot {} reached robot {} beyond its range",
+                        link.from, link.to
+                    ));
                 }
             }
         }

@@ -128,8 +128,6 @@ pub struct RoundReport {
     pub metrics: RoundMetrics,
     /// Events, in the order they happened.
     pub events: Vec<Event>,
-    /// Messages sent this round and whom they will reach.
-    pub links: Vec<Link>,
     /// Robots whose known map changed this round.
     pub known_changed: Vec<RobotId>,
     /// Robots whose strategy took longer than the limit to decide this round (set with

@@ -35,7 +35,6 @@ impl Simulation {
         self.report.round = round;
         self.report.metrics = RoundMetrics::default();
         self.report.events.clear();
-        self.report.links.clear();
         self.report.known_changed.clear();
         self.report.slow_decisions.clear();
         // 1 + 2: perceive and decide, in parallel.

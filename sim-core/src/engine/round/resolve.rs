@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::agent::Needs;
 use crate::engine::simulation::{Outgoing, Simulation};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
-use crate::world::{Action, Event, Link, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
+use crate::world::{Action, Event, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
 
 impl Simulation {
     /// Step 3: the physical unit, robot by robot in id order. Returns messages and bytes sent.
@@ -266,7 +266,6 @@ impl Simulation {
         for &to in receivers {
             if self.robots[to.index()].alive {
                 self.inboxes[to.index()].push(k);
-                self.report.links.push(Link { from, to });
                 heard = true;
             }
         }
@@ -310,100 +309,58 @@ impl Simulation {
             max_range.clamp(1.0, 64.0),
         );
         // Receivers are independent (each reads the shared sends and writes its own inbox),
-        // so they run in parallel; links are gathered in receiver order, as on one thread.
-        let robots = &self.robots;
-        let types = &self.types;
-        let starts = &self.start_positions;
-        // Accepted messages are marked in a bitset over `outgoing` (one per worker, reused)
-        // and read back in order: sender order, as a sort would give, at a word a 64
-        // messages instead of a sort of each receiver's hundreds (16 % of a crowded round).
+        // so they run in parallel. Each worker also gathers which messages anyone accepted,
+        // so the bag can be made without another pass over every pick (issue 11: that pass,
+        // and gathering every delivery as a link, were sequential, and millions a round in
+        // a crowd).
+        let sends = Sends {
+            outgoing: &outgoing,
+            first: &first,
+            last: &last,
+            direct: &direct,
+            senders: &senders,
+            max_range,
+            robots: &self.robots,
+            types: &self.types,
+            starts: &self.start_positions,
+        };
         let words = outgoing.len().div_ceil(64);
         // Budgeted sends skip the bag until the end: picks are indices into `outgoing`.
         debug_assert!(self.mailbag.is_empty());
-        let links: Vec<Vec<Link>> = self
+        let (used, _) = self
             .inboxes
             .par_iter_mut()
             .enumerate()
-            .map_init(Vec::new, |accepted: &mut Vec<u64>, (r, inbox)| {
-                let to = robots[r].id;
-                if !robots[r].alive {
-                    return Vec::new();
-                }
-                let here = starts[r];
-                let budget = types[robots[r].type_index].radio_bytes_per_round;
-                let mut used = 0u64;
-                let mut fits = |bytes: u64| {
-                    let ok = used.checked_add(bytes).is_some_and(|u| u <= budget);
-                    if ok {
-                        used += bytes;
+            .fold(
+                || (vec![0u64; words], vec![0u64; words]),
+                |(mut used, mut accepted), (r, inbox)| {
+                    sends.deliver_to(r, inbox, &mut used, &mut accepted);
+                    (used, accepted)
+                },
+            )
+            .reduce(
+                || (vec![0u64; words], Vec::new()),
+                |(mut a, s), (b, _)| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x |= *y;
                     }
-                    ok
-                };
-                accepted.clear();
-                accepted.resize(words, 0);
-                let mut accept = |k: u32| accepted[k as usize / 64] |= 1u64 << (k % 64);
-                let mine = direct.partition_point(|e| e.0 < to.get());
-                for &(target, k) in direct[mine..].iter().take_while(|e| e.0 == to.get()) {
-                    debug_assert_eq!(target, to.get());
-                    let o = &outgoing[k as usize];
-                    if o.from != r && starts[o.from].distance(here) <= o.range_m && fits(o.bytes) {
-                        accept(k);
-                    }
-                }
-                let _ = senders.try_for_each_within(here, max_range, |sender, at| {
-                    let s = sender.index();
-                    if s == r {
-                        return ControlFlow::Continue(());
-                    }
-                    for k in first[s]..last[s] {
-                        let o = &outgoing[k as usize];
-                        if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
-                            if !fits(o.bytes) {
-                                return ControlFlow::Break(());
-                            }
-                            accept(k);
-                        }
-                    }
-                    ControlFlow::Continue(())
-                });
-                let mut links = Vec::new();
-                for (w, &word) in accepted.iter().enumerate() {
-                    let mut bits = word;
-                    while bits != 0 {
-                        let k = w * 64 + bits.trailing_zeros() as usize;
-                        bits &= bits - 1;
-                        let o = &outgoing[k];
-                        inbox.push(k as u32);
-                        links.push(Link {
-                            from: o.message.from,
-                            to,
-                        });
-                    }
-                }
-                links
-            })
-            .collect();
-        for l in links {
-            self.report.links.extend(l);
-        }
-        self.bag_accepted(&mut outgoing);
+                    (a, s)
+                },
+            );
+        self.bag_accepted(&mut outgoing, &used);
         self.outgoing = outgoing;
     }
 
-    /// Move the messages that someone accepted from `outgoing` into the bag, in order, and
-    /// point the inboxes' picks (indices into `outgoing`) at them there. The rest are
-    /// dropped now: their payloads (whole known maps, often) are not kept for a round.
-    fn bag_accepted(&mut self, outgoing: &mut Vec<Outgoing>) {
+    /// Move the messages that someone accepted (bits of `used`) from `outgoing` into the
+    /// bag, in order, and point the inboxes' picks (indices into `outgoing`) at them there.
+    /// The rest are dropped now: their payloads (whole known maps, often) are not kept for
+    /// a round.
+    fn bag_accepted(&mut self, outgoing: &mut Vec<Outgoing>, used: &[u64]) {
         const UNUSED: u32 = u32::MAX;
         let mut place = vec![UNUSED; outgoing.len()];
-        for picks in &self.inboxes {
-            for &k in picks {
-                place[k as usize] = 0;
-            }
-        }
         let mut next = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
-        for (slot, o) in place.iter_mut().zip(outgoing.drain(..)) {
-            if *slot != UNUSED {
+        for (k, (slot, o)) in place.iter_mut().zip(outgoing.drain(..)).enumerate() {
+            if used[k / 64] >> (k % 64) & 1 != 0 {
                 *slot = next;
                 next += 1;
                 self.mailbag.push(o.message);
@@ -414,6 +371,89 @@ impl Simulation {
                 *k = place[*k as usize];
             }
         });
+    }
+}
+
+/// A round's sends under radio budgets, as the receivers read them.
+struct Sends<'a> {
+    outgoing: &'a [Outgoing],
+    /// Each sender's broadcasts are `outgoing[first[s]..last[s]]` (resolve runs in sender
+    /// order).
+    first: &'a [u32],
+    last: &'a [u32],
+    /// Direct messages as (receiver id, index in `outgoing`), sorted.
+    direct: &'a [(u32, u32)],
+    /// The senders where they sent from, in cells of the widest range.
+    senders: &'a RobotIndex,
+    max_range: f64,
+    robots: &'a [crate::world::Robot],
+    types: &'a [RobotType],
+    starts: &'a [DVec2],
+}
+
+impl Sends<'_> {
+    /// Fill robot `r`'s inbox: messages addressed to it first, then broadcasts of senders in
+    /// range in the index's fixed order, until the next would overflow its budget; the
+    /// accepted ones in sender order, as unbudgeted delivery would put them. `accepted` is
+    /// a clear bitset over `outgoing` (left clear); the accepted messages are also set in
+    /// `used`.
+    ///
+    /// The bitset is read back a word at a time: sender order, as a sort would give,
+    /// instead of a sort of each receiver's hundreds (16 % of a crowded round).
+    fn deliver_to(&self, r: usize, inbox: &mut Vec<u32>, used: &mut [u64], accepted: &mut [u64]) {
+        let robot = &self.robots[r];
+        if !robot.alive {
+            return;
+        }
+        let to = robot.id;
+        let here = self.starts[r];
+        let budget = self.types[robot.type_index].radio_bytes_per_round;
+        let mut spent = 0u64;
+        let mut fits = |bytes: u64| {
+            let ok = spent.checked_add(bytes).is_some_and(|u| u <= budget);
+            if ok {
+                spent += bytes;
+            }
+            ok
+        };
+        // The words of `accepted` written (all clear outside them).
+        let (mut lo, mut hi) = (accepted.len(), 0);
+        let mut accept = |k: u32| {
+            let w = k as usize / 64;
+            accepted[w] |= 1u64 << (k % 64);
+            (lo, hi) = (lo.min(w), hi.max(w + 1));
+        };
+        let mine = self.direct.partition_point(|e| e.0 < to.get());
+        for &(_, k) in self.direct[mine..].iter().take_while(|e| e.0 == to.get()) {
+            let o = &self.outgoing[k as usize];
+            if o.from != r && self.starts[o.from].distance(here) <= o.range_m && fits(o.bytes) {
+                accept(k);
+            }
+        }
+        let _ = self.senders.try_for_each_within(here, self.max_range, |sender, at| {
+            let s = sender.index();
+            if s == r {
+                return ControlFlow::Continue(());
+            }
+            for k in self.first[s]..self.last[s] {
+                let o = &self.outgoing[k as usize];
+                if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
+                    if !fits(o.bytes) {
+                        return ControlFlow::Break(());
+                    }
+                    accept(k);
+                }
+            }
+            ControlFlow::Continue(())
+        });
+        for w in lo..hi {
+            let mut bits = std::mem::take(&mut accepted[w]);
+            used[w] |= bits;
+            while bits != 0 {
+                inbox.push((w * 64 + bits.trailing_zeros() as usize) as u32);
+                bits &= bits - 1;
+            }
+        }
     }
 }
 
