@@ -25,7 +25,7 @@ use editor::generate::{GenerateOptions, cell_hash, mesas::mesas, unit};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_core::agent::{Params, StrategyRegistry};
-use sim_core::engine::{Group, Scenario, ScenarioBuilder, Simulation};
+use sim_core::engine::{Group, PhaseTimes, Scenario, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::ObstacleMap;
 use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
@@ -333,6 +333,8 @@ pub struct Measurement {
     pub explored_fraction: f64,
     /// A digest of every robot's final position, to compare runs (thread counts).
     pub digest: u64,
+    /// Wall time in each step of the timed rounds.
+    pub phases: PhaseTimes,
 }
 
 impl Measurement {
@@ -420,6 +422,7 @@ pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measur
             robot_memory_bytes: sim.robot_memory_bytes(),
             explored_fraction: sim.report().metrics.explored_fraction,
             digest,
+            phases: sim.phase_times(),
         })
     })
 }

@@ -205,6 +205,14 @@ fn run(cli: &Cli) -> Result<()> {
         m.explored_fraction,
         m.digest
     );
+    let p = m.phases;
+    println!(
+        "  time in the rounds: perceive + decide {:.3} s, resolve {:.3} s, deliver {:.3} s, other {:.3} s",
+        p.perceive_decide.as_secs_f64(),
+        p.resolve.as_secs_f64(),
+        p.deliver.as_secs_f64(),
+        p.other.as_secs_f64()
+    );
     Ok(())
 }
 

@@ -9,4 +9,4 @@ mod simulation;
 
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
-pub use simulation::{DEFAULT_DECIDE_LIMIT, Simulation};
+pub use simulation::{DEFAULT_DECIDE_LIMIT, PhaseTimes, Simulation};

@@ -127,6 +127,24 @@ pub struct Simulation {
     pub(super) outgoing: Vec<Outgoing>,
     /// Positions at the start of the current round (send-time positions for messages).
     pub(super) start_positions: Vec<DVec2>,
+    /// Wall time spent in each step of the rounds so far.
+    pub(super) phase_times: PhaseTimes,
+}
+
+/// Wall time a simulation spent in each step of its rounds so far (see
+/// [`Simulation::phase_times`]): where a run's time goes, for finding what to make faster.
+/// Like every wall time, it differs from run to run; nothing in a run depends on it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// Steps 1 and 2 (parallel): perceiving, reading messages, deciding, planning moves.
+    pub perceive_decide: Duration,
+    /// Step 3 (by robot id), with the collective explored map marked alongside.
+    pub resolve: Duration,
+    /// Delivering the round's messages within radio budgets (parallel by receiver).
+    pub deliver: Duration,
+    /// Everything else: moving last round's messages into inboxes, crediting discoveries,
+    /// rebuilding the robot indexes, metrics.
+    pub other: Duration,
 }
 
 impl Simulation {
@@ -199,6 +217,7 @@ impl Simulation {
             seed,
             strategies_failed: 0,
             decide_limit: Some(DEFAULT_DECIDE_LIMIT),
+            phase_times: PhaseTimes::default(),
             rounds,
             round: 0,
             nav: LazyNavGraph::new(),
@@ -306,6 +325,11 @@ impl Simulation {
     pub fn explored(&self) -> &KnownMap {
         &self.explored
     }
+    /// Wall time spent in each step of the rounds so far.
+    pub fn phase_times(&self) -> PhaseTimes {
+        self.phase_times
+    }
+
     /// The last round's report.
     pub fn report(&self) -> &RoundReport {
         &self.report

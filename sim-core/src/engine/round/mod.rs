@@ -18,6 +18,8 @@ mod explored;
 mod perceive;
 mod resolve;
 
+use std::time::{Duration, Instant};
+
 use explored::ExploredUpdate;
 
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
@@ -37,9 +39,16 @@ impl Simulation {
         self.report.events.clear();
         self.report.known_changed.clear();
         self.report.slow_decisions.clear();
+        let started = Instant::now();
+        // The steps timed apart this round (the rest is `other`).
+        let mut apart = Duration::ZERO;
         // 1 + 2: perceive and decide, in parallel.
         self.deliver_messages();
+        let t = Instant::now();
         self.perceive_and_decide(round);
+        let took = t.elapsed();
+        self.phase_times.perceive_decide += took;
+        apart += took;
         self.record_discoveries(round);
         // 3: resolve, in id order, while another thread marks the collective explored map
         // (it reads only the start of the round).
@@ -48,14 +57,23 @@ impl Simulation {
         let mut explored = ExploredUpdate::take(self);
         let event_at = self.report.events.len();
         let map = std::sync::Arc::clone(&self.map);
+        let t = Instant::now();
         let ((), (messages, bytes)) = rayon::join(|| explored.run(&map.obstacles), || self.resolve(round));
+        let took = t.elapsed();
+        self.phase_times.resolve += took;
+        apart += took;
         explored.finish(self, event_at);
         if self.radio_limited {
+            let t = Instant::now();
             self.deliver_within_budget();
+            let took = t.elapsed();
+            self.phase_times.deliver += took;
+            apart += took;
         }
         self.rebuild_robot_indexes();
         // 4: observe (the caller hands the report to the observers).
         self.report.metrics = self.metrics(round, messages, bytes);
+        self.phase_times.other += started.elapsed().saturating_sub(apart);
         &self.report
     }
 }
