@@ -5,8 +5,16 @@ use glam::DVec2;
 use super::SHARE_EVERY;
 use super::explorer::{Explorer, share_knowledge};
 use crate::Result;
-use crate::agent::{Ctx, Params, Strategy};
+use crate::agent::{Ctx, Needs, Params, Strategy};
 use crate::world::{Action, REACH_M, Sighting};
+
+/// What workers perceive: everything but other robots, which they never look at (the
+/// physical unit keeps bodies apart and the collision tactic handles being stuck). Issue 11:
+/// in a crowd each worker filed hundreds of robots a round into a memory list it never read.
+const WORKER_NEEDS: Needs = Needs {
+    robots: false,
+    ..Needs::ALL
+};
 
 /// The part excavators and transporters share: exploration, sharing and going places.
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -87,6 +95,10 @@ pub(super) struct Excavator {
 impl Strategy for Excavator {
     crate::serde_state!();
 
+    fn needs(&self) -> Needs {
+        WORKER_NEEDS
+    }
+
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
             return a;
@@ -110,6 +122,10 @@ pub(super) struct Transporter {
 
 impl Strategy for Transporter {
     crate::serde_state!();
+
+    fn needs(&self) -> Needs {
+        WORKER_NEEDS
+    }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         if let Some(a) = self.core.begin_round(ctx) {
