@@ -241,8 +241,12 @@ impl NavGraph {
             let mut guard = cell.borrow_mut();
             let (stamp, marks) = &mut *guard;
             if marks.len() != self.squares.len() {
-                marks.clear();
-                marks.resize(self.squares.len(), (0, 0.0, u32::MAX));
+                // All zero bytes, so the allocator hands out pages the kernel maps only
+                // when a search first writes them: searches stay local, and a marked copy
+                // of a ten-million-node graph per thread cost the moonshot 200 MB and a
+                // tenth of its first rounds in page clearing (issue 11). A node's parent
+                // is read only once it carries the search's stamp (never 0).
+                *marks = vec![(0, 0.0, 0); self.squares.len()];
                 *stamp = 0;
             }
             *stamp = stamp.wrapping_add(1);
