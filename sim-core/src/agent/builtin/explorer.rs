@@ -14,15 +14,31 @@ use crate::world::{Action, Payload, Sighting};
 pub(super) struct Sharing {
     pub(super) every_rounds: u64,
     pub(super) avoid_radius_m: f64,
+    /// Team mates' goals remembered at most (the most recently heard).
+    #[serde(default = "default_max_claims")]
+    pub(super) max_claims: usize,
+}
+
+/// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
+/// the paper's kind (the last n), so that a crowd's memory and work stay linear in its
+/// size (issue 11: unbounded, each of 10,000 robots crowded at home held a thousand goals
+/// after 20 rounds and merged its list with hundreds more every round, a stream of memory
+/// that bounded the whole round).
+pub(super) const MAX_CLAIMS: u64 = 256;
+
+fn default_max_claims() -> usize {
+    MAX_CLAIMS as usize
 }
 
 impl Sharing {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
         let every_rounds = p.u64_in("share_every", 10, SHARE_EVERY)?;
         let avoid_radius_m = p.f64_in("avoid_radius_m", 5.0, 0.0..=MAX_DISTANCE_M)?;
+        let max_claims = p.u64_in("max_claims", MAX_CLAIMS, 0..=1_000_000)? as usize;
         Ok(Self {
             every_rounds,
             avoid_radius_m,
+            max_claims,
         })
     }
 }

@@ -35,6 +35,38 @@ fn merge_claims(claims: &[(u32, DVec2, u64)], updates: &[Update], round: u64, ou
     out.extend_from_slice(&claims[i..]);
 }
 
+/// Keep the `max` claims heard last (of those heard in the same round, the lowest ids),
+/// in id order. Claims were heard in the last 60 rounds (older ones are forgotten every
+/// 10), so the cut is found by counting claims per round heard, without sorting.
+fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
+    if claims.len() <= max {
+        return;
+    }
+    let age = |heard: u64| (round.saturating_sub(heard)).min(63) as usize;
+    let mut per_age = [0usize; 64];
+    for c in claims.iter() {
+        per_age[age(c.2)] += 1;
+    }
+    // The oldest age kept, and how many claims of that age fit.
+    let (mut cut, mut room) = (63, 0);
+    let mut kept = 0;
+    for (a, &n) in per_age.iter().enumerate() {
+        if kept + n >= max {
+            (cut, room) = (a, max - kept);
+            break;
+        }
+        kept += n;
+    }
+    claims.retain(|c| match age(c.2).cmp(&cut) {
+        std::cmp::Ordering::Less => true,
+        std::cmp::Ordering::Equal if room > 0 => {
+            room -= 1;
+            true
+        }
+        _ => false,
+    });
+}
+
 /// `frontier` and `cooperative`.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Frontier {
@@ -107,6 +139,7 @@ impl Strategy for Frontier {
                 self.claims
                     .retain(|(_, g, heard)| round <= *heard + 50 && g.distance(p) <= near);
             }
+            keep_newest(&mut self.claims, share.max_claims, round);
         }
         if let Some(a) = self.core.reflexes(ctx) {
             return a;
@@ -133,7 +166,7 @@ mod tests {
     use glam::DVec2;
     use proptest::prelude::*;
 
-    use super::{Update, merge_claims};
+    use super::{Update, keep_newest, merge_claims};
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(3), ..ProptestConfig::default() })]
@@ -158,6 +191,23 @@ mod tests {
             merge_claims(&claims, &updates, 9, &mut out);
             let expected: Vec<(u32, DVec2, u64)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
             prop_assert_eq!(out, expected);
+        }
+
+        /// Issue 11: a crowd's claims are cut to the `max` heard last (the lowest ids among
+        /// those heard in the same round), in id order, as sorting by recency would.
+        #[test]
+        fn issue11_claims_keep_the_most_recently_heard(
+            heard in proptest::collection::btree_map(0u32..500, 0u64..60, 0..300),
+            max in 0usize..200,
+        ) {
+            let round = 60;
+            let mut claims: Vec<(u32, DVec2, u64)> = heard.iter().map(|(&id, &r)| (id, DVec2::splat(f64::from(id)), r)).collect();
+            let mut by_recency = claims.clone();
+            by_recency.sort_by_key(|c| (std::cmp::Reverse(c.2), c.0));
+            by_recency.truncate(max);
+            by_recency.sort_by_key(|c| c.0);
+            keep_newest(&mut claims, max, round);
+            prop_assert_eq!(claims, by_recency);
         }
     }
 }

@@ -50,9 +50,10 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "cooperative",
-        "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals",
+        "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
+         (the max_claims most recently heard, 256 by default)",
         |p| {
-            p.only(&["share_every", "avoid_radius_m"])?;
+            p.only(&["share_every", "avoid_radius_m", "max_claims"])?;
             let share = explorer::Sharing::from_params(p)?;
             Ok(Box::new(frontier::Frontier::new(Some(share))))
         },
