@@ -17,6 +17,10 @@ impl Simulation {
     /// Step 3: the physical unit, robot by robot in id order. Returns messages and bytes sent.
     pub(super) fn resolve(&mut self, round: u64) -> (u64, u64) {
         let (mut messages, mut bytes) = (0, 0);
+        // Held apart from `self` so the loop can mutate the simulation while it reads a type
+        // (one count update a round, not one a robot: this loop is the round's sequential
+        // part).
+        let types = Arc::clone(&self.types);
         for i in 0..self.robots.len() {
             if !self.robots[i].alive {
                 continue;
@@ -25,7 +29,6 @@ impl Simulation {
                 self.fail(i, reason);
                 continue;
             }
-            let types = Arc::clone(&self.types);
             let kind = &types[self.robots[i].type_index];
             let action = self.agents[i].action;
             self.spend(i, upkeep(kind, self.agents[i].needs));
@@ -34,7 +37,11 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            let outbox = self.agents[i].mind.output.take_outbox();
+            let outbox = if self.agents[i].mind.output.outbox().is_empty() {
+                Vec::new()
+            } else {
+                self.agents[i].mind.output.take_outbox()
+            };
             for (to, payload) in outbox {
                 if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
                     break;
