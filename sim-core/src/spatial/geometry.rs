@@ -289,25 +289,6 @@ impl CellRows {
             _ => 0,
         }
     }
-
-    /// Take out of these rows every cell that `other` holds.
-    pub fn remove(&mut self, other: &CellRows) {
-        // Bit `i` of `other`'s row is column `other.x0 + i`, here bit `i - dx`.
-        let dx = i64::from(self.x0) - i64::from(other.x0);
-        let shift = |row: u64| match dx {
-            0..=63 => row >> dx,
-            -63..=-1 => row << -dx,
-            _ => 0,
-        };
-        for (j, row) in self.rows[..self.len].iter_mut().enumerate() {
-            let k = i64::from(self.y0) + j as i64 - i64::from(other.y0);
-            if let Ok(k) = usize::try_from(k)
-                && k < other.len
-            {
-                *row &= !shift(other.rows[k]);
-            }
-        }
-    }
 }
 
 impl Disc {
@@ -337,18 +318,10 @@ impl Disc {
     }
 
     fn contained_rows_unclean(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
-        let b = self.bounds();
-        let side = grid.side_cells();
-        let lo = (b.min - grid.origin()) / grid.cell_m();
-        let hi = (b.max - grid.origin()) / grid.cell_m();
         (out.x0, out.y0, out.len) = (0, 0, 0);
-        if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < f64::from(side) && lo.y < f64::from(side)) {
+        let Some(((x0, y0), (x1, y1))) = grid.cells_touching(&self.bounds()) else {
             return true;
-        }
-        // Saturating casts clamp to the covering square; a cell whose edge the bounds merely
-        // touch is included, so no cell the disc may contain is left out.
-        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
-        let (x0, x1, y0, y1) = (cell(lo.x), cell(hi.x), cell(lo.y), cell(hi.y));
+        };
         if x1 - x0 >= 64 || y1 - y0 >= 64 {
             return false;
         }

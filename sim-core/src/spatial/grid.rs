@@ -2,7 +2,7 @@
 
 use glam::DVec2;
 
-use crate::spatial::geometry::Aabb;
+use crate::spatial::geometry::{Aabb, floor};
 use crate::{Error, Result};
 
 /// Deepest quadtree supported: 2^24 cells a side (16,777 km at 1 m cells).
@@ -143,6 +143,22 @@ impl Grid {
         } else {
             None
         }
+    }
+
+    /// The cells of the covering square that the box touches, as the inclusive corners
+    /// `((x0, y0), (x1, y1))` (a cell whose edge the box merely touches included, so none
+    /// the box may overlap is left out), or `None` if the box misses the covering square.
+    #[inline]
+    pub(crate) fn cells_touching(&self, area: &Aabb) -> Option<((u32, u32), (u32, u32))> {
+        let side = self.side_cells();
+        let lo = (area.min - self.origin) / self.cell_m;
+        let hi = (area.max - self.origin) / self.cell_m;
+        if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < f64::from(side) && lo.y < f64::from(side)) {
+            return None;
+        }
+        // Saturating casts clamp to the covering square.
+        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
+        Some(((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y))))
     }
 
     /// Whether cell `(x, y)` lies inside the map (not in the padding).

@@ -9,7 +9,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use crate::Result;
-use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, floor, segment_box_distance_squared};
+use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_box_distance_squared};
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
@@ -171,14 +171,12 @@ impl ObstacleMap {
     ) -> Option<ControlFlow<()>> {
         let grid = self.grid();
         let eps = DVec2::splat(area.rounding_margin());
-        let side = grid.side_cells();
-        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
-        let lo = (area.min - eps - grid.origin()) / grid.cell_m();
-        let hi = (area.max + eps - grid.origin()) / grid.cell_m();
+        let (lo, hi) = grid.cells_touching(&Aabb {
+            min: area.min - eps,
+            max: area.max + eps,
+        })?;
         self.tree
-            .visit_cells_in_rect((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y)), true, |x, y| {
-                visit(grid.square(x, y, 0))
-            })
+            .visit_cells_in_rect(lo, hi, true, |x, y| visit(grid.square(x, y, 0)))
     }
 
     /// How far along move `d` from `from` a disc of `radius_m` gets before an obstacle or the

@@ -334,7 +334,7 @@ impl Simulation {
         let words = outgoing.len().div_ceil(64);
         // Budgeted sends skip the bag until the end: picks are indices into `outgoing`.
         debug_assert!(self.mailbag.is_empty());
-        let (used, _) = self
+        let used = self
             .inboxes
             .par_iter_mut()
             .enumerate()
@@ -345,13 +345,14 @@ impl Simulation {
                     (used, accepted)
                 },
             )
+            .map(|(used, _)| used)
             .reduce(
-                || (vec![0u64; words], Vec::new()),
-                |(mut a, s), (b, _)| {
+                || vec![0u64; words],
+                |mut a, b| {
                     for (x, y) in a.iter_mut().zip(&b) {
                         *x |= *y;
                     }
-                    (a, s)
+                    a
                 },
             );
         self.bag_accepted(&mut outgoing, &used);

@@ -45,21 +45,21 @@ impl RegionQuadtree {
     /// collective explored map takes each robot's new squares this way, a few thousand a
     /// round).
     pub fn fill_square_reporting(&mut self, sq: Square, value: bool, mut changed: impl FnMut(Square)) {
-        // A whole square's changes are reported as whole squares.
-        self.fill_cells_reporting(CellSet::whole(sq), value, |set| changed(set.square()));
+        let root = self.root_square();
+        let before = self.root;
+        self.root = self.fill_square_node(before, root, sq, leaf(value), &mut changed);
     }
 
     /// Set the cells of `set` to `value`, calling `changed` with the cells that switched (a
     /// whole square's as whole squares, a block's as one set), by one descent along the
     /// square's coordinates (see [`fill_square_reporting`](Self::fill_square_reporting)).
     pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
-        if !set.is_whole() && self.packed {
+        if !set.is_whole() {
+            // A block's cells: there are blocks only in packed trees.
             self.fill_block_cells(set.square(), set.bits, value, &mut changed);
             return;
         }
-        let root = self.root_square();
-        let before = self.root;
-        self.root = self.fill_cells_node(before, root, set, leaf(value), &mut changed);
+        self.fill_square_reporting(set.square(), value, |sq| changed(CellSet::whole(sq)));
     }
 
     /// Set the cells `cover` (Z order) of the block at `sq` to `value`: a loop down the
@@ -85,24 +85,24 @@ impl RegionQuadtree {
         if n == want {
             return;
         }
-        // `n` is a block, or a leaf of the other value at `level` (≥ the block's).
-        let bits = self.bits_of(if level == BLOCK_LEVEL { n } else { leaf(!value) }, BLOCK_LEVEL);
+        // `n` is the block, or a leaf of the other value at `level` (≥ the block's): the
+        // block's cells either way.
+        let bits = self.bits_of(n, BLOCK_LEVEL);
         let filled = if value { bits | cover } else { bits & !cover };
         if filled == bits {
             return;
         }
         changed(CellSet::of_block(sq, filled ^ bits));
-        let old = n;
-        let mut new = self.store_bits(if level == BLOCK_LEVEL { n } else { leaf(!value) }, filled);
+        let mut new = self.store_bits(n, filled);
         // Split a leaf above the block: a group per level, the rest of each still that leaf.
         for l in BLOCK_LEVEL + 1..=level {
             let i = (((sq.x >> (l - 1)) & 1) | (((sq.y >> (l - 1)) & 1) << 1)) as usize;
-            let mut kids = [old; 4];
+            let mut kids = [n; 4];
             kids[i] = new;
             new = self.make_node(kids);
         }
         // Back up: write the changed child, and merge groups that became one leaf.
-        let mut old = old;
+        let mut old = n;
         while new != old {
             let Some(d) = depth.checked_sub(1) else {
                 self.root = new;
@@ -116,56 +116,42 @@ impl RegionQuadtree {
         }
     }
 
-    fn fill_cells_node(
+    /// One step of setting the whole grid square `target` to leaf `want` by a descent along
+    /// its coordinates, from node `n` of square `at` (which holds `target`).
+    fn fill_square_node(
         &mut self,
         n: NodeRef,
         at: Square,
-        set: CellSet,
+        target: Square,
         want: NodeRef,
-        changed: &mut impl FnMut(CellSet),
+        changed: &mut impl FnMut(Square),
     ) -> NodeRef {
         if n == want {
             return n;
         }
-        let target = set.square();
-        if at.level == target.level && set.is_whole() {
-            return self.replace_with_leaf(n, at, want, &mut |sq| changed(CellSet::whole(sq)));
+        if at.level == target.level {
+            return self.replace_with_leaf(n, at, want, changed);
         }
         if self.packs(at.level) {
             let bits = self.bits_of(n, BLOCK_LEVEL);
-            let cover = if set.is_whole() {
-                // An aligned square's cells are consecutive in Z order.
-                block::low_bits(target.level) << block::cell_index(target.x - at.x, target.y - at.y)
-            } else {
-                set.bits
-            };
+            // An aligned square's cells are consecutive in Z order.
+            let cover = block::low_bits(target.level) << block::cell_index(target.x - at.x, target.y - at.y);
             let filled = if want == FULL { bits | cover } else { bits & !cover };
-            if set.is_whole() {
-                report_bits(filled ^ bits, at, &mut |sq| changed(CellSet::whole(sq)));
-            } else if filled != bits {
-                changed(CellSet::of_block(at, filled ^ bits));
-            }
+            report_bits(filled ^ bits, at, changed);
             return self.store_bits(n, filled);
         }
         let half = at.level - 1;
         let i = (((target.x >> half) & 1) | (((target.y >> half) & 1) << 1)) as usize;
         if is_leaf(n) {
             let mut kids = [n; 4];
-            kids[i] = self.fill_cells_node(n, at.child(i), set, want, changed);
+            kids[i] = self.fill_square_node(n, at.child(i), target, want, changed);
             self.make_node(kids)
         } else {
             let k = self.groups[n as usize][i];
-            let k2 = self.fill_cells_node(k, at.child(i), set, want, changed);
+            let k2 = self.fill_square_node(k, at.child(i), target, want, changed);
             self.groups[n as usize][i] = k2;
             self.merge_if_uniform(n)
         }
-    }
-
-    /// Set the cells of `cells` to `value`, calling `changed` with each block's cells that
-    /// switched; see [`fill_new_rows_reporting`](Self::fill_new_rows_reporting). Trees with
-    /// blocks only (`false`, nothing done, otherwise).
-    pub fn fill_rows_reporting(&mut self, cells: &CellRows, value: bool, changed: impl FnMut(CellSet)) -> bool {
-        self.fill_new_rows_reporting(cells, None, value, changed)
     }
 
     /// Set the cells of `cells` that `seen` does not hold to `value`, calling `changed` with
