@@ -151,7 +151,7 @@ fn energy_management_way_home_is_nine_metres() {
     let ctx = w.ctx();
     let route = ctx
         .nav()
-        .route_within(ctx.known().unwrap(), ctx.position(), DVec2::new(1.5, 1.5), 50_000)
+        .route_within(ctx.terrain().unwrap(), ctx.position(), DVec2::new(1.5, 1.5), 50_000)
         .unwrap();
     // Straight along y = 1.5 from x = 10.5 to x = 1.5.
     assert!((route.length_m - 9.0).abs() < 1e-9, "{}", route.length_m);

@@ -5,7 +5,7 @@ use std::sync::Arc;
 use glam::DVec2;
 
 use crate::agent::perception::{DataModule, Perception, SeenRobot, SeenTreasure};
-use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId};
+use crate::spatial::{KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, Terrain};
 use crate::world::{Action, HomeBase, Inbox, Outcome, Payload, Recipient, Robot, RobotType, StrategyEvent};
 
 /// The unchanging world a strategy may consult.
@@ -187,6 +187,16 @@ impl<'a> Ctx<'a> {
     /// call in a run builds it.
     pub fn nav(&self) -> &'a NavGraph {
         self.world.nav.get_or_build(self.world.obstacles)
+    }
+
+    /// The terrain this robot plans routes in (the map, its known map and its radius), for
+    /// the graph's searches; `None` if it keeps no known map.
+    pub fn terrain(&self) -> Option<Terrain<'_>> {
+        Some(Terrain {
+            obstacles: self.world.obstacles,
+            known: self.data.known.as_ref()?,
+            radius_m: self.kind.radius_m,
+        })
     }
 
     /// Whether a disc of this robot's size could move from `a` to `b` — answered from the

@@ -104,8 +104,8 @@ impl Tactic for EnergyManagement {
         let measure = |ctx: &Ctx| {
             let target = home.center();
             let route = ctx
-                .known()
-                .and_then(|k| ctx.nav().route_within(k, p, target, SEARCH_BUDGET))
+                .terrain()
+                .and_then(|t| ctx.nav().route_within(t, p, target, SEARCH_BUDGET))
                 .unwrap_or_else(|| Route {
                     nodes: Vec::new(),
                     waypoints: vec![target],
@@ -143,8 +143,8 @@ impl Tactic for EnergyManagement {
                 // this body): plan again from here.
                 self.nav.clear();
                 if let Some(route) = ctx
-                    .known()
-                    .and_then(|k| ctx.nav().route_within(k, p, home.center(), SEARCH_BUDGET))
+                    .terrain()
+                    .and_then(|t| ctx.nav().route_within(t, p, home.center(), SEARCH_BUDGET))
                 {
                     self.home_route = Some(WayHome {
                         round: ctx.round,

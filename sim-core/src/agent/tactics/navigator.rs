@@ -47,8 +47,8 @@ impl Navigator {
     /// Plan a shortest route to `to` within known terrain and follow it.
     pub fn go_to(&mut self, ctx: &Ctx, to: DVec2) -> bool {
         let route = ctx
-            .known()
-            .and_then(|k| ctx.nav().route_within(k, ctx.position(), to, SEARCH_BUDGET));
+            .terrain()
+            .and_then(|t| ctx.nav().route_within(t, ctx.position(), to, SEARCH_BUDGET));
         match route {
             Some(r) => {
                 self.follow(r);
@@ -75,7 +75,8 @@ impl Navigator {
     /// a free leaf not known at all (the route ends just across their shared edge). Targets
     /// within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
     pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Option<Route> {
-        let known = ctx.known()?;
+        let terrain = ctx.terrain()?;
+        let known = terrain.known;
         let nav = ctx.nav();
         let p = ctx.position();
         let step_in = 0.5 * known.grid().cell_m();
@@ -87,6 +88,7 @@ impl Navigator {
         let touches = |m: NavNodeId| known.touches_square(nav.square(m));
         nav.search(
             p,
+            terrain,
             |m| {
                 let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
                 hit.unwrap_or_else(|| touches(m))

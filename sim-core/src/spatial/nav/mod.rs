@@ -1,7 +1,9 @@
 //! The navigation graph (paper §4.2): computed once per map, its nodes are the free leaves
-//! of the obstacle quadtree and its edges join leaves that share a stretch of edge. A robot
-//! may only use the nodes its known map touches; paths run through the midpoints of shared
-//! edges ("portals").
+//! of the obstacle quadtree and its edges join leaves that share a stretch of edge (a
+//! "portal"). A robot may only use the nodes its known map touches. Searches order nodes by
+//! the distance between portal midpoints; the route found is then pulled taut through its
+//! corridor of nodes ([`funnel`]), so robots walk straight lines that bend only at corners
+//! of the corridor, keeping their radius clear of them.
 
 use std::cell::RefCell;
 use std::cmp::Reverse;
@@ -15,6 +17,10 @@ use crate::spatial::grid::Grid;
 use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::Square;
+
+mod funnel;
+
+use funnel::Portal;
 
 /// A node of the navigation graph (a free quadtree leaf).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
@@ -76,11 +82,52 @@ fn morton(x: u32, y: u32) -> u64 {
 pub struct Route {
     /// Nodes from start to goal.
     pub nodes: Vec<NavNodeId>,
-    /// Waypoints: the portals between consecutive nodes, then the goal point.
+    /// Waypoints: where the route bends, then the goal point.
     pub waypoints: Vec<DVec2>,
     /// Length of the waypoint polyline from the start point, m.
     pub length_m: f64,
 }
+
+/// The terrain a robot plans in: the map the graph was built from, the robot's known map
+/// (routes use nodes it touches, and cut corners only across cells it knows), and the
+/// radius the route keeps clear.
+#[derive(Clone, Copy, Debug)]
+pub struct Terrain<'a> {
+    /// The map the graph was built from.
+    pub obstacles: &'a ObstacleMap,
+    /// What the walking robot knows of it.
+    pub known: &'a KnownMap,
+    /// The walking robot's radius, m (0 for a point).
+    pub radius_m: f64,
+}
+
+impl Terrain<'_> {
+    /// The clearance a route's legs keep: the radius, and a twentieth of a cell more, so
+    /// that a robot nudged off its line (by collision avoidance, say) does not end up
+    /// pressed against the corner its route bends round.
+    fn clearance_m(&self) -> f64 {
+        self.radius_m + 0.05 * self.obstacles.grid().cell_m()
+    }
+
+    /// Whether the robot's disc, widened to the clearance, may sweep straight from `a` to `b`.
+    fn leg_clear(&self, a: DVec2, b: DVec2) -> bool {
+        self.obstacles.is_swept_disc_free(a, b, self.clearance_m())
+    }
+
+    /// Whether a leg from `a` to `b` that no route proposed may be walked: clear, and over
+    /// known cells only.
+    fn shortcut_clear(&self, a: DVec2, b: DVec2) -> bool {
+        let swept = crate::spatial::geometry::Capsule {
+            a,
+            b,
+            radius: self.radius_m,
+        };
+        self.known.tree().all_in(&swept, true) && self.leg_clear(a, b)
+    }
+}
+
+/// How many waypoints ahead a route looks for a shortcut.
+const SHORTCUT_LOOKAHEAD: usize = 4;
 
 /// Search marks: the current stamp, and per node (stamp, distance, parent).
 type Marks = (u32, Vec<(u32, f64, u32)>);
@@ -198,10 +245,116 @@ impl NavGraph {
 
     /// Midpoint of the edge stretch two adjacent nodes share.
     pub fn portal(&self, a: NavNodeId, b: NavNodeId) -> DVec2 {
-        let (p, q) = (self.bounds(a), self.bounds(b));
-        let lo = p.min.max(q.min);
-        let hi = p.max.min(q.max);
+        let (lo, hi) = self.portal_ends(a, b);
         (lo + hi) * 0.5
+    }
+
+    /// Ends of the edge stretch two adjacent nodes share (lower left first).
+    pub fn portal_ends(&self, a: NavNodeId, b: NavNodeId) -> (DVec2, DVec2) {
+        let (p, q) = (self.bounds(a), self.bounds(b));
+        (p.min.max(q.min), p.max.min(q.max))
+    }
+
+    /// The portal from `a` into `b` as a walker sees it, each end pulled in by `margin_m`
+    /// (down to the midpoint on short portals).
+    fn walked_portal(&self, a: NavNodeId, b: NavNodeId, margin_m: f64) -> Portal {
+        let (lo, hi) = self.portal_ends(a, b);
+        let len = lo.distance(hi);
+        let (lo, hi) = if len > 0.0 {
+            let cut = (hi - lo) * (margin_m.min(0.5 * len) / len);
+            (lo + cut, hi - cut)
+        } else {
+            (lo, hi)
+        };
+        let travel = self.bounds(b).center() - self.bounds(a).center();
+        if travel.perp_dot(hi - lo) > 0.0 {
+            Portal { left: hi, right: lo }
+        } else {
+            Portal { left: lo, right: hi }
+        }
+    }
+
+    /// The route through `nodes` (a chain of neighbours from the node holding `from`) to
+    /// `goal`, pulled taut. Its bends keep the terrain's clearance from the portals' ends,
+    /// and every leg is checked with the swept-disc test.
+    fn taut_route(&self, from: DVec2, mut nodes: Vec<NavNodeId>, goal: DVec2, terrain: Terrain) -> Route {
+        let last = *nodes.last().expect("a route holds its start");
+        // A goal across the last node's edge (a frontier just inside an unknown node) is
+        // reached through that edge too.
+        if let Some(m) = self
+            .node_at(goal)
+            .filter(|&m| m != last && self.neighbors(last).any(|x| x == m))
+        {
+            nodes.push(m);
+        }
+        let first_margin_m = terrain.clearance_m();
+        let mut margins_m = vec![first_margin_m; nodes.len() - 1];
+        let walked = |margins_m: &[f64]| -> Vec<Portal> {
+            (nodes.windows(2).zip(margins_m))
+                .map(|(w, &m)| self.walked_portal(w[0], w[1], m))
+                .collect()
+        };
+        // A leg that meets a portal at a shallow angle passes the corner at the portal's end
+        // closer than the margin: a bend at distance `m` along the portal from the corner
+        // clears it by `m·sin θ`, θ the angle between leg and portal. Such a bend's portal
+        // is pulled in to `r / sin θ` and the string pulled again (portals a failing leg
+        // only crosses are pulled in twice as far), three times at most. If a leg is still
+        // too close, the route goes through the portals' midpoints, as unpulled routes do,
+        // cutting only the corners that are clear.
+        let mut attempt = 0;
+        loop {
+            let portals = walked(&margins_m);
+            let bends = funnel::pull(from, &portals, goal);
+            let mut legs = Vec::with_capacity(bends.len());
+            let (mut prev, mut passed) = (from, 0usize);
+            for &(p, i) in &bends {
+                let clear = terrain.leg_clear(prev, p);
+                legs.push((prev, p, passed, i, clear));
+                (prev, passed) = (p, i);
+            }
+            attempt += 1;
+            if legs.iter().all(|l| l.4) {
+                let waypoints: Vec<DVec2> = bends.iter().map(|b| b.0).collect();
+                break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
+            }
+            if attempt == 4 {
+                let mut waypoints: Vec<DVec2> = portals.iter().map(Portal::mid).collect();
+                waypoints.push(goal);
+                break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
+            }
+            for &(a, b, passed, i, clear) in &legs {
+                if clear {
+                    continue;
+                }
+                let d = (b - a).normalize_or_zero();
+                // Portals counted from 0: the leg starts on `passed - 1` and ends on `i - 1`.
+                for k in passed.saturating_sub(1)..i.min(portals.len()) {
+                    let m = &mut margins_m[k];
+                    if k + 1 == passed || k + 1 == i {
+                        let along = (portals[k].left - portals[k].right).normalize_or_zero();
+                        let sin = along.perp_dot(d).abs().max(0.1);
+                        *m = (terrain.clearance_m() / sin).max(1.2 * *m);
+                    } else {
+                        *m *= 2.0;
+                    }
+                }
+            }
+        }
+    }
+
+    /// A route of `nodes` along `waypoints` from `from`, with its length.
+    fn route_of(from: DVec2, nodes: Vec<NavNodeId>, waypoints: Vec<DVec2>) -> Route {
+        let mut length_m = 0.0;
+        let mut prev = from;
+        for w in &waypoints {
+            length_m += prev.distance(*w);
+            prev = *w;
+        }
+        Route {
+            nodes,
+            waypoints,
+            length_m,
+        }
     }
 
     /// Bytes held.
@@ -212,16 +365,19 @@ impl NavGraph {
     }
 
     /// Dijkstra from the node holding `from` over nodes accepted by `usable`, until `is_goal`
-    /// accepts a node; the route ends at the point `is_goal` returns for it. Edge costs are
-    /// distances between portals, so routes through big open leaves cost what they measure.
+    /// accepts a node; the route ends at the point `is_goal` returns for it, pulled taut for
+    /// a robot in `terrain`. Edge costs are distances between portal midpoints, so routes
+    /// through big open leaves cost what they measure.
     pub fn search(
         &self,
         from: DVec2,
+        terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
         is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
-        self.best_first(from, usable, is_goal, |_| 0.0, max_nodes)
+        let (nodes, goal) = self.best_first(from, usable, is_goal, |_| 0.0, max_nodes)?;
+        Some(self.taut_route(from, nodes, goal, terrain))
     }
 
     /// [`search`](Self::search) ordered by distance so far plus `estimate` of the rest from
@@ -235,7 +391,7 @@ impl NavGraph {
         mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
         estimate: impl Fn(DVec2) -> f64,
         max_nodes: usize,
-    ) -> Option<Route> {
+    ) -> Option<(Vec<NavNodeId>, DVec2)> {
         let start = self.node_at(from)?;
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
@@ -279,19 +435,7 @@ impl NavGraph {
                         nodes.push(NavNodeId(cur));
                     }
                     nodes.reverse();
-                    let mut waypoints: Vec<DVec2> = nodes.windows(2).map(|w| self.portal(w[0], w[1])).collect();
-                    waypoints.push(goal);
-                    let mut length_m = 0.0;
-                    let mut prev = from;
-                    for w in &waypoints {
-                        length_m += prev.distance(*w);
-                        prev = *w;
-                    }
-                    return Some(Route {
-                        nodes,
-                        waypoints,
-                        length_m,
-                    });
+                    return Some((nodes, goal));
                 }
                 if settled >= max_nodes {
                     return None;
@@ -313,8 +457,10 @@ impl NavGraph {
         })
     }
 
-    /// Shortest route from `from` to `to` through nodes the known map touches.
-    pub fn route_within(&self, known: &KnownMap, from: DVec2, to: DVec2, max_nodes: usize) -> Option<Route> {
+    /// Shortest route from `from` to `to` through nodes the terrain's known map touches,
+    /// pulled taut for its robot.
+    pub fn route_within(&self, terrain: Terrain, from: DVec2, to: DVec2, max_nodes: usize) -> Option<Route> {
+        let known = terrain.known;
         let goal = self.node_at(to)?;
         // A goal the known map does not touch is never reached (only the start is exempt
         // from that test): say so now instead of searching everything known first (issue
@@ -326,14 +472,35 @@ impl NavGraph {
         // A*: the straight line to `to` is never longer than a route's rest, and shrinks by
         // at most what a step walks (issue 12: workers re-planning to treasures and energy
         // management measuring the way home were 22 % of a bench-1000 round with Dijkstra).
-        self.best_first(
+        let (nodes, to) = self.best_first(
             from,
             |n| known.touches_square(self.square(n)),
             |n| (n == goal).then_some(to),
             |p| p.distance(to),
             max_nodes,
-        )
+        )?;
+        Some(self.taut_route(from, nodes, to, terrain))
     }
+}
+
+/// `waypoints` (walked from `from`) with corners cut where the terrain allows: from each
+/// point, straight to the farthest of the next [`SHORTCUT_LOOKAHEAD`] waypoints reachable in
+/// one clear leg over known cells. A corridor of nodes can bend more than the free space
+/// around it does; the cut legs take that back.
+fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
+    let mut out = Vec::with_capacity(waypoints.len());
+    let (mut at, mut i) = (from, 0);
+    while i < waypoints.len() {
+        let last = (i + SHORTCUT_LOOKAHEAD).min(waypoints.len()) - 1;
+        // The next waypoint itself is always walkable: it is the route's own leg.
+        let j = (i + 1..=last)
+            .rev()
+            .find(|&j| terrain.shortcut_clear(at, waypoints[j]))
+            .unwrap_or(i);
+        out.push(waypoints[j]);
+        (at, i) = (waypoints[j], j + 1);
+    }
+    out
 }
 
 /// f64 ordered by `total_cmp`, for the search heap (ties broken by node id: deterministic).
@@ -352,111 +519,4 @@ impl Ord for OrdF64 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn maze() -> ObstacleMap {
-        // 16 × 16 with a wall at x = 8 open only at y = 14.
-        let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
-        ObstacleMap::from_fn(grid, |x, y| x == 8 && y != 14)
-    }
-
-    #[test]
-    fn graph_edges_match_cell_adjacency() {
-        let map = maze();
-        let g = NavGraph::build(&map);
-        // Every free cell lies in exactly one node; two free cells that share an edge lie in
-        // the same node or in adjacent nodes.
-        for y in 0..16 {
-            for x in 0..16 {
-                let p = map.grid().cell_center(x, y);
-                let n = g.node_at(p);
-                assert_eq!(n.is_some(), map.is_point_free(p), "cell ({x}, {y})");
-                if let (Some(a), Some(b)) = (n, g.node_at(p + DVec2::X)) {
-                    assert!(a == b || g.neighbors(a).any(|m| m == b), "({x}, {y}) east");
-                }
-                if let (Some(a), Some(b)) = (n, g.node_at(p + DVec2::Y)) {
-                    assert!(a == b || g.neighbors(a).any(|m| m == b), "({x}, {y}) north");
-                }
-            }
-        }
-        for i in 0..g.len() {
-            let a = NavNodeId(i as u32);
-            for b in g.neighbors(a) {
-                assert!(g.neighbors(b).any(|c| c == a), "asymmetric edge");
-            }
-        }
-    }
-
-    #[test]
-    fn route_goes_through_the_door() {
-        let map = maze();
-        let g = NavGraph::build(&map);
-        let mut known = KnownMap::new(*map.grid());
-        known.mark(&map.grid().extent());
-        let from = DVec2::new(2.5, 2.5);
-        let to = DVec2::new(13.5, 2.5);
-        let r = g.route_within(&known, from, to, usize::MAX).unwrap();
-        // Must pass the door cell (8, 14): at least up to y = 14 and back.
-        assert!(
-            r.waypoints.iter().any(|w| w.y >= 14.0 && (w.x - 8.5).abs() <= 1.0),
-            "{r:?}"
-        );
-        // No path is shorter than the taut string through the door's corners:
-        // |(2.5,2.5)-(8,14)| + 1 + |(9,14)-(13.5,2.5)| = 12.747 + 1 + 12.349.
-        let taut = DVec2::new(2.5, 2.5).distance(DVec2::new(8.0, 14.0)) + 1.0 + DVec2::new(9.0, 14.0).distance(to);
-        assert!(
-            r.length_m >= taut - 1e-9 && r.length_m < 1.2 * taut,
-            "{} vs {taut}",
-            r.length_m
-        );
-        // Straight segments between waypoints stay in free space.
-        let mut prev = from;
-        for w in &r.waypoints {
-            assert!(map.is_segment_free(prev, *w), "{prev} → {w}");
-            prev = *w;
-        }
-        // Unknown terrain is off limits.
-        let mut half = KnownMap::new(*map.grid());
-        half.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::new(8.0, 16.0)));
-        assert!(g.route_within(&half, from, to, usize::MAX).is_none());
-    }
-
-    proptest::proptest! {
-        #![proptest_config(proptest::prelude::ProptestConfig { cases: 300, rng_seed: proptest::test_runner::RngSeed::Fixed(7), ..proptest::prelude::ProptestConfig::default() })]
-
-        /// Issue 12: A* (`route_within`) finds a route exactly when a Dijkstra search over
-        /// the same known nodes does, never longer than it, never shorter than the straight
-        /// line, and along segments free of obstacles.
-        #[test]
-        fn a_star_routes_match_dijkstra(
-            cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
-            known_to in (4u32..=16, 4u32..=16),
-            from in (0u32..16, 0u32..16),
-            to in (0u32..16, 0u32..16),
-        ) {
-            let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
-            let map = ObstacleMap::from_fn(grid, |x, y| cells[(y * 16 + x) as usize]);
-            let g = NavGraph::build(&map);
-            let mut known = KnownMap::new(grid);
-            known.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::new(f64::from(known_to.0), f64::from(known_to.1))));
-            let from = grid.cell_center(from.0, from.1) + DVec2::new(0.1, -0.2);
-            let to = grid.cell_center(to.0, to.1) + DVec2::new(-0.3, 0.15);
-            let a_star = g.route_within(&known, from, to, usize::MAX);
-            let dijkstra = g.node_at(to).and_then(|goal| {
-                g.search(from, |n| known.touches_square(g.square(n)), |n| (n == goal).then_some(to), usize::MAX)
-            });
-            proptest::prop_assert_eq!(a_star.is_some(), dijkstra.is_some());
-            if let (Some(a), Some(d)) = (a_star, dijkstra) {
-                proptest::prop_assert!(a.length_m <= d.length_m + 1e-9, "{} > {}", a.length_m, d.length_m);
-                proptest::prop_assert!(a.length_m >= from.distance(to) - 1e-9);
-                let mut prev = from;
-                for w in &a.waypoints {
-                    proptest::prop_assert!(map.is_segment_free(prev, *w), "{} -> {}", prev, w);
-                    prev = *w;
-                }
-                proptest::prop_assert_eq!(prev, to);
-            }
-        }
-    }
-}
+mod tests;

@@ -1,0 +1,198 @@
+use super::*;
+
+fn maze() -> ObstacleMap {
+    // 16 × 16 with a wall at x = 8 open only at y = 14.
+    let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
+    ObstacleMap::from_fn(grid, |x, y| x == 8 && y != 14)
+}
+
+#[test]
+fn graph_edges_match_cell_adjacency() {
+    let map = maze();
+    let g = NavGraph::build(&map);
+    // Every free cell lies in exactly one node; two free cells that share an edge lie in
+    // the same node or in adjacent nodes.
+    for y in 0..16 {
+        for x in 0..16 {
+            let p = map.grid().cell_center(x, y);
+            let n = g.node_at(p);
+            assert_eq!(n.is_some(), map.is_point_free(p), "cell ({x}, {y})");
+            if let (Some(a), Some(b)) = (n, g.node_at(p + DVec2::X)) {
+                assert!(a == b || g.neighbors(a).any(|m| m == b), "({x}, {y}) east");
+            }
+            if let (Some(a), Some(b)) = (n, g.node_at(p + DVec2::Y)) {
+                assert!(a == b || g.neighbors(a).any(|m| m == b), "({x}, {y}) north");
+            }
+        }
+    }
+    for i in 0..g.len() {
+        let a = NavNodeId(i as u32);
+        for b in g.neighbors(a) {
+            assert!(g.neighbors(b).any(|c| c == a), "asymmetric edge");
+        }
+    }
+}
+
+#[test]
+fn route_goes_through_the_door() {
+    let map = maze();
+    let g = NavGraph::build(&map);
+    let mut known = KnownMap::new(*map.grid());
+    known.mark(&map.grid().extent());
+    let from = DVec2::new(2.5, 2.5);
+    let to = DVec2::new(13.5, 2.5);
+    let point = Terrain {
+        obstacles: &map,
+        known: &known,
+        radius_m: 0.0,
+    };
+    let r = g.route_within(point, from, to, usize::MAX).unwrap();
+    // Must pass the door cell (8, 14): at least up to y = 14 and back.
+    assert!(
+        r.waypoints.iter().any(|w| w.y >= 14.0 && (w.x - 8.5).abs() <= 1.0),
+        "{r:?}"
+    );
+    // No path is shorter than the taut string through the door's corners:
+    // |(2.5,2.5)-(8,14)| + 1 + |(9,14)-(13.5,2.5)| = 12.747 + 1 + 12.349.
+    let taut = DVec2::new(2.5, 2.5).distance(DVec2::new(8.0, 14.0)) + 1.0 + DVec2::new(9.0, 14.0).distance(to);
+    // Pulled taut, a point's route is that string (issue 12: no zig-zag through portal
+    // midpoints), but for the twentieth of a cell its legs keep off the corners: within 1 %.
+    assert!(
+        r.length_m >= taut && r.length_m < 1.01 * taut,
+        "{} vs {taut}",
+        r.length_m
+    );
+    assert!(r.waypoints.len() <= 4, "bends only at the door: {r:?}");
+    // Straight segments between waypoints stay in free space.
+    let mut prev = from;
+    for w in &r.waypoints {
+        assert!(map.is_segment_free(prev, *w), "{prev} → {w}");
+        prev = *w;
+    }
+    // Unknown terrain is off limits.
+    let mut half = KnownMap::new(*map.grid());
+    half.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::new(8.0, 16.0)));
+    let half = Terrain { known: &half, ..point };
+    assert!(g.route_within(half, from, to, usize::MAX).is_none());
+}
+
+/// The length of the unpulled route through `nodes`: portal midpoints, then the goal.
+fn midpoint_length(g: &NavGraph, from: DVec2, nodes: &[NavNodeId], to: DVec2) -> f64 {
+    let mut points: Vec<DVec2> = vec![from];
+    points.extend(nodes.windows(2).map(|w| g.portal(w[0], w[1])));
+    points.push(to);
+    points.windows(2).map(|w| w[0].distance(w[1])).sum()
+}
+
+#[test]
+fn issue12_wide_robot_keeps_its_radius_round_a_block() {
+    // 20 × 10 with a block at x 8..12, y 0..6: from low left to low right over its top.
+    let grid = Grid::new(DVec2::ZERO, 1.0, 20, 10).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| (8..12).contains(&x) && y < 6);
+    let g = NavGraph::build(&map);
+    let mut known = KnownMap::new(grid);
+    known.mark(&grid.extent());
+    let (from, to) = (DVec2::new(2.0, 2.0), DVec2::new(18.0, 2.0));
+    let radius_m = 0.4;
+    let wide = Terrain {
+        obstacles: &map,
+        known: &known,
+        radius_m,
+    };
+    let r = g.route_within(wide, from, to, usize::MAX).unwrap();
+    let mut prev = from;
+    for w in &r.waypoints {
+        assert!(map.is_swept_disc_free(prev, *w, radius_m), "{prev} → {w} in {r:?}");
+        prev = *w;
+    }
+    // Never shorter than a point's optimum over the block's corners (8, 6) and (12, 6);
+    // within 5 % of the exact any-angle planner's path for the same disc, which bends at
+    // the corners of the block grown by the radius, (7.6, 6.4) and (12.4, 6.4).
+    let point = 2.0 * DVec2::new(6.0, 4.0).length() + 4.0;
+    let disc = crate::spatial::AnyAnglePlanner::build(&map, radius_m)
+        .unwrap()
+        .path(from, to)
+        .unwrap();
+    assert!(
+        r.length_m >= point && r.length_m <= 1.05 * disc.length_m,
+        "{} vs {point} and {}",
+        r.length_m,
+        disc.length_m
+    );
+    assert!(r.length_m < midpoint_length(&g, from, &r.nodes, to));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 300, rng_seed: proptest::test_runner::RngSeed::Fixed(7), ..proptest::prelude::ProptestConfig::default() })]
+
+    /// Issue 12: A* (`route_within`) finds a route exactly when a Dijkstra search over
+    /// the same known nodes does, never longer than it, never shorter than the straight
+    /// line, and along segments free of obstacles.
+    #[test]
+    fn a_star_routes_match_dijkstra(
+        cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
+        known_to in (4u32..=16, 4u32..=16),
+        from in (0u32..16, 0u32..16),
+        to in (0u32..16, 0u32..16),
+    ) {
+        let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
+        let map = ObstacleMap::from_fn(grid, |x, y| cells[(y * 16 + x) as usize]);
+        let g = NavGraph::build(&map);
+        let mut known = KnownMap::new(grid);
+        known.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::new(f64::from(known_to.0), f64::from(known_to.1))));
+        let from = grid.cell_center(from.0, from.1) + DVec2::new(0.1, -0.2);
+        let to = grid.cell_center(to.0, to.1) + DVec2::new(-0.3, 0.15);
+        let point = Terrain { obstacles: &map, known: &known, radius_m: 0.0 };
+        let a_star = g.route_within(point, from, to, usize::MAX);
+        let dijkstra = g.node_at(to).and_then(|goal| {
+            g.search(from, point, |n| known.touches_square(g.square(n)), |n| (n == goal).then_some(to), usize::MAX)
+        });
+        proptest::prop_assert_eq!(a_star.is_some(), dijkstra.is_some());
+        if let (Some(a), Some(d)) = (a_star, dijkstra) {
+            proptest::prop_assert!(a.length_m <= d.length_m + 1e-9, "{} > {}", a.length_m, d.length_m);
+            proptest::prop_assert!(a.length_m >= from.distance(to) - 1e-9);
+            let mut prev = from;
+            for w in &a.waypoints {
+                proptest::prop_assert!(map.is_segment_free(prev, *w), "{} -> {}", prev, w);
+                prev = *w;
+            }
+            proptest::prop_assert_eq!(prev, to);
+        }
+    }
+
+    /// Issue 12: a small robot's route, pulled taut, keeps its radius clear of obstacles,
+    /// is never shorter than a point's exact any-angle optimum (a visibility graph of the
+    /// blocked cells' corners, built independently), and never longer than the midpoint
+    /// route through the same nodes.
+    #[test]
+    fn taut_routes_are_free_and_between_the_optimum_and_the_midpoints(
+        cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
+        from in (0u32..16, 0u32..16),
+        to in (0u32..16, 0u32..16),
+        nudge in (-0.4f64..0.4, -0.4f64..0.4),
+    ) {
+        let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
+        let map = ObstacleMap::from_fn(grid, |x, y| cells[(y * 16 + x) as usize]);
+        let g = NavGraph::build(&map);
+        let mut known = KnownMap::new(grid);
+        known.mark(&grid.extent());
+        let from = grid.cell_center(from.0, from.1) + DVec2::new(nudge.0, nudge.1);
+        let to = grid.cell_center(to.0, to.1) - DVec2::new(nudge.1, nudge.0);
+        let radius_m = 0.05;
+        let small = Terrain { obstacles: &map, known: &known, radius_m };
+        let route = g.route_within(small, from, to, usize::MAX);
+        let best = crate::spatial::AnyAnglePlanner::build(&map, 0.0).unwrap().path(from, to).ok();
+        if let Some(r) = route {
+            let mut prev = from;
+            for w in &r.waypoints {
+                proptest::prop_assert!(map.is_swept_disc_free(prev, *w, radius_m), "{} -> {}", prev, w);
+                prev = *w;
+            }
+            proptest::prop_assert_eq!(prev, to);
+            let best = best.expect("the exact planner finds a path where the graph does");
+            proptest::prop_assert!(r.length_m >= best.length_m - 1e-9, "{} < optimum {}", r.length_m, best.length_m);
+            let mid = midpoint_length(&g, from, &r.nodes, to);
+            proptest::prop_assert!(r.length_m <= mid + 1e-9, "{} > midpoints {}", r.length_m, mid);
+        }
+    }
+}
