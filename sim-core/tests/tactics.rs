@@ -43,6 +43,33 @@ fn collision_avoidance_is_quiet_while_moves_succeed() {
     }
 }
 
+/// Regression (issue 12): a robot pressed against the map's edge escaped off the map again
+/// and again (no cell there is ever known, so "not known to be blocked" let every such
+/// heading through), and a follower stood there while its leader walked away.
+#[test]
+fn issue12_escapes_never_head_off_the_map() {
+    for seed in 0..24 {
+        let mut w = TestWorld::from_ascii("\n    R...\n    ....\n    ....", 1.0)
+            .unwrap()
+            .knowing_all();
+        w.seed = seed;
+        w.robot.position = DVec2::new(0.13, 1.5);
+        let mut c = CollisionAvoidance::default();
+        let off_map = Action::MoveTo {
+            to: DVec2::new(-0.87, 1.5),
+        };
+        for _ in 1..=3 {
+            assert_eq!(c.suggest(&mut w.ctx()), None);
+            w.apply(off_map);
+            assert_eq!(w.robot.last_action.1, Outcome::Refused);
+        }
+        let to = move_target(c.suggest(&mut w.ctx()));
+        assert!(w.extent().contains_strictly(to), "seed {seed}: escape to {to}");
+        w.apply(Action::MoveTo { to });
+        assert_eq!(w.robot.last_action.1, Outcome::Done, "seed {seed}");
+    }
+}
+
 #[test]
 fn collision_avoidance_escapes_after_patience_refused_moves() {
     let mut w = TestWorld::from_ascii(ROOM, 1.0).unwrap().knowing_all();

@@ -188,6 +188,18 @@ impl KnownMap {
         self.tree.square_value(sq) == Some(true)
     }
 
+    /// Whether some cell of the cell rectangle `lo ..= hi` is known.
+    #[inline]
+    pub fn touches_cells(&self, lo: (u32, u32), hi: (u32, u32)) -> bool {
+        self.tree.any_cell_in_rect(lo, hi, true)
+    }
+
+    /// Whether every cell of the cell rectangle `lo ..= hi` is known.
+    #[inline]
+    pub fn covers_cells(&self, lo: (u32, u32), hi: (u32, u32)) -> bool {
+        !self.tree.any_cell_in_rect(lo, hi, false)
+    }
+
     /// Whether some cell overlapping the shape is known.
     pub fn touches_known<S: Shape>(&self, shape: &S) -> bool {
         self.tree.any_leaf_in(shape, true)

@@ -76,7 +76,7 @@ impl Tactic for CollisionAvoidance {
         if self.escaping > 0 {
             self.escaping -= 1;
             let to = p + self.heading * ctx.kind.speed_m_per_round;
-            if ctx.can_move(p, to) == Some(false) {
+            if !may_head_for(ctx, to) {
                 self.heading = random_free_heading(ctx).unwrap_or(-self.heading);
             }
             return Some(Action::MoveTo {
@@ -87,11 +87,19 @@ impl Tactic for CollisionAvoidance {
     }
 }
 
+/// Whether an escape may head for `to`: not known to be blocked, and not off the map (no
+/// cell there is ever known, so the known map cannot say; a robot pressed against the
+/// map's edge used to pick such headings again and again).
+fn may_head_for(ctx: &Ctx, to: DVec2) -> bool {
+    let on_map = ctx.known().is_none_or(|k| k.grid().extent().contains_strictly(to));
+    on_map && ctx.can_move(ctx.position(), to) != Some(false)
+}
+
 fn random_free_heading(ctx: &mut Ctx) -> Option<DVec2> {
     let p = ctx.position();
     let step = ctx.kind.speed_m_per_round;
     let start = ctx.rng.random_range(0.0..std::f64::consts::TAU);
     (0..12)
         .map(|i| DVec2::from_angle(start + f64::from(i) * std::f64::consts::TAU / 12.0))
-        .find(|h| ctx.can_move(p, p + *h * step) != Some(false))
+        .find(|h| may_head_for(ctx, p + *h * step))
 }

@@ -70,9 +70,9 @@ impl Navigator {
         Some(Action::MoveTo { to: target })
     }
 
-    /// Route to the nearest frontier (by path): the closest free leaf the known map touches
-    /// that is either partly unknown (the route ends at its nearest unknown point) or borders
-    /// a free leaf not known at all (the route ends just across their shared edge). Targets
+    /// Route to the nearest frontier (by path): the closest piece of free space the known map
+    /// touches that is either partly unknown (the route ends at its nearest unknown point) or
+    /// borders a piece not known at all (the route ends just across their shared edge). Targets
     /// within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
     pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Option<Route> {
         let terrain = ctx.terrain()?;
@@ -85,7 +85,7 @@ impl Navigator {
         // and the search asks again right after, when it expands the node: the answers are
         // kept in between (each is a descent of the known map's tree).
         let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
-        let touches = |m: NavNodeId| known.touches_square(nav.square(m));
+        let touches = |m: NavNodeId| nav.touched_by(known, m);
         nav.search(
             p,
             terrain,
@@ -95,7 +95,7 @@ impl Navigator {
             },
             |n| {
                 touched.borrow_mut().clear();
-                if !known.covers_square(nav.square(n)) {
+                if !nav.covered_by(known, n) {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
                 let mut cache = touched.borrow_mut();

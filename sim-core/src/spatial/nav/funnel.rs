@@ -21,11 +21,6 @@ impl Portal {
     fn point(p: DVec2) -> Self {
         Self { left: p, right: p }
     }
-
-    /// The middle of the portal.
-    pub fn mid(&self) -> DVec2 {
-        0.5 * (self.left + self.right)
-    }
 }
 
 /// Positive when `b` lies left of the ray from `o` through `a`, negative when right.

@@ -1,7 +1,8 @@
-//! The navigation graph (paper §4.2): computed once per map, its nodes are the free leaves
-//! of the obstacle quadtree and its edges join leaves that share a stretch of edge (a
-//! "portal"). A robot may only use the nodes its known map touches. Searches order nodes by
-//! the distance between portal midpoints; the route found is then pulled taut through its
+//! The navigation graph (paper §4.2): computed once per map, its nodes are convex pieces of
+//! free space (the obstacle quadtree's free leaves merged into rectangles, [`pieces`]) and
+//! its edges join pieces that share a stretch of edge (a "portal"). A robot may only use
+//! the nodes its known map touches. Searches order nodes by
+//! the walk through the nearest points of their portals; the route found is then pulled taut through its
 //! corridor of nodes ([`funnel`]), so robots walk straight lines that bend only at corners
 //! of the corridor, keeping their radius clear of them.
 
@@ -19,10 +20,12 @@ use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::Square;
 
 mod funnel;
+mod pieces;
 
 use funnel::Portal;
+pub use pieces::Piece;
 
-/// A node of the navigation graph (a free quadtree leaf).
+/// A node of the navigation graph (a piece of free space).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub struct NavNodeId(pub u32);
 
@@ -49,13 +52,16 @@ impl LazyNavGraph {
     }
 }
 
-/// Free leaves and their edge adjacency, in compressed sparse rows.
+/// Pieces of free space and their edge adjacency, in compressed sparse rows.
 #[derive(Clone, Debug)]
 pub struct NavGraph {
     grid: Grid,
-    squares: Vec<Square>,
-    /// Morton keys of the squares' lower-left cells, increasing (leaves in Z order).
+    pieces: Vec<Piece>,
+    /// The free leaves, to find the piece holding a point: Morton keys of their lower-left
+    /// cells, increasing (Z order), their levels and their pieces.
     keys: Vec<u64>,
+    levels: Vec<u8>,
+    piece_of: Vec<u32>,
     starts: Vec<u32>,
     adjacent: Vec<u32>,
 }
@@ -75,6 +81,24 @@ fn spread(v: u32) -> u64 {
 #[inline]
 fn morton(x: u32, y: u32) -> u64 {
     spread(x) | (spread(y) << 1)
+}
+
+/// The even bits of `v`, packed.
+#[inline]
+fn gather(v: u64) -> u32 {
+    let mut x = v & 0x5555_5555_5555_5555;
+    x = (x | (x >> 1)) & 0x3333_3333_3333_3333;
+    x = (x | (x >> 2)) & 0x0F0F_0F0F_0F0F_0F0F;
+    x = (x | (x >> 4)) & 0x00FF_00FF_00FF_00FF;
+    x = (x | (x >> 8)) & 0x0000_FFFF_0000_FFFF;
+    x = (x | (x >> 16)) & 0x0000_0000_FFFF_FFFF;
+    u32::try_from(x).expect("32 bits")
+}
+
+/// The cell of a Z-order key.
+#[inline]
+fn unmorton(key: u64) -> (u32, u32) {
+    (gather(key), gather(key >> 1))
 }
 
 /// A route found on the graph.
@@ -141,25 +165,29 @@ impl NavGraph {
     /// Build from the obstacle map's free leaves.
     pub fn build(obstacles: &ObstacleMap) -> Self {
         let grid = *obstacles.grid();
-        let mut squares = Vec::new();
+        let mut leaves = Vec::new();
         obstacles.tree().for_each_leaf(|sq, blocked| {
             if !blocked {
-                squares.push(sq);
+                leaves.push(sq);
             }
         });
-        let keys: Vec<u64> = squares.iter().map(|s| morton(s.x, s.y)).collect();
+        let keys: Vec<u64> = leaves.iter().map(|s| morton(s.x, s.y)).collect();
         debug_assert!(keys.windows(2).all(|w| w[0] < w[1]), "leaves come in Z order");
+        let (pieces, piece_of) = pieces::merge(&leaves);
         let mut graph = Self {
             grid,
-            squares,
+            pieces,
+            levels: leaves.iter().map(|s| s.level).collect(),
             keys,
+            piece_of,
             starts: Vec::new(),
             adjacent: Vec::new(),
         };
-        // East and north neighbours of every leaf; each edge is then stored both ways.
+        // Pieces of leaves that share a stretch of edge (east and north of every leaf),
+        // each pair stored both ways.
         let mut edges: Vec<(u32, u32)> = Vec::new();
         let half = 0.5 * grid.cell_m();
-        for (i, sq) in graph.squares.iter().enumerate() {
+        for (i, sq) in leaves.iter().enumerate() {
             let s = sq.side_cells();
             let east = Aabb {
                 min: grid.corner(sq.x + s, sq.y),
@@ -169,43 +197,52 @@ impl NavGraph {
                 min: grid.corner(sq.x, sq.y + s),
                 max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(0.0, half),
             };
+            let a = graph.piece_of[i];
             for strip in [east, north] {
                 let _ = obstacles.tree().visit_leaves_in(&strip, false, |n, _| {
-                    let j = graph.find(n).expect("free leaf is a node");
-                    edges.push((i as u32, j.0));
-                    edges.push((j.0, i as u32));
+                    let b = graph.piece_of[graph.find(n).expect("free leaf is a node")];
+                    if a != b {
+                        edges.push((a, b));
+                        edges.push((b, a));
+                    }
                     ControlFlow::Continue(())
                 });
             }
         }
         edges.sort_unstable();
-        graph.starts = vec![0; graph.squares.len() + 1];
+        edges.dedup();
+        graph.starts = vec![0; graph.pieces.len() + 1];
         for &(a, _) in &edges {
             graph.starts[a as usize + 1] += 1;
         }
-        for i in 0..graph.squares.len() {
+        for i in 0..graph.pieces.len() {
             graph.starts[i + 1] += graph.starts[i];
         }
         graph.adjacent = edges.into_iter().map(|e| e.1).collect();
         graph
     }
 
-    fn find(&self, sq: Square) -> Option<NavNodeId> {
+    /// The index of free leaf `sq`.
+    fn find(&self, sq: Square) -> Option<usize> {
         self.keys
             .binary_search(&morton(sq.x, sq.y))
             .ok()
-            .filter(|&i| self.squares[i] == sq)
-            .map(|i| NavNodeId(i as u32))
+            .filter(|&i| self.levels[i] == sq.level)
     }
 
     /// Number of nodes.
     pub fn len(&self) -> usize {
-        self.squares.len()
+        self.pieces.len()
     }
 
     /// Whether the map has no free space.
     pub fn is_empty(&self) -> bool {
-        self.squares.is_empty()
+        self.pieces.is_empty()
+    }
+
+    /// Number of free leaves the pieces were merged from.
+    pub fn leaf_count(&self) -> usize {
+        self.keys.len()
     }
 
     /// Number of (undirected) edges.
@@ -213,25 +250,41 @@ impl NavGraph {
         self.adjacent.len() / 2
     }
 
-    /// The node whose square holds `p`, if `p` is in free space.
+    /// The node whose piece holds `p`, if `p` is in free space.
     pub fn node_at(&self, p: DVec2) -> Option<NavNodeId> {
         let (x, y) = self.grid.cell_of(p)?;
         let key = morton(x, y);
         let i = self.keys.partition_point(|&k| k <= key).checked_sub(1)?;
-        let sq = self.squares[i];
-        let s = sq.side_cells();
-        (x >= sq.x && x < sq.x + s && y >= sq.y && y < sq.y + s).then_some(NavNodeId(i as u32))
+        // The leaf at or before the cell in Z order holds it if its square reaches it.
+        let (lx, ly) = unmorton(self.keys[i]);
+        let s = 1u32 << self.levels[i];
+        (x >= lx && x < lx + s && y >= ly && y < ly + s).then_some(NavNodeId(self.piece_of[i]))
     }
 
-    /// A node's square.
-    pub fn square(&self, n: NavNodeId) -> Square {
-        self.squares[n.0 as usize]
+    /// A node's piece of free space.
+    pub fn piece(&self, n: NavNodeId) -> Piece {
+        self.pieces[n.0 as usize]
+    }
+
+    /// Whether `known` knows some cell of node `n`.
+    pub fn touched_by(&self, known: &KnownMap, n: NavNodeId) -> bool {
+        let p = self.piece(n);
+        known.touches_cells(p.lo(), p.hi())
+    }
+
+    /// Whether `known` knows every cell of node `n`.
+    pub fn covered_by(&self, known: &KnownMap, n: NavNodeId) -> bool {
+        let p = self.piece(n);
+        known.covers_cells(p.lo(), p.hi())
     }
 
     /// A node's world box.
     pub fn bounds(&self, n: NavNodeId) -> Aabb {
-        let sq = self.square(n);
-        self.grid.square(sq.x, sq.y, sq.level)
+        let p = self.piece(n);
+        Aabb {
+            min: self.grid.corner(p.x, p.y),
+            max: self.grid.corner(p.x + p.w, p.y + p.h),
+        }
     }
 
     /// A node's neighbours.
@@ -249,10 +302,51 @@ impl NavGraph {
         (lo + hi) * 0.5
     }
 
+    /// Where a search that reached node `a` at `at` enters neighbour `b`: the point of their
+    /// portal nearest to `at`, kept half a cell from the portal's ends. Costing a piece by
+    /// the walk between such points, not between portal midpoints, keeps searches from
+    /// preferring corridors that look short only through the middles of big pieces.
+    fn entry_point(&self, a: NavNodeId, b: NavNodeId, at: DVec2) -> DVec2 {
+        let (lo, hi) = self.portal_ends(a, b);
+        let inset = DVec2::splat(0.5 * self.grid.cell_m()).min(0.5 * (hi - lo));
+        at.clamp(lo + inset, hi - inset)
+    }
+
     /// Ends of the edge stretch two adjacent nodes share (lower left first).
     pub fn portal_ends(&self, a: NavNodeId, b: NavNodeId) -> (DVec2, DVec2) {
         let (p, q) = (self.bounds(a), self.bounds(b));
         (p.min.max(q.min), p.max.min(q.max))
+    }
+
+    /// Where a route through `nodes` that keeps well inside them crosses their portals: for
+    /// each portal, a point either side of its middle, as deep into each piece as half the
+    /// portal's length and half of either piece allow. Legs between such points stay that
+    /// deep too (the points at a given depth of a rectangle form a rectangle), so the route
+    /// keeps half a cell clear on maps of unit cells, whatever its pieces' shapes.
+    fn deep_crossings(&self, nodes: &[NavNodeId]) -> Vec<DVec2> {
+        let mut points = Vec::with_capacity(2 * nodes.len());
+        for w in nodes.windows(2) {
+            let (lo, hi) = self.portal_ends(w[0], w[1]);
+            let (a, b) = (self.bounds(w[0]), self.bounds(w[1]));
+            let along = hi - lo;
+            // The portal's normal from `a` into `b`, and the pieces' depths along it.
+            let (normal, depth) = if along.x.abs() >= along.y.abs() {
+                (
+                    DVec2::Y * (b.center().y - a.center().y).signum(),
+                    (a.max.y - a.min.y).min(b.max.y - b.min.y),
+                )
+            } else {
+                (
+                    DVec2::X * (b.center().x - a.center().x).signum(),
+                    (a.max.x - a.min.x).min(b.max.x - b.min.x),
+                )
+            };
+            let d = 0.5 * along.length().min(depth);
+            let mid = 0.5 * (lo + hi);
+            points.push(mid - normal * d);
+            points.push(mid + normal * d);
+        }
+        points
     }
 
     /// The portal from `a` into `b` as a walker sees it, each end pulled in by `margin_m`
@@ -299,8 +393,8 @@ impl NavGraph {
         // clears it by `m·sin θ`, θ the angle between leg and portal. Such a bend's portal
         // is pulled in to `r / sin θ` and the string pulled again (portals a failing leg
         // only crosses are pulled in twice as far), three times at most. If a leg is still
-        // too close, the route goes through the portals' midpoints, as unpulled routes do,
-        // cutting only the corners that are clear.
+        // too close, the route crosses every portal square at its middle instead
+        // ([`deep_crossings`](Self::deep_crossings)), cutting only the corners that are clear.
         let mut attempt = 0;
         loop {
             let portals = walked(&margins_m);
@@ -318,7 +412,7 @@ impl NavGraph {
                 break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
             }
             if attempt == 4 {
-                let mut waypoints: Vec<DVec2> = portals.iter().map(Portal::mid).collect();
+                let mut waypoints = self.deep_crossings(&nodes);
                 waypoints.push(goal);
                 break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
             }
@@ -359,15 +453,16 @@ impl NavGraph {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.squares.capacity() * std::mem::size_of::<Square>()
+        self.pieces.capacity() * std::mem::size_of::<Piece>()
             + self.keys.capacity() * 8
-            + (self.starts.capacity() + self.adjacent.capacity()) * 4
+            + self.levels.capacity()
+            + (self.piece_of.capacity() + self.starts.capacity() + self.adjacent.capacity()) * 4
     }
 
     /// Dijkstra from the node holding `from` over nodes accepted by `usable`, until `is_goal`
     /// accepts a node; the route ends at the point `is_goal` returns for it, pulled taut for
-    /// a robot in `terrain`. Edge costs are distances between portal midpoints, so routes
-    /// through big open leaves cost what they measure.
+    /// a robot in `terrain`. A route costs the walk from entry point to entry point (see
+    /// `entry_point`), so routes through big open pieces cost what they measure.
     pub fn search(
         &self,
         from: DVec2,
@@ -396,13 +491,13 @@ impl NavGraph {
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
             let (stamp, marks) = &mut *guard;
-            if marks.len() != self.squares.len() {
+            if marks.len() != self.pieces.len() {
                 // All zero bytes, so the allocator hands out pages the kernel maps only
                 // when a search first writes them: searches stay local, and a marked copy
                 // of a ten-million-node graph per thread cost the moonshot 200 MB and a
                 // tenth of its first rounds in page clearing (issue 11). A node's parent
                 // is read only once it carries the search's stamp (never 0).
-                *marks = vec![(0, 0.0, 0); self.squares.len()];
+                *marks = vec![(0, 0.0, 0); self.pieces.len()];
                 *stamp = 0;
             }
             *stamp = stamp.wrapping_add(1);
@@ -441,7 +536,7 @@ impl NavGraph {
                     return None;
                 }
                 for m in self.neighbors(node) {
-                    let p = self.portal(node, m);
+                    let p = self.entry_point(node, m, at);
                     let nd = d + at.distance(p);
                     let mark = marks[m.0 as usize];
                     // Only nodes found usable are ever stamped, so the test runs once a node.
@@ -466,7 +561,7 @@ impl NavGraph {
         // from that test): say so now instead of searching everything known first (issue
         // 12: workers heading for treasures they only heard of spent 18 % of bench-1000's
         // time on such searches).
-        if self.node_at(from) != Some(goal) && !known.touches_square(self.square(goal)) {
+        if self.node_at(from) != Some(goal) && !self.touched_by(known, goal) {
             return None;
         }
         // A*: the straight line to `to` is never longer than a route's rest, and shrinks by
@@ -474,7 +569,7 @@ impl NavGraph {
         // management measuring the way home were 22 % of a bench-1000 round with Dijkstra).
         let (nodes, to) = self.best_first(
             from,
-            |n| known.touches_square(self.square(n)),
+            |n| self.touched_by(known, n),
             |n| (n == goal).then_some(to),
             |p| p.distance(to),
             max_nodes,

@@ -280,6 +280,45 @@ impl RegionQuadtree {
         Some(ControlFlow::Continue(()))
     }
 
+    /// Whether some cell of the cell rectangle `lo ..= hi` (inclusive corners, inside the
+    /// covering square) holds `value`. A descent into the nodes the rectangle meets that
+    /// stops at the first node inside it that is mixed (it holds both values): the test
+    /// for navigation pieces, which are rectangles of cells.
+    pub fn any_cell_in_rect(&self, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
+        debug_assert!(lo.0 <= hi.0 && lo.1 <= hi.1 && hi.0 < self.grid.side_cells() && hi.1 < self.grid.side_cells());
+        self.any_in_rect_below(self.node(self.root), self.root_square(), lo, hi, value)
+    }
+
+    /// `any_cell_in_rect` below node `n` of square `sq`, which the rectangle meets.
+    fn any_in_rect_below(&self, n: Node, sq: Square, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
+        let last = sq.side_cells() - 1;
+        match n {
+            Node::Leaf(v) => v == value,
+            // An internal node is never uniform: inside the rectangle it holds both values.
+            _ if lo.0 <= sq.x && lo.1 <= sq.y && sq.x + last <= hi.0 && sq.y + last <= hi.1 => true,
+            Node::Bits { bits, level } if level == BLOCK_LEVEL => {
+                // The rectangle's part of the block as a mask, row-major, then in Z order.
+                let (cx0, cx1) = (lo.0.max(sq.x) - sq.x, hi.0.min(sq.x + 7) - sq.x);
+                let (cy0, cy1) = (lo.1.max(sq.y) - sq.y, hi.1.min(sq.y + 7) - sq.y);
+                let row = (0xFFu64 >> (7 - (cx1 - cx0))) << cx0;
+                let rows = (u64::MAX >> (8 * (7 - (cy1 - cy0)))) << (8 * cy0);
+                let held = if value { bits } else { !bits };
+                held & block::z_order(rows & (row * 0x0101_0101_0101_0101)) != 0
+            }
+            _ => {
+                let half = sq.side_cells() / 2;
+                (0..4).any(|i| {
+                    let c = sq.child(i);
+                    c.x <= hi.0
+                        && c.y <= hi.1
+                        && c.x + half > lo.0
+                        && c.y + half > lo.1
+                        && self.any_in_rect_below(self.kid(n, i), c, lo, hi, value)
+                })
+            }
+        }
+    }
+
     /// The value at world point `p`, or `None` outside the covering square.
     pub fn value_at(&self, p: DVec2) -> Option<bool> {
         self.grid.cell_of(p).map(|(x, y)| self.cell_value(x, y))

@@ -189,3 +189,47 @@ fn issue11_packed_trees_are_the_unpacked_tree() {
         assert_same(&packed, &twin, &format!("case {case}: compacted"));
     }
 }
+
+/// Issue 12: `any_cell_in_rect` against the cells one by one, on random trees (packed and
+/// not) and random rectangles.
+#[test]
+fn any_cell_in_rect_matches_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    for case in 0..60 {
+        let grid = Grid::new(DVec2::ZERO, 1.0, 40, 24).unwrap();
+        let density = rng.random_range(0.0..0.5);
+        let blocky = rng.random_bool(0.5);
+        let cells: Vec<bool> = (0..40 * 24).map(|_| rng.random_bool(density)).collect();
+        let value_at = |x: u32, y: u32| {
+            if blocky {
+                // Clusters, so that large uniform leaves and mixed nodes both occur.
+                cells[((y / 4) * 40 + x / 4) as usize]
+            } else {
+                cells[(y * 40 + x) as usize]
+            }
+        };
+        let packed = RegionQuadtree::from_fn(grid, false, value_at);
+        let unpacked = packed.unpacked();
+        let side = grid.side_cells();
+        for _ in 0..200 {
+            let (x0, x1) = (rng.random_range(0..side), rng.random_range(0..side));
+            let (y0, y1) = (rng.random_range(0..side), rng.random_range(0..side));
+            let (lo, hi) = ((x0.min(x1), y0.min(y1)), (x0.max(x1), y0.max(y1)));
+            for value in [false, true] {
+                let brute = (lo.1..=hi.1).any(|y| {
+                    (lo.0..=hi.0).any(|x| {
+                        let inside = x < 40 && y < 24;
+                        (if inside { value_at(x, y) } else { false }) == value
+                    })
+                });
+                for tree in [&packed, &unpacked] {
+                    assert_eq!(
+                        tree.any_cell_in_rect(lo, hi, value),
+                        brute,
+                        "case {case}: {lo:?}..={hi:?} {value}"
+                    );
+                }
+            }
+        }
+    }
+}
