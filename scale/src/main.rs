@@ -102,6 +102,26 @@ enum Scenario {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// The kernel's navigation graph (issue 12): pieces of free space, edges and build time
+    /// on a map, then route queries for a robot that knows the whole map, with their lengths
+    /// against the exact any-angle planner's on maps small enough for it.
+    NavGraph {
+        /// A Moving AI `.map` or a Smart Teams map file.
+        #[arg(long)]
+        map: std::path::PathBuf,
+        /// Random queries (pairs of free cell centres).
+        #[arg(long, default_value_t = 1_000)]
+        queries: usize,
+        /// Robot radius, metres.
+        #[arg(long, default_value_t = 0.125)]
+        robot_radius_m: f64,
+        /// Compare with the exact planner on maps of at most this many cells.
+        #[arg(long, default_value_t = 4_194_304)]
+        compare_cells: u64,
+        /// Seed of the random queries.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
     Fig4 {
@@ -144,6 +164,13 @@ fn run(cli: &Cli) -> Result<()> {
             robot_radius_m,
             seed,
         } => return any_angle(map, scen.as_deref(), queries, robot_radius_m, seed),
+        Scenario::NavGraph {
+            ref map,
+            queries,
+            robot_radius_m,
+            compare_cells,
+            seed,
+        } => return nav_graph(map, queries, robot_radius_m, compare_cells, seed),
         Scenario::RandomWalk {
             robots,
             side_m,
@@ -250,6 +277,34 @@ fn any_angle(
         b.queries,
         b.reachable,
         b.reachability_mismatches,
+        b.mean_query_ms,
+        b.max_query_ms,
+    );
+    Ok(())
+}
+
+fn nav_graph(map: &std::path::Path, queries: usize, radius_m: f64, compare_cells: u64, seed: u64) -> Result<()> {
+    let obstacles = scale::paths::load_map(map)?;
+    let queries = scale::paths::random_queries(&obstacles, queries, seed);
+    let b = scale::paths::nav_bench(&obstacles, &queries, radius_m, compare_cells)?;
+    let excess = b.excess.map_or(String::from(" | not compared with the exact planner"), |(n, mean, worst)| {
+        format!(
+            " | over {n} routes the exact planner also found: mean {:.2} %, worst {:.2} % longer than a point's optimum",
+            mean * 100.0,
+            worst * 100.0
+        )
+    });
+    println!(
+        "nav-graph: {} | {} leaves, {} free | {} pieces, {} edges, built in {:.2} s, {:.1} MB | {} queries ({} reachable) for radius {radius_m} m, mean {:.3} ms, slowest {:.3} ms{excess}",
+        map.display(),
+        obstacles.leaf_count(),
+        b.free_leaves,
+        b.pieces,
+        b.edges,
+        b.build_s,
+        b.memory_bytes as f64 / 1e6,
+        b.queries,
+        b.reachable,
         b.mean_query_ms,
         b.max_query_ms,
     );

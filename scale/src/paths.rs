@@ -9,7 +9,7 @@ use editor::import::{ImportOptions, import};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_core::glam::DVec2;
-use sim_core::spatial::{AnyAnglePlanner, ObstacleMap};
+use sim_core::spatial::{AnyAnglePlanner, KnownMap, NavGraph, ObstacleMap, Terrain};
 use sim_core::world::MapData;
 
 use crate::{Error, Result};
@@ -195,5 +195,93 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
             )
         }),
         reachability_mismatches: mismatches,
+    })
+}
+
+/// What the navigation-graph bench measured (issue 12, item 1).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NavBench {
+    /// Free leaves of the map's quadtree.
+    pub free_leaves: usize,
+    /// Pieces (nodes) they merged into.
+    pub pieces: usize,
+    /// Edges between pieces.
+    pub edges: usize,
+    /// Seconds to build the graph.
+    pub build_s: f64,
+    /// Heap bytes of the graph.
+    pub memory_bytes: usize,
+    /// Queries run, and those with a route.
+    pub queries: usize,
+    /// Queries with a route.
+    pub reachable: usize,
+    /// Mean and slowest route query (the whole map known), milliseconds.
+    pub mean_query_ms: f64,
+    /// Slowest query, milliseconds.
+    pub max_query_ms: f64,
+    /// Over reachable queries the exact any-angle planner also answered: how many, and the
+    /// mean and worst relative excess of the route's length over a point's exact optimum.
+    pub excess: Option<(usize, f64, f64)>,
+}
+
+/// Build the kernel's navigation graph of `map`, then route each query for a robot of
+/// `radius_m` that knows the whole map, and compare the lengths with the exact any-angle
+/// planner's point paths where it can be built (maps of at most `compare_cells` cells).
+pub fn nav_bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64, compare_cells: u64) -> Result<NavBench> {
+    let t = Instant::now();
+    let graph = NavGraph::build(map);
+    let build_s = t.elapsed().as_secs_f64();
+    let mut known = KnownMap::new(*map.grid());
+    known.mark(&map.grid().extent());
+    let terrain = Terrain {
+        obstacles: map,
+        known: &known,
+        radius_m,
+    };
+    let g = map.grid();
+    let cells = u64::from(g.width_cells()) * u64::from(g.height_cells());
+    let exact = if cells <= compare_cells {
+        AnyAnglePlanner::build(map, 0.0).ok()
+    } else {
+        None
+    };
+    if let Some(p) = &exact {
+        p.link_all();
+    }
+    let (mut total, mut max, mut reachable) = (0.0, 0.0f64, 0);
+    let mut excess = Vec::new();
+    for q in queries {
+        let t = Instant::now();
+        let route = graph.route_within(terrain, q.from, q.to, usize::MAX);
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        total += ms;
+        max = max.max(ms);
+        let Some(route) = route else { continue };
+        reachable += 1;
+        if let Some(Ok(best)) = exact.as_ref().map(|p| p.path(q.from, q.to))
+            && best.length_m > 0.0
+        {
+            excess.push(route.length_m / best.length_m - 1.0);
+        }
+    }
+    #[allow(clippy::cast_precision_loss)] // Counts far below 2^52.
+    let mean = |v: f64, n: usize| if n == 0 { 0.0 } else { v / n as f64 };
+    Ok(NavBench {
+        free_leaves: graph.leaf_count(),
+        pieces: graph.len(),
+        edges: graph.edge_count(),
+        build_s,
+        memory_bytes: graph.memory_bytes(),
+        queries: queries.len(),
+        reachable,
+        mean_query_ms: mean(total, queries.len()),
+        max_query_ms: max,
+        excess: (!excess.is_empty()).then(|| {
+            (
+                excess.len(),
+                mean(excess.iter().sum(), excess.len()),
+                excess.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        }),
     })
 }

@@ -151,7 +151,7 @@ impl Terrain<'_> {
 }
 
 /// How many waypoints ahead a route looks for a shortcut.
-const SHORTCUT_LOOKAHEAD: usize = 4;
+const SHORTCUT_LOOKAHEAD: usize = 8;
 
 /// Search marks: the current stamp, and per node (stamp, distance, parent).
 type Marks = (u32, Vec<(u32, f64, u32)>);
