@@ -7,7 +7,7 @@ use sim_core::agent::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, TestWorld, blocked,
 };
 use sim_core::glam::DVec2;
-use sim_core::spatial::RobotId;
+use sim_core::spatial::{Frontier, RobotId};
 use sim_core::world::{Action, Inbox, Message, Outcome, Payload, Recipient, StrategyEvent};
 
 const EPS: f64 = 1e-9;
@@ -316,8 +316,13 @@ fn navigator_frontier_route_leaves_the_known_disc() {
     let p = w.robot.position;
     // The robot at (10.5, 10.5) knows a disc of 3 m around itself.
     w = w.knowing_disc(p, 3.0);
+    let mut frontier = Frontier::default();
     let ctx = w.ctx();
-    let route = Navigator::frontier_route(&ctx, &[], 0.0).expect("a frontier");
+    let nav = ctx.nav();
+    frontier.sync(nav, ctx.data.known.as_mut().unwrap());
+    let route = Navigator::frontier_route(&ctx, Some(&frontier), &[], 0.0).expect("a frontier");
+    // Asking the set or the map finds the same route.
+    assert_eq!(Navigator::frontier_route(&ctx, None, &[], 0.0), Some(route.clone()));
     let last = *route.waypoints.last().unwrap();
     let known = ctx.known().unwrap();
     let off_or_border = !known.is_known(last)

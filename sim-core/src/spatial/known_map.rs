@@ -9,7 +9,8 @@ use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape}
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
-use crate::spatial::quadtree::{CellSet, PartialCells};
+use crate::spatial::quadtree::{CellSet, PartialCells, Square};
+use crate::spatial::tile_log::TileLog;
 
 /// The explored part of the map, as seen by one robot (or a team).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -21,6 +22,10 @@ pub struct KnownMap {
     last_view: Option<Disc>,
     /// That view's cells, when it was marked by its rows: all known.
     last_rows: Option<Box<CellRows>>,
+    /// Which tiles changed when, once a reader asked for it ([`track_changes`](Self::track_changes));
+    /// not saved: a restored map starts a new log.
+    #[serde(skip)]
+    log: Option<Box<TileLog>>,
 }
 
 impl KnownMap {
@@ -31,6 +36,7 @@ impl KnownMap {
             known_cells: 0,
             last_view: None,
             last_rows: None,
+            log: None,
         }
     }
 
@@ -42,6 +48,7 @@ impl KnownMap {
             known_cells,
             last_view: None,
             last_rows: None,
+            log: None,
         }
     }
 
@@ -80,6 +87,9 @@ impl KnownMap {
             radius: radius_m,
         };
         let before = self.known_cells;
+        if let Some(log) = &mut self.log {
+            log.begin();
+        }
         // A view up to 64 cells across: its cells worked out at once, then set by one walk
         // that goes only where they are (issue 11: the walk from the root along the view's
         // rim, with shape tests at every node, was half of a random walker's round). Bigger
@@ -89,11 +99,15 @@ impl KnownMap {
         let mut rows = CellRows::empty();
         // Only the cells the last view did not hold: a walker's view moves a fraction of
         // itself a round, so most rounds that is a thin crescent, or nothing.
-        let by_rows = disc.contained_rows_into(self.grid(), &clip, &mut rows)
+        let log = &mut self.log;
+        let by_rows = disc.contained_rows_into(self.tree.grid(), &clip, &mut rows)
             && self
                 .tree
                 .fill_new_rows_reporting(&rows, self.last_rows.as_deref(), true, |set| {
                     added += set.cells();
+                    if let Some(log) = log {
+                        log.stamp(set.square());
+                    }
                     newly_known(set);
                 });
         self.known_cells += added;
@@ -135,8 +149,15 @@ impl KnownMap {
             return;
         }
         let mut added = 0;
+        let log = &mut self.log;
+        if let Some(log) = log {
+            log.begin();
+        }
         self.tree.fill_cells_reporting(set, true, |set| {
             added += set.cells();
+            if let Some(log) = log {
+                log.stamp(set.square());
+            }
             newly_known(set);
         });
         self.known_cells += added;
@@ -150,8 +171,15 @@ impl KnownMap {
     ) {
         let clip = self.grid().extent();
         let mut added = 0;
+        let log = &mut self.log;
+        if let Some(log) = log {
+            log.begin();
+        }
         let mut report = |sq: crate::spatial::quadtree::Square| {
             added += sq.cells();
+            if let Some(log) = log {
+                log.stamp(sq);
+            }
             newly_known(sq);
         };
         // Clipping costs a box test at every node; most shapes lie inside the map anyway.
@@ -208,9 +236,28 @@ impl KnownMap {
     /// Add everything `other` knows (both over the same map). Returns whether anything new
     /// became known.
     pub fn merge(&mut self, other: &KnownMap) -> bool {
-        let added = self.tree.union_counting(&other.tree);
+        let added = match &mut self.log {
+            None => self.tree.union_counting(&other.tree),
+            Some(log) => {
+                log.begin();
+                self.tree.union_reporting(&other.tree, |sq: Square| log.stamp(sq))
+            }
+        };
         self.known_cells += added;
         added > 0
+    }
+
+    /// Keep a log of which tiles change from now on (see [`TileLog`]); nothing if it is kept
+    /// already. Maps that nobody reads that way pay nothing for it.
+    pub fn track_changes(&mut self) {
+        if self.log.is_none() {
+            self.log = Some(Box::default());
+        }
+    }
+
+    /// The log of changed tiles, if kept.
+    pub fn change_log(&self) -> Option<&TileLog> {
+        self.log.as_deref()
     }
 
     /// Number of known cells (kept up to date, no traversal).
@@ -228,9 +275,16 @@ impl KnownMap {
         self.tree.count_cells_where(true, obstacles.tree(), false) as f64 * self.grid().cell_area_m2()
     }
 
-    /// Bytes held.
+    /// Bytes held by the map itself (the change log aside: a restored run has none until a
+    /// reader asks, and this figure is part of the run's metrics, which must not depend on
+    /// where a run was resumed).
     pub fn memory_bytes(&self) -> usize {
         self.tree.memory_bytes()
+    }
+
+    /// Bytes held by the change log, if kept.
+    pub fn change_log_bytes(&self) -> usize {
+        self.log.as_ref().map_or(0, |l| l.memory_bytes())
     }
 
     /// Number of quadtree leaves.

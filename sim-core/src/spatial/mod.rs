@@ -11,6 +11,7 @@ mod nav;
 mod obstacle_map;
 mod quadtree;
 mod robot_index;
+mod tile_log;
 mod treasure_index;
 
 pub use anyangle::{AnyAnglePath, AnyAnglePlanner, MAX_RASTER_CELLS, MAX_VERTICES, NoPath, reference};
@@ -21,8 +22,9 @@ pub use geometry::{
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
-pub use nav::{LazyNavGraph, NavGraph, NavNodeId, Piece, Route, Terrain};
+pub use nav::{Frontier, LazyNavGraph, NavGraph, NavNodeId, Piece, Route, Terrain};
 pub use obstacle_map::ObstacleMap;
 pub use quadtree::{BitGrid, CellSet, Components, PartialCells, Region, RegionQuadtree, Square};
 pub use robot_index::RobotIndex;
+pub use tile_log::{LogMark, TILE_LEVEL, TileLog};
 pub use treasure_index::{BUCKET, Treasure, TreasureIndex};

@@ -40,8 +40,8 @@ impl FrontierSeeking {
             .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            if let Some(route) = Navigator::frontier_route(ctx, &avoid(), avoid_radius_m)
-                .or_else(|| Navigator::frontier_route(ctx, &[], 0.0))
+            if let Some(route) = Navigator::frontier_route(ctx, None, &avoid(), avoid_radius_m)
+                .or_else(|| Navigator::frontier_route(ctx, None, &[], 0.0))
             {
                 self.target = route.waypoints.last().copied();
                 self.nav.follow(route);

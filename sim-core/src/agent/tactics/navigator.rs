@@ -6,7 +6,7 @@ use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, KnownMap, NavNodeId, Overlap, Route, Shape};
+use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, Route, Shape};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -72,9 +72,20 @@ impl Navigator {
 
     /// Route to the nearest frontier (by path): the closest piece of free space the known map
     /// touches that is either partly unknown (the route ends at its nearest unknown point) or
-    /// borders a piece not known at all (the route ends just across their shared edge). Targets
-    /// within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
-    pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64) -> Option<Route> {
+    /// borders a piece not known at all (the route ends just across their shared edge).
+    /// Targets within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
+    ///
+    /// With `frontier` (the robot's [`Frontier`], synced with its known map) the search asks
+    /// the set whether a node is a frontier before asking the map; without, it asks the map
+    /// of each node it reaches. The route is the same either way. The built-in explorers
+    /// search without: keeping the set costs more than it saves when the frontier is near,
+    /// as it mostly is (BENCHMARKS.md, "Navigation").
+    pub fn frontier_route(
+        ctx: &Ctx,
+        frontier: Option<&Frontier>,
+        avoid: &[DVec2],
+        avoid_radius_m: f64,
+    ) -> Option<Route> {
         let terrain = ctx.terrain()?;
         let known = terrain.known;
         let nav = ctx.nav();
@@ -95,6 +106,9 @@ impl Navigator {
             },
             |n| {
                 touched.borrow_mut().clear();
+                if frontier.is_some_and(|f| !f.contains(n)) {
+                    return None;
+                }
                 if !nav.covered_by(known, n) {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }

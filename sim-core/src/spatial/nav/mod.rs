@@ -19,9 +19,11 @@ use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::Square;
 
+mod frontier;
 mod funnel;
 mod pieces;
 
+pub use frontier::Frontier;
 use funnel::Portal;
 pub use pieces::Piece;
 
@@ -259,6 +261,28 @@ impl NavGraph {
         let (lx, ly) = unmorton(self.keys[i]);
         let s = 1u32 << self.levels[i];
         (x >= lx && x < lx + s && y >= ly && y < ly + s).then_some(NavNodeId(self.piece_of[i]))
+    }
+
+    /// Visit the nodes whose pieces meet the aligned square `sq` (a node may come more than
+    /// once): the leaves inside it are a run of Z order, and a leaf bigger than it holds its
+    /// first cell.
+    pub fn for_each_node_meeting(&self, sq: Square, mut visit: impl FnMut(NavNodeId)) {
+        let last = sq.side_cells() - 1;
+        let (lo, hi) = (morton(sq.x, sq.y), morton(sq.x + last, sq.y + last));
+        let first = self.keys.partition_point(|&k| k < lo);
+        if let Some(i) = first.checked_sub(1) {
+            let (lx, ly) = unmorton(self.keys[i]);
+            let s = 1u32 << self.levels[i];
+            if sq.x < lx + s && sq.y < ly + s && lx <= sq.x && ly <= sq.y {
+                visit(NavNodeId(self.piece_of[i]));
+            }
+        }
+        for i in first..self.keys.len() {
+            if self.keys[i] > hi {
+                break;
+            }
+            visit(NavNodeId(self.piece_of[i]));
+        }
     }
 
     /// A node's piece of free space.

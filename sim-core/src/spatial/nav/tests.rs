@@ -272,3 +272,71 @@ proptest::proptest! {
         assert_graph_matches_cells(&map);
     }
 }
+
+/// Issue 12, item 3: the frontier kept up to date by the known map's changed tiles equals
+/// the frontier worked out from scratch after every step of random runs of views (the
+/// kernel's marking), discs, boxes and merges with other robots' maps.
+#[test]
+fn issue12_incremental_frontier_equals_from_scratch() {
+    use rand::{Rng, SeedableRng};
+    for seed in 0..12u64 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let (w, h) = (rng.random_range(40..100u32), rng.random_range(40..100u32));
+        let grid = Grid::new(DVec2::ZERO, 1.0, w, h).unwrap();
+        let density = rng.random_range(0.0..0.35);
+        let cells: Vec<bool> = (0..w * h).map(|_| rng.random_bool(density)).collect();
+        let clustered = rng.random_bool(0.5);
+        let map = ObstacleMap::from_fn(grid, |x, y| {
+            if clustered {
+                cells[((y / 4) * w + x / 4) as usize]
+            } else {
+                cells[(y * w + x) as usize]
+            }
+        });
+        let g = NavGraph::build(&map);
+        let mut known = KnownMap::new(grid);
+        let mut frontier = Frontier::default();
+        let mut at = DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)));
+        for step in 0..120 {
+            let point = |rng: &mut rand_chacha::ChaCha8Rng| {
+                DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)))
+            };
+            match rng.random_range(0..10) {
+                // A robot walking and looking around, as the kernel marks its view.
+                0..=5 => {
+                    at = (at + DVec2::from_angle(rng.random_range(0.0..6.3)) * 1.5)
+                        .clamp(DVec2::ZERO, DVec2::new(f64::from(w), f64::from(h)));
+                    known.mark_view(at, rng.random_range(2.0..9.0));
+                }
+                6 => {
+                    known.mark_disc(point(&mut rng), rng.random_range(1.0..6.0));
+                }
+                7 => {
+                    let (a, b) = (point(&mut rng), point(&mut rng));
+                    known.mark(&Aabb::from_corners(a.min(b), a.max(b)));
+                }
+                // A team mate's map: a few views of its own.
+                _ => {
+                    let mut other = KnownMap::new(grid);
+                    for _ in 0..rng.random_range(1..5) {
+                        other.mark_view(point(&mut rng), rng.random_range(2.0..12.0));
+                    }
+                    known.merge(&other);
+                }
+            }
+            // Not every step is read: searches come every few rounds.
+            if rng.random_bool(0.6) {
+                frontier.sync(&g, &mut known);
+                assert_eq!(
+                    frontier.nodes(),
+                    Frontier::from_scratch(&g, &known),
+                    "seed {seed}, step {step}"
+                );
+            }
+        }
+        // A copy of the map is another log: reading it starts from scratch, and agrees.
+        let mut copy = known.clone();
+        frontier.sync(&g, &mut copy);
+        assert_eq!(frontier.nodes(), Frontier::from_scratch(&g, &copy), "seed {seed}, copy");
+    }
+}

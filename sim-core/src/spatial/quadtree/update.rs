@@ -421,23 +421,42 @@ impl RegionQuadtree {
     /// keeps its count up to date without a traversal of the whole tree (issue 11: the
     /// recount after every merge was a twentieth of a crowded round).
     pub fn union_counting(&mut self, other: &RegionQuadtree) -> u64 {
+        self.union_reporting(other, |_| {})
+    }
+
+    /// [`union_counting`](Self::union_counting), calling `changed` with squares that hold
+    /// every cell that became `1` (a square may hold cells that were `1` already): what a
+    /// known map's frontier needs to look at again after a merge (issue 12).
+    pub fn union_reporting(&mut self, other: &RegionQuadtree, mut changed: impl FnMut(Square)) -> u64 {
         assert_eq!(self.grid.depth(), other.grid.depth(), "trees over different grids");
         let mut added = 0;
-        self.root = self.union_node(self.root, self.grid.depth(), other, other.root, &mut added);
+        let root = self.root_square();
+        self.root = self.union_node(self.root, root, other, other.root, &mut added, &mut changed);
         added
     }
 
-    fn union_node(&mut self, n: NodeRef, level: u8, other: &RegionQuadtree, m: NodeRef, added: &mut u64) -> NodeRef {
+    fn union_node(
+        &mut self,
+        n: NodeRef,
+        sq: Square,
+        other: &RegionQuadtree,
+        m: NodeRef,
+        added: &mut u64,
+        changed: &mut impl FnMut(Square),
+    ) -> NodeRef {
+        let level = sq.level;
         if n == FULL || m == super::EMPTY {
             return n;
         }
         if m == FULL {
             *added += (1u64 << (2 * u32::from(level))) - self.full_cells(n, level);
             self.release(n);
+            changed(sq);
             return FULL;
         }
         if n == super::EMPTY {
             *added += other.full_cells(m, level);
+            changed(sq);
             return self.copy_from(other, m, level);
         }
         if self.packs(level) {
@@ -448,25 +467,26 @@ impl RegionQuadtree {
                 return n;
             }
             *added += u64::from(union.count_ones() - mine.count_ones());
+            changed(sq);
             return self.store_bits(n, union);
         }
         // Maps that were exchanged before are mostly alike: settle equal leaves here rather
         // than in a call, and write back (and try to merge) only children that changed.
         let (kids, theirs) = (self.groups[n as usize], other.groups[m as usize]);
-        let mut changed = false;
+        let mut any = false;
         for i in 0..4 {
             let (k, mk) = (kids[i], theirs[i]);
             if k == FULL || mk == super::EMPTY {
                 continue;
             }
-            let k2 = self.union_node(k, level - 1, other, mk, added);
+            let k2 = self.union_node(k, sq.child(i), other, mk, added, changed);
             if k2 != k {
                 self.groups[n as usize][i] = k2;
-                changed = true;
+                any = true;
             }
         }
         // Only a child that became a leaf can make the group uniform.
-        if changed { self.merge_if_uniform(n) } else { n }
+        if any { self.merge_if_uniform(n) } else { n }
     }
 
     /// Cells of value `1` under node `n` of a square at `level`.
