@@ -175,8 +175,6 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
             excess.push(p.length_m / best - 1.0);
         }
     }
-    #[allow(clippy::cast_precision_loss)] // Counts far below 2^52.
-    let mean = |v: f64, n: usize| if n == 0 { 0.0 } else { v / n as f64 };
     Ok(PathBench {
         vertices: planner.vertex_count(),
         edges: planner.edge_count(),
@@ -188,12 +186,7 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
         reachable,
         mean_query_ms: mean(total, queries.len()),
         max_query_ms: max,
-        excess: (!excess.is_empty()).then(|| {
-            (
-                mean(excess.iter().sum(), excess.len()),
-                excess.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            )
-        }),
+        excess: mean_and_worst(&excess),
         reachability_mismatches: mismatches,
     })
 }
@@ -264,8 +257,6 @@ pub fn nav_bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64, compar
             excess.push(route.length_m / best.length_m - 1.0);
         }
     }
-    #[allow(clippy::cast_precision_loss)] // Counts far below 2^52.
-    let mean = |v: f64, n: usize| if n == 0 { 0.0 } else { v / n as f64 };
     Ok(NavBench {
         free_leaves: graph.leaf_count(),
         pieces: graph.len(),
@@ -276,12 +267,22 @@ pub fn nav_bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64, compar
         reachable,
         mean_query_ms: mean(total, queries.len()),
         max_query_ms: max,
-        excess: (!excess.is_empty()).then(|| {
-            (
-                excess.len(),
-                mean(excess.iter().sum(), excess.len()),
-                excess.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            )
-        }),
+        excess: mean_and_worst(&excess).map(|(mean, worst)| (excess.len(), mean, worst)),
+    })
+}
+
+/// `total` over `n` (0 for none).
+#[allow(clippy::cast_precision_loss)] // Counts far below 2^52.
+fn mean(total: f64, n: usize) -> f64 {
+    if n == 0 { 0.0 } else { total / n as f64 }
+}
+
+/// The mean and the largest of `values`, if there are any.
+fn mean_and_worst(values: &[f64]) -> Option<(f64, f64)> {
+    (!values.is_empty()).then(|| {
+        (
+            mean(values.iter().sum(), values.len()),
+            values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
     })
 }

@@ -79,8 +79,8 @@ impl Strategy for MyRandomWalk {
     }
 }
 
-/// A tactic of our own: head for the nearest treasure in view. Configs compose it by name
-/// with the built-in tactics, e.g. `strategy="tactics"` with
+/// A tactic of our own: head for the nearest treasure in view, and stay there. Configs
+/// compose it by name with the built-in tactics, e.g. `strategy="tactics"` with
 /// `tactics="collision,treasure_magnet,frontier"`.
 #[derive(Default, serde::Serialize, serde::Deserialize)]
 pub struct TreasureMagnet;
@@ -93,7 +93,13 @@ impl Tactic for TreasureMagnet {
             .iter()
             .map(|t| t.position)
             .min_by(|a, b| a.distance_squared(p).total_cmp(&b.distance_squared(p)))?;
-        (nearest.distance(p) > 0.1).then(|| ctx.move_towards(nearest))
+        // At the treasure the magnet holds the robot: letting go would hand it to the next
+        // tactic, which walks it off, and the magnet pulls it back every other round.
+        Some(if nearest.distance(p) > 0.1 {
+            ctx.move_towards(nearest)
+        } else {
+            Action::Idle
+        })
     }
 
     fn needs(&self) -> Needs {
