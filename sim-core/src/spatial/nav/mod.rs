@@ -155,12 +155,20 @@ impl Terrain<'_> {
 /// How many waypoints ahead a route looks for a shortcut.
 const SHORTCUT_LOOKAHEAD: usize = 8;
 
-/// Search marks: the current stamp, and per node (stamp, distance, parent).
-type Marks = (u32, Vec<(u32, f64, u32)>);
+/// A search's scratch, kept per thread and reused: the current stamp; per node (stamp,
+/// distance, parent); where the search entered nodes (point, distance walked), indexed by
+/// the heap's entries; the heap of (estimate, node, entry).
+#[derive(Default)]
+struct Scratch {
+    stamp: u32,
+    marks: Vec<(u32, f64, u32)>,
+    entry: Vec<(DVec2, f64)>,
+    heap: BinaryHeap<Reverse<(OrdF64, u32, u32)>>,
+}
 
 thread_local! {
     /// Per-thread search scratch, sized to the graph, reused across searches.
-    static SCRATCH: RefCell<Marks> = const { RefCell::new((0, Vec::new())) };
+    static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
 }
 
 impl NavGraph {
@@ -514,7 +522,12 @@ impl NavGraph {
         let start = self.node_at(from)?;
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
-            let (stamp, marks) = &mut *guard;
+            let Scratch {
+                stamp,
+                marks,
+                entry,
+                heap,
+            } = &mut *guard;
             if marks.len() != self.pieces.len() {
                 // All zero bytes, so the allocator hands out pages the kernel maps only
                 // when a search first writes them: searches stay local, and a marked copy
@@ -533,9 +546,11 @@ impl NavGraph {
             }
             let stamp = *stamp;
             // Where the search enters each node (portal or start), for edge costs, and the
-            // distance walked to get there.
-            let mut entry: Vec<(DVec2, f64)> = vec![(from, 0.0)];
-            let mut heap = BinaryHeap::new();
+            // distance walked to get there (buffers reused: a search is planned every few
+            // rounds by every explorer, and allocating them was a few per cent of a round).
+            entry.clear();
+            entry.push((from, 0.0));
+            heap.clear();
             marks[start.0 as usize] = (stamp, 0.0, u32::MAX);
             heap.push(Reverse((OrdF64(estimate(from)), start.0, 0u32)));
             let mut settled = 0usize;
