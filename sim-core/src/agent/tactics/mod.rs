@@ -120,7 +120,7 @@ impl TacticRegistry {
         );
         r.register(
             "shortest_path",
-            "goes to the goal along the shortest route in known terrain; while none is known, quiet (or straight towards the goal with optimistic=1)",
+            "goes to the goal along the shortest route in known terrain; while none is known, quiet (optimistic=1: plans as if unknown terrain were open)",
             |p| {
                 p.only(&["optimistic"])?;
                 Ok(Box::new(ShortestPath::new(p.u64_in("optimistic", 0, 0..=1)? == 1)))

@@ -58,6 +58,21 @@ impl Navigator {
         }
     }
 
+    /// Plan the shortest route to `to` taking unknown terrain as open (see
+    /// [`NavGraph::route_optimistic`](crate::spatial::NavGraph::route_optimistic)) and follow it.
+    pub fn go_to_optimistic(&mut self, ctx: &Ctx, to: DVec2) -> bool {
+        let route = ctx
+            .terrain()
+            .and_then(|t| ctx.nav().route_optimistic(t, ctx.position(), to, SEARCH_BUDGET));
+        match route {
+            Some(r) => {
+                self.follow(r);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The move towards the next waypoint (skipping those already reached).
     pub fn step(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let p = ctx.position();

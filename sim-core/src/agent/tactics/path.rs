@@ -19,9 +19,12 @@ const HELD_ROUNDS: u32 = 3;
 /// the navigation graph once per goal and again when the route is held back. While no
 /// known route reaches the goal (it lies in unexplored terrain) it plans again every few
 /// rounds as the way becomes known, and meanwhile is quiet (so that a tactic after it, such
-/// as [`BoundaryFollowing`](super::BoundaryFollowing), gets there through the unknown), or,
-/// if optimistic, heads straight for the goal as long as the known terrain lets it. Quiet
-/// with no goal, at the goal, or with no way it can take.
+/// as [`BoundaryFollowing`](super::BoundaryFollowing), gets there through the unknown).
+/// Optimistic, it plans as if unknown terrain were open: through known terrain to where a
+/// straight way on to the goal crosses nothing it knows to be blocked, then on through the
+/// unknown (planned again when held back), or, with no such route, straight for the goal
+/// as long as the known terrain lets it. Quiet with no goal, at the goal, or with no way it
+/// can take.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct ShortestPath {
     /// Head straight for a goal that no known route reaches yet (default `false`).
@@ -70,7 +73,12 @@ impl Tactic for ShortestPath {
         if new_goal || retry || self.held >= HELD_ROUNDS {
             self.planned_for = Some(goal);
             self.held = 0;
-            if self.nav.go_to(ctx, goal) {
+            let planned = if self.optimistic {
+                self.nav.go_to_optimistic(ctx, goal)
+            } else {
+                self.nav.go_to(ctx, goal)
+            };
+            if planned {
                 self.failed_at = None;
             } else {
                 self.nav.clear();

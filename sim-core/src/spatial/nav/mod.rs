@@ -140,6 +140,34 @@ impl Terrain<'_> {
         self.obstacles.is_swept_disc_free(a, b, self.clearance_m())
     }
 
+    /// Whether a leg from `a` to `b` may be hoped for, taking unknown terrain as open: no
+    /// cell the robot knows to be blocked lies within its radius of the leg (a blocked leaf
+    /// that meets the leg counts when the robot knows one of its cells within the leg's
+    /// bounding box; what the robot has not seen never enters the answer).
+    fn hopeful(&self, a: DVec2, b: DVec2) -> bool {
+        let swept = crate::spatial::geometry::Capsule {
+            a,
+            b,
+            radius: self.radius_m,
+        };
+        let grid = self.obstacles.grid();
+        let Some((lo, hi)) = grid.cells_touching(&crate::spatial::geometry::Shape::bounds(&swept)) else {
+            return false;
+        };
+        self.obstacles
+            .visit_blocked(&swept, |sq, _| {
+                let side = sq.side_cells();
+                let (x0, y0) = (sq.x.max(lo.0), sq.y.max(lo.1));
+                let (x1, y1) = ((sq.x + side - 1).min(hi.0), (sq.y + side - 1).min(hi.1));
+                if x0 <= x1 && y0 <= y1 && self.known.touches_cells((x0, y0), (x1, y1)) {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            })
+            .is_continue()
+    }
+
     /// Whether a leg from `a` to `b` that no route proposed may be walked: clear, and over
     /// known cells only.
     fn shortcut_clear(&self, a: DVec2, b: DVec2) -> bool {
@@ -614,6 +642,55 @@ impl NavGraph {
             max_nodes,
         )?;
         Some(self.taut_route(from, nodes, to, terrain))
+    }
+
+    /// The shortest route from `from` to `to` if unknown terrain were open (issue 12:
+    /// planning optimistically): through nodes the known map touches either to the goal,
+    /// or to a frontier node from which a hopeful straight leg (no cell known to be blocked
+    /// near it) leads on to `to`, from the node's point nearest to `to` or else from its
+    /// corner nearest to `to` that allows one; the search takes the node whose way there
+    /// plus the straight line on is shortest. The known part is pulled taut and checked like any route; the last leg is
+    /// a hope, never checked against what the robot has not seen, and a robot that meets
+    /// an obstacle on it plans again. `None` if no such route exists within `max_nodes`.
+    pub fn route_optimistic(&self, terrain: Terrain, from: DVec2, to: DVec2, max_nodes: usize) -> Option<Route> {
+        let known = terrain.known;
+        // The map's edges are known to every robot.
+        let extent = self.grid.extent();
+        if !extent.contains_strictly(to) || !extent.contains_strictly(from) {
+            return None;
+        }
+        // `to` may lie in a node the robot knows, or in terrain it has not seen (blocked or
+        // not: only what it knows counts).
+        let goal = self.node_at(to).filter(|&g| self.touched_by(known, g));
+        let (nodes, end) = self.best_first(
+            from,
+            |n| self.touched_by(known, n),
+            |n| {
+                if Some(n) == goal {
+                    return Some(to);
+                }
+                if !Frontier::is_frontier(self, known, n) {
+                    return None;
+                }
+                // Leave the node at its point nearest to `to`, or else at the corner nearest
+                // to it from which the way on is hopeful (round the end of a wall the robot
+                // has seen part of), kept the clearance inside.
+                let b = self.bounds(n);
+                let inset = DVec2::splat(terrain.clearance_m()).min(0.5 * (b.max - b.min));
+                let (lo, hi) = (b.min + inset, b.max - inset);
+                let mut exits = [to.clamp(lo, hi), lo, DVec2::new(hi.x, lo.y), DVec2::new(lo.x, hi.y), hi];
+                exits[1..].sort_by(|a, b| a.distance_squared(to).total_cmp(&b.distance_squared(to)));
+                exits.into_iter().find(|&exit| terrain.hopeful(exit, to))
+            },
+            |p| p.distance(to),
+            max_nodes,
+        )?;
+        let mut route = self.taut_route(from, nodes, end, terrain);
+        if end != to {
+            route.length_m += end.distance(to);
+            route.waypoints.push(to);
+        }
+        Some(route)
     }
 }
 

@@ -340,3 +340,56 @@ fn issue12_incremental_frontier_equals_from_scratch() {
         assert_eq!(frontier.nodes(), Frontier::from_scratch(&g, &copy), "seed {seed}, copy");
     }
 }
+
+/// Issue 12, item 1: planning optimistically through unknown space. 30 × 20 with a wall at
+/// x = 15 from the bottom up to y = 17 (a gap above it); the robot at (3, 3.5) has seen only
+/// a disc of 5 m around itself, the goal is at (27, 3.5) beyond the wall.
+/// The terrain of a robot of radius 0.25 m.
+fn robot<'a>(map: &'a ObstacleMap, known: &'a KnownMap) -> Terrain<'a> {
+    Terrain {
+        obstacles: map,
+        known,
+        radius_m: 0.25,
+    }
+}
+
+#[test]
+fn issue12_optimistic_routes_hope_only_where_nothing_known_is_blocked() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 30, 20).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| x == 15 && y < 17);
+    let g = NavGraph::build(&map);
+    let (from, to) = (DVec2::new(3.0, 3.5), DVec2::new(27.0, 3.5));
+    let mut known = KnownMap::new(grid);
+    known.mark_disc(from, 5.0);
+    // Known terrain only: no route.
+    assert!(g.route_within(robot(&map, &known), from, to, usize::MAX).is_none());
+    // Optimistic: straight on through the unknown, the wall it has not seen included
+    // (the planner must not know of it): the last leg crosses the wall.
+    let r = g.route_optimistic(robot(&map, &known), from, to, usize::MAX).unwrap();
+    assert_eq!(r.waypoints.last(), Some(&to));
+    assert!((r.length_m - 24.0).abs() < 1e-6, "{r:?}");
+    assert!(!map.is_segment_free(from, to));
+    // Once the wall is seen (the robot knows the strip x 10..20), the hope goes round it,
+    // through the gap above: every leg over known cells is clear.
+    known.mark(&Aabb::from_corners(DVec2::new(10.0, 0.0), DVec2::new(20.0, 20.0)));
+    let r = g.route_optimistic(robot(&map, &known), from, to, usize::MAX).unwrap();
+    assert_eq!(r.waypoints.last(), Some(&to));
+    assert!(r.waypoints.iter().any(|w| w.y >= 17.0), "over the wall's end: {r:?}");
+    let mut prev = from;
+    for w in &r.waypoints {
+        assert!(map.is_swept_disc_free(prev, *w, 0.25), "{prev} → {w} in {r:?}");
+        prev = *w;
+    }
+    // Never shorter than the way round the wall's end at (15, 17)-(16, 17).
+    let round = from.distance(DVec2::new(15.0, 17.0)) + 1.0 + DVec2::new(16.0, 17.0).distance(to);
+    assert!(r.length_m >= round, "{} < {round}", r.length_m);
+    // A goal in a cell known to be blocked, or off the map, has no route.
+    assert!(
+        g.route_optimistic(robot(&map, &known), from, DVec2::new(15.5, 3.5), usize::MAX)
+            .is_none()
+    );
+    assert!(
+        g.route_optimistic(robot(&map, &known), from, DVec2::new(31.0, 3.5), usize::MAX)
+            .is_none()
+    );
+}
