@@ -396,14 +396,15 @@ fn issue12_a_composed_strategy_checkpoints_and_resumes_bit_for_bit() {
 
 /// Issue 12, item 1: an optimistic shortest path gets to a goal in terrain the robot has
 /// never seen, behind a wall it only finds on the way (30 × 20, the wall at x = 15 from the
-/// bottom up to y = 17): it walks at the wall, sees it, and plans round its end. Without
-/// optimism the tactic has no known route and stays quiet.
+/// bottom up to y = 17): it walks at the wall, sees it, and plans round its end, also with
+/// collision avoidance before it. Without optimism the tactic has no known route and stays
+/// quiet.
 #[test]
 fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     let walled = map(1.0, 30, 20, DVec2::new(3.0, 3.5), |x, y| x == 15 && y < 17);
     let kind = RobotType::explorer().with_speed_m_per_round(1.0);
     let goal = DVec2::new(27.0, 3.5);
-    let run = |optimistic: &str| {
+    let run = |tactics: &str, optimistic: &str| {
         let mut s = sim(
             Arc::clone(&walled),
             1,
@@ -412,7 +413,7 @@ fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
             vec![group(
                 1,
                 Start::At(DVec2::new(3.0, 3.5)),
-                "shortest_path",
+                tactics,
                 &[("goal", "27,3.5"), ("shortest_path.optimistic", optimistic)],
             )],
         );
@@ -423,8 +424,12 @@ fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     };
     // Round the wall's end: at least |(3, 3.5)-(15, 17)| + 1 + |(16, 17)-(27, 3.5)| ≈ 36.5 m,
     // well within 120 rounds at 1 m a round.
-    let at = run("1");
+    let at = run("shortest_path", "1");
     assert!(at.distance(goal) < 0.1, "optimistic: ended at {at}");
-    let at = run("0");
+    // Behind collision avoidance too, which escapes first when the robot is held back at
+    // the wall.
+    let at = run("collision,shortest_path", "1");
+    assert!(at.distance(goal) < 0.1, "optimistic after collision: ended at {at}");
+    let at = run("shortest_path", "0");
     assert!(at.distance(DVec2::new(3.0, 3.5)) < 0.5, "not optimistic: moved to {at}");
 }
