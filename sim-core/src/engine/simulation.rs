@@ -43,6 +43,9 @@ pub(super) struct Agent {
     pub(super) hearers: Vec<RobotId>,
     /// Why its strategy failed this round (it panicked): step 3 disables the robot.
     pub(super) failure: Option<String>,
+    /// Resolved this round ahead of the id order, nothing in its turn depending on another
+    /// robot (step 3).
+    pub(super) alone: bool,
     /// How long its strategy took to decide this round, when over the limit.
     pub(super) slow: Option<Duration>,
 }
@@ -96,6 +99,8 @@ pub struct Simulation {
     pub(super) types: Arc<[RobotType]>,
     pub(super) groups: Vec<Group>,
     pub(super) robots: Vec<Robot>,
+    /// Each robot's type index (as in `robots`, which step 2 writes while robots perceive).
+    pub(super) type_of: Vec<usize>,
     pub(super) agents: Vec<Agent>,
     pub(super) treasures: Vec<TreasureState>,
     pub(super) treasure_index: TreasureIndex,
@@ -205,6 +210,7 @@ impl Simulation {
                     planned_near: Vec::new(),
                     hearers: Vec::new(),
                     failure: None,
+                    alone: false,
                     slow: None,
                 });
             }
@@ -223,6 +229,7 @@ impl Simulation {
             nav: LazyNavGraph::new(),
             types: types.into(),
             groups,
+            type_of: robots.iter().map(|r| r.type_index).collect(),
             robots,
             agents,
             treasures,

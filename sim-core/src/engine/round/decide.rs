@@ -5,10 +5,11 @@ use std::cell::RefCell;
 use std::panic::AssertUnwindSafe;
 use std::time::Instant;
 
+use glam::DVec2;
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
-use super::resolve::{Bodies, move_within_means, trim_to_obstacles, upkeep};
+use super::resolve::{Bodies, move_within_means, resolve_alone, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex};
@@ -19,7 +20,7 @@ impl Simulation {
     pub(super) fn perceive_and_decide(&mut self, round: u64) {
         let world = WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types);
         let snapshot = Snapshot {
-            robots: &self.robots,
+            type_of: &self.type_of,
             treasures: &self.treasures,
             treasure_index: &self.treasure_index,
             robot_index: &self.robot_index,
@@ -31,13 +32,18 @@ impl Simulation {
         let limit = self.decide_limit;
         let robot_index = &self.robot_index;
         let radio_limited = self.radio_limited;
+        let home = self.map.home;
+        self.start_positions.resize(self.robots.len(), DVec2::ZERO);
         self.agents
             .par_iter_mut()
-            .zip(self.robots.par_iter())
-            .for_each(|(agent, robot)| {
+            .zip(self.robots.par_iter_mut())
+            .zip(self.start_positions.par_iter_mut())
+            .for_each(|((agent, robot), start)| {
+                *start = robot.position;
                 agent.mind.output.begin_round();
                 agent.known_changed = false;
                 agent.planned_move = None;
+                agent.alone = false;
                 if !robot.alive {
                     agent.action = Action::Idle;
                     return;
@@ -68,6 +74,10 @@ impl Simulation {
                         if broadcasts && !radio_limited {
                             hearers(robot_index, robot, kind.comm_radius_m, &mut agent.hearers);
                         }
+                        // Step 3 for a robot whose turn depends on nobody, while its data are
+                        // at hand (issue 11: a pass of its own over every robot, or step 3's
+                        // sequential loop, cost more than the turns).
+                        agent.alone = resolve_alone(robot, agent, kind, &home);
                     }
                     Err(payload) => {
                         agent.action = Action::Idle;

@@ -40,8 +40,9 @@ impl ExploredUpdate {
             .robots
             .iter()
             .zip(&sim.agents)
-            .map(|(robot, agent)| Viewer {
-                position: robot.position,
+            .zip(&sim.start_positions)
+            .map(|((robot, agent), &position)| Viewer {
+                position,
                 view_radius_m: sim.types[robot.type_index].view_radius_m,
                 senses: agent.needs.senses() && robot.alive,
                 has_known: agent.mind.data.known.is_some(),

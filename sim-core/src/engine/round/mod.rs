@@ -52,13 +52,11 @@ impl Simulation {
         self.record_discoveries(round);
         // 3: resolve, in id order, while another thread marks the collective explored map
         // (it reads only the start of the round).
-        self.start_positions.clear();
-        self.start_positions.extend(self.robots.iter().map(|r| r.position));
         let mut explored = ExploredUpdate::take(self);
         let event_at = self.report.events.len();
         let map = std::sync::Arc::clone(&self.map);
         let t = Instant::now();
-        let ((), (messages, bytes)) = rayon::join(|| explored.run(&map.obstacles), || self.resolve(round));
+        let ((messages, bytes), ()) = rayon::join(|| self.resolve(round), || explored.run(&map.obstacles));
         let took = t.elapsed();
         self.phase_times.resolve += took;
         apart += took;

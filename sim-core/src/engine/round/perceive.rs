@@ -53,7 +53,8 @@ pub const MAX_MAP_MERGES_PER_ROUND: usize = 2;
 
 /// The shared, read-only state robots perceive in a round.
 pub(super) struct Snapshot<'a> {
-    pub(super) robots: &'a [Robot],
+    /// Each robot's type (robots resolved alone in step 2 are being written meanwhile).
+    pub(super) type_of: &'a [usize],
     pub(super) treasures: &'a [TreasureState],
     pub(super) treasure_index: &'a TreasureIndex,
     pub(super) robot_index: &'a RobotIndex,
@@ -78,7 +79,7 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
                 perception.robots.push(SeenRobot {
                     id,
                     position: q,
-                    type_index: world.robots[id.index()].type_index,
+                    type_index: world.type_of[id.index()],
                 });
             }
         });

@@ -9,20 +9,29 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use crate::agent::Needs;
-use crate::engine::simulation::{Outgoing, Simulation};
+use crate::agent::StrategyOutput;
+use crate::engine::simulation::{Agent, Outgoing, Simulation};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
-use crate::world::{Action, Event, Message, Outcome, Payload, REACH_M, Recipient, RobotType, TreasureState};
+use crate::world::{
+    Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
+};
 
 impl Simulation {
     /// Step 3: the physical unit, robot by robot in id order. Returns messages and bytes sent.
+    ///
+    /// Robots whose turn depends on no other robot (see [`resolve_alone`]) had it in step 2,
+    /// in parallel; the rest have theirs here, in id order. The result is that of one pass
+    /// in id order (issue 11: this step was sequential, a third of a 2-thread round of
+    /// spread-out walkers).
     pub(super) fn resolve(&mut self, round: u64) -> (u64, u64) {
         let (mut messages, mut bytes) = (0, 0);
         // Held apart from `self` so the loop can mutate the simulation while it reads a type
         // (one count update a round, not one a robot: this loop is the round's sequential
         // part).
         let types = Arc::clone(&self.types);
+        let home = self.map.home;
         for i in 0..self.robots.len() {
-            if !self.robots[i].alive {
+            if !self.robots[i].alive || self.agents[i].alone {
                 continue;
             }
             if let Some(reason) = self.agents[i].failure.take() {
@@ -54,15 +63,13 @@ impl Simulation {
                 self.robots[i].stats.messages_sent += 1;
                 self.robots[i].stats.message_bytes += size;
             }
-            let r = &mut self.robots[i];
-            if r.alive && self.map.home.contains(r.position) {
-                r.energy = (r.energy + kind.recharge_per_round).min(kind.energy_capacity);
-            }
-            r.last_action = (action, outcome);
-            let output = &self.agents[i].mind.output;
-            r.goal = output.goal();
-            r.path.clear();
-            r.path.extend_from_slice(output.path());
+            end_of_turn(
+                &mut self.robots[i],
+                &self.agents[i].mind.output,
+                kind,
+                &home,
+                (action, outcome),
+            );
         }
         (messages, bytes)
     }
@@ -80,10 +87,7 @@ impl Simulation {
     /// Charge energy; a robot that runs dry is disabled for good.
     fn spend(&mut self, i: usize, amount: f64) {
         let r = &mut self.robots[i];
-        let paid = amount.min(r.energy);
-        r.energy -= paid;
-        r.stats.energy_used += paid;
-        if r.energy <= 1e-12 {
+        if !charge(r, amount) {
             r.energy = 0.0;
             r.alive = false;
             self.report.events.push(Event::RobotDisabled { robot: r.id });
@@ -463,6 +467,100 @@ impl Sends<'_> {
             }
         }
     }
+}
+
+/// Take `amount` of energy from a robot (as much as it has); `false` if that leaves it
+/// dry, which disables it (the caller's part, with its event).
+fn charge(r: &mut Robot, amount: f64) -> bool {
+    let paid = amount.min(r.energy);
+    r.energy -= paid;
+    r.stats.energy_used += paid;
+    r.energy > 1e-12
+}
+
+/// The end of a robot's turn in step 3: recharge at home, and what viewers show of it.
+pub(super) fn end_of_turn(
+    r: &mut Robot,
+    output: &StrategyOutput,
+    kind: &RobotType,
+    home: &HomeBase,
+    last: (Action, Outcome),
+) {
+    if r.alive && home.contains(r.position) {
+        r.energy = (r.energy + kind.recharge_per_round).min(kind.energy_capacity);
+    }
+    r.last_action = last;
+    r.goal = output.goal();
+    r.path.clear();
+    r.path.extend_from_slice(output.path());
+}
+
+/// Resolve a robot's turn ahead of the id order (in step 2, right after it decided) if
+/// nothing in it depends on another robot: it is idle, or moves with nobody within reach of
+/// its move (step 2's list); it sends nothing, touches no treasure, did not fail, and keeps
+/// enough energy to stay alive (so it raises no event). Returns `false`, changing nothing,
+/// otherwise.
+///
+/// The outcome is the one the id order gives. Its own turn reads no other robot: nobody was
+/// within reach of its move (radii plus the top speed) where they stood. And no other
+/// robot's turn depends on whether this one has moved yet: a robot that lists it near its
+/// own move ends within the top speed of where it started, so farther than the two radii
+/// from both where this one started and where it ends (every robot starts farther than the
+/// reach from this one's move). The arithmetic is that of the id-order path.
+pub(super) fn resolve_alone(r: &mut Robot, agent: &mut Agent, kind: &RobotType, home: &HomeBase) -> bool {
+    if agent.failure.is_some() || !agent.mind.output.outbox().is_empty() {
+        return false;
+    }
+    let up = upkeep(kind, agent.needs);
+    let after_upkeep = r.energy - up.min(r.energy);
+    if after_upkeep <= 1e-12 {
+        return false;
+    }
+    let from = r.position;
+    // The move, when there is one: its obstacle-free part and its length asked for.
+    let step = match agent.action {
+        Action::Idle => None,
+        Action::MoveTo { to } => {
+            let wanted = (to - from).length();
+            if wanted.is_finite() && wanted > 0.0 {
+                let d = move_within_means(from, to, kind, after_upkeep);
+                match &agent.planned_move {
+                    Some(p) if p.is_for(from, d, kind.radius_m) && agent.planned_near.is_empty() => {
+                        Some((p.free, wanted))
+                    }
+                    _ => return false,
+                }
+            } else {
+                None
+            }
+        }
+        Action::Excavate { .. } | Action::Load { .. } | Action::Unload => return false,
+    };
+    let moved = step.map_or(0.0, |(free, _)| free.length());
+    if moved > 1e-12 && after_upkeep - (moved * kind.energy_per_m).min(after_upkeep) <= 1e-12 {
+        return false;
+    }
+    let alive = charge(r, up);
+    debug_assert!(alive, "checked above");
+    let outcome = match (agent.action, step) {
+        (Action::MoveTo { to }, None) if !(to - from).length().is_finite() => Outcome::Refused,
+        (_, None) => Outcome::Done,
+        (_, Some(_)) if moved <= 1e-12 => Outcome::Refused,
+        (_, Some((free, wanted))) => {
+            r.position = from + free;
+            r.stats.distance_m += moved;
+            let alive = charge(r, moved * kind.energy_per_m);
+            debug_assert!(alive, "checked above");
+            if (moved - wanted).abs() > 1e-9 {
+                Outcome::Trimmed
+            } else {
+                Outcome::Done
+            }
+        }
+    };
+    agent.planned_move = None;
+    end_of_turn(r, &agent.mind.output, kind, home, (agent.action, outcome));
+    true
 }
 
 /// Energy a live robot pays every round whatever it does: living, and sensing if its strategy
