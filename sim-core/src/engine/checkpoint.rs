@@ -211,7 +211,7 @@ impl Simulation {
         self.explored_views = state.explored_views;
         self.rebuild_robot_indexes();
         self.report.round = self.round;
-        self.report.metrics = self.metrics(self.round, 0, 0);
+        self.report.metrics = self.metrics(self.round, 0, 0, self.robot_memory_bytes());
         Ok(())
     }
 

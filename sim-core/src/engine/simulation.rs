@@ -23,14 +23,9 @@ pub(super) struct Agent {
     pub(super) needs: Needs,
     pub(super) mind: Mind,
     pub(super) action: Action,
-    pub(super) known_changed: bool,
     /// Known cells of the last map merged from each sender: a map that has not grown since
     /// is already contained in ours (maps only grow), so merging it again is skipped.
     pub(super) merged_from: HashMap<RobotId, u64, foldhash::fast::FixedState>,
-    /// Cells its own view added to its known map this round: the only cells it can be
-    /// first to explore (what it knew before was seen, by it or another, in an earlier
-    /// round), so the collective map is updated from these instead of from its view disc.
-    pub(super) new_squares: Vec<CellSet>,
     /// This round's move with obstacles already accounted for, worked out in parallel in
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,
@@ -43,10 +38,40 @@ pub(super) struct Agent {
     pub(super) hearers: Vec<RobotId>,
     /// Why its strategy failed this round (it panicked): step 3 disables the robot.
     pub(super) failure: Option<String>,
-    /// Resolved this round ahead of the id order, nothing in its turn depending on another
-    /// robot (step 3).
+}
+
+/// What step 2 leaves of a robot's turn for the rest of the round, apart from its agent:
+/// the round's sequential parts read a few bytes a robot here instead of a robot's whole
+/// agent (issue 11: those passes over every agent were a fifth of a 2-thread round of
+/// random walkers).
+#[derive(Clone, Debug, Default)]
+pub(super) struct Turn {
+    /// Where it stood at the start of the round.
+    pub(super) start: DVec2,
+    /// Its view radius, if it perceived this round (alive and sensing): its view then
+    /// counts for the collective explored map.
+    pub(super) sensed_m: Option<f64>,
+    /// It keeps a known map (then `new_squares` is all its view can add to the collective
+    /// map).
+    pub(super) has_known: bool,
+    /// Its known map changed this round.
+    pub(super) known_changed: bool,
+    /// Cells its own view added to its known map this round: the only cells it can be
+    /// first to explore (what it knew before was seen, by it or another, in an earlier
+    /// round), so the collective map is updated from these instead of from its view disc.
+    pub(super) new_squares: Vec<CellSet>,
+    /// Heap bytes of its known map after step 2 (steps 3 and 4 do not change it).
+    pub(super) known_bytes: usize,
+    /// It saw treasures, changed its known map or raised events: the round's report has
+    /// something of it (see `record_discoveries`).
+    pub(super) news: bool,
+    /// Resolved in step 2, nothing in its turn depending on another robot (see
+    /// `resolve_alone`).
     pub(super) alone: bool,
-    /// How long its strategy took to decide this round, when over the limit.
+    /// Its broadcasts' hearers are to be listed after step 2 (the view-sized index was not
+    /// built for this round: no strategy perceives robots).
+    pub(super) hearers_pending: bool,
+    /// How long its strategy took to decide, when over the limit.
     pub(super) slow: Option<Duration>,
 }
 
@@ -105,8 +130,16 @@ pub struct Simulation {
     pub(super) treasures: Vec<TreasureState>,
     pub(super) treasure_index: TreasureIndex,
     /// Start-of-round positions in cells of the widest view or radio range (perception,
-    /// messages).
+    /// messages); built only for rounds that need it (see `robot_index_eager`).
     pub(super) robot_index: RobotIndex,
+    /// Some strategy perceives robots: the view-sized index is built every round. Otherwise
+    /// only for rounds in which someone broadcasts, after step 2 (issue 11: rebuilding it
+    /// for robots that never look cost a random walk 1.5 %).
+    pub(super) robot_index_eager: bool,
+    /// Each robot's turn this round (see [`Turn`]).
+    pub(super) turns: Vec<Turn>,
+    /// Some robot holds last round's messages: the next delivery must take them back.
+    pub(super) inboxes_held: bool,
     /// The same positions in cells of the widest body-contact reach (collisions): in a
     /// crowd, a 20 m cell holds hundreds of robots that a 0.75 m contact test need not see.
     pub(super) body_index: RobotIndex,
@@ -119,6 +152,8 @@ pub struct Simulation {
     pub(super) explored_free_cells: u64,
     /// Each robot's view disc last marked in `explored`.
     pub(super) explored_views: Vec<Option<Disc>>,
+    /// Free cells each robot was first to see this round (kept to reuse its allocation).
+    pub(super) explored_fresh: Vec<u64>,
     pub(super) total_free_cells: u64,
     pub(super) report: RoundReport,
     pub(super) max_radius_m: f64,
@@ -130,8 +165,6 @@ pub struct Simulation {
     pub(super) near_scratch: Vec<u32>,
     /// Messages sent this round, waiting for budgeted delivery (sender order).
     pub(super) outgoing: Vec<Outgoing>,
-    /// Positions at the start of the current round (send-time positions for messages).
-    pub(super) start_positions: Vec<DVec2>,
     /// Wall time spent in each step of the rounds so far.
     pub(super) phase_times: PhaseTimes,
 }
@@ -203,21 +236,18 @@ impl Simulation {
                     needs,
                     mind: Mind::new(DataModule::new(needs.known_map.then(|| KnownMap::new(grid)), tr, rr)),
                     action: Action::Idle,
-                    known_changed: false,
                     merged_from: HashMap::default(),
-                    new_squares: Vec::new(),
                     planned_move: None,
                     planned_near: Vec::new(),
                     hearers: Vec::new(),
                     failure: None,
-                    alone: false,
-                    slow: None,
                 });
             }
         }
         let total_free_cells = obstacles.tree().count_cells(false);
         let n = robots.len();
         let radio_limited = types.iter().any(|t| t.radio_bytes_per_round < u64::MAX);
+        let robot_index_eager = agents.iter().any(|a| a.needs.robots);
         let mut sim = Self {
             name,
             seed,
@@ -235,12 +265,16 @@ impl Simulation {
             treasures,
             treasure_index,
             robot_index: RobotIndex::new(),
+            robot_index_eager,
+            turns: vec![Turn::default(); n],
+            inboxes_held: false,
             body_index: RobotIndex::new(),
             mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
             explored_views: vec![None; n],
+            explored_fresh: Vec::new(),
             total_free_cells,
             report: RoundReport::default(),
             max_radius_m,
@@ -248,7 +282,6 @@ impl Simulation {
             radio_limited,
             outgoing: Vec::new(),
             near_scratch: Vec::new(),
-            start_positions: Vec::new(),
             map,
         };
         sim.rebuild_robot_indexes();
@@ -257,7 +290,7 @@ impl Simulation {
         if sim.agents.iter().any(|a| a.needs.obstacles) {
             sim.nav.get_or_build(&sim.map.obstacles);
         }
-        sim.report.metrics = sim.metrics(0, 0, 0);
+        sim.report.metrics = sim.metrics(0, 0, 0, sim.robot_memory_bytes());
         Ok(sim)
     }
 
@@ -377,14 +410,26 @@ impl Simulation {
             .sum()
     }
 
-    /// Metrics for the current state.
-    pub(super) fn metrics(&self, round: u64, messages: u64, message_bytes: u64) -> RoundMetrics {
-        let alive: Vec<&Robot> = self.robots.iter().filter(|r| r.alive).collect();
-        let mean_energy = if alive.is_empty() {
-            0.0
-        } else {
-            alive.iter().map(|r| r.energy).sum::<f64>() / alive.len() as f64
-        };
+    /// Metrics for the current state; `known_map_bytes` is [`robot_memory_bytes`](Self::robot_memory_bytes).
+    pub(super) fn metrics(
+        &self,
+        round: u64,
+        messages: u64,
+        message_bytes: u64,
+        known_map_bytes: usize,
+    ) -> RoundMetrics {
+        // One pass over the robots (issue 11: one a figure was a tenth of the sequential
+        // part of a random walk's round).
+        let (mut alive, mut energy, mut distance_m, mut units_dug, mut units_delivered) = (0u32, 0.0, 0.0, 0, 0);
+        for r in &self.robots {
+            if r.alive {
+                alive += 1;
+                energy += r.energy;
+            }
+            distance_m += r.stats.distance_m;
+            units_dug += r.stats.units_dug;
+            units_delivered += r.stats.units_delivered;
+        }
         RoundMetrics {
             round,
             explored_fraction: if self.total_free_cells == 0 {
@@ -395,15 +440,15 @@ impl Simulation {
             treasures_found: self.treasures.iter().filter(|t| t.found_round.is_some()).count() as u32,
             treasures_excavated: self.treasures.iter().filter(|t| t.buried == 0).count() as u32,
             treasures_delivered: self.treasures.iter().filter(|t| t.delivered == t.initial).count() as u32,
-            robots_alive: alive.len() as u32,
-            mean_energy,
+            robots_alive: alive,
+            mean_energy: if alive == 0 { 0.0 } else { energy / f64::from(alive) },
             messages,
-            distance_m: self.robots.iter().map(|r| r.stats.distance_m).sum(),
-            units_dug: self.robots.iter().map(|r| r.stats.units_dug).sum(),
-            units_delivered: self.robots.iter().map(|r| r.stats.units_delivered).sum(),
+            distance_m,
+            units_dug,
+            units_delivered,
             message_bytes,
             strategies_failed: self.strategies_failed,
-            known_map_bytes: self.robot_memory_bytes() as u64,
+            known_map_bytes: known_map_bytes as u64,
         }
     }
 
@@ -422,7 +467,9 @@ impl Simulation {
 }
 
 impl Simulation {
-    /// Index the robots' current positions (both indexes).
+    /// Index the robots' current positions: the contact-sized index always, the view-sized
+    /// one when some strategy perceives robots (otherwise step 2 builds it from the start
+    /// positions if someone broadcasts).
     pub(super) fn rebuild_robot_indexes(&mut self) {
         let robots = &self.robots;
         let positions = || robots.iter().map(|r| (r.id, r.position));
@@ -432,13 +479,25 @@ impl Simulation {
         // (issue 11: the 9 to 25 cells of each query were 15 % of the dense random walk;
         // with twice that size, crowds put a hundred robots in the 2 × 2 cells of a query).
         let reach = 2.0 * self.max_radius_m + 2.0 * self.max_speed_m;
-        // The two are independent: built side by side (issue 11: one after the other they
-        // were a third of the dense random walk's sequential time).
         let (robot_index, body_index) = (&mut self.robot_index, &mut self.body_index);
-        rayon::join(
-            || robot_index.rebuild(positions(), view_cell_m),
-            || body_index.rebuild(positions(), reach.clamp(0.25, 64.0)),
-        );
+        if self.robot_index_eager {
+            // The two are independent: built side by side (issue 11: one after the other they
+            // were a third of the dense random walk's sequential time).
+            rayon::join(
+                || robot_index.rebuild(positions(), view_cell_m),
+                || body_index.rebuild(positions(), reach.clamp(0.25, 64.0)),
+            );
+        } else {
+            body_index.rebuild(positions(), reach.clamp(0.25, 64.0));
+        }
+    }
+
+    /// Build the view-sized index from the start-of-round positions (for a round whose
+    /// broadcasts need it when it is not built every round).
+    pub(super) fn rebuild_robot_index_at_start(&mut self) {
+        let view_cell_m = index_cell_m(&self.types);
+        let starts = self.turns.iter().zip(&self.robots).map(|(t, r)| (r.id, t.start));
+        self.robot_index.rebuild(starts, view_cell_m);
     }
 }
 

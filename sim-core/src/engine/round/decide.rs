@@ -3,6 +3,7 @@
 
 use std::cell::RefCell;
 use std::panic::AssertUnwindSafe;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::DVec2;
@@ -12,7 +13,7 @@ use super::perceive::{Snapshot, perceive};
 use super::resolve::{Bodies, move_within_means, resolve_alone, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
-use crate::spatial::{ObstacleMap, RobotId, RobotIndex};
+use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
 use crate::world::{Action, Recipient, Robot, RobotType};
 
 impl Simulation {
@@ -25,72 +26,106 @@ impl Simulation {
             treasure_index: &self.treasure_index,
             robot_index: &self.robot_index,
         };
+
         let seed = self.seed;
         let types = &self.types;
         let obstacles = &self.map.obstacles;
         let bodies = Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m);
         let limit = self.decide_limit;
-        let robot_index = &self.robot_index;
+        // Without strategies that perceive robots the view-sized index is built only when
+        // someone broadcasts: their hearers are listed after this pass.
+        let robot_index = self.robot_index_eager.then_some(&self.robot_index);
         let radio_limited = self.radio_limited;
         let home = self.map.home;
-        self.start_positions.resize(self.robots.len(), DVec2::ZERO);
+        let pending = AtomicBool::new(false);
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
-            .zip(self.start_positions.par_iter_mut())
-            .for_each(|((agent, robot), start)| {
-                *start = robot.position;
+            .zip(self.turns.par_iter_mut())
+            .for_each(|((agent, robot), turn)| {
+                turn.start = robot.position;
+                turn.sensed_m = None;
+                turn.known_changed = false;
+                turn.news = false;
+                turn.alone = false;
+                turn.hearers_pending = false;
+                turn.slow = None;
+                turn.new_squares.clear();
                 agent.mind.output.begin_round();
-                agent.known_changed = false;
                 agent.planned_move = None;
-                agent.alone = false;
-                if !robot.alive {
-                    agent.action = Action::Idle;
-                    return;
-                }
-                let kind = &types[robot.type_index];
-                perceive(agent, robot, kind, &snapshot, round);
-                let rng = Simulation::rng_for(seed, robot.id, round);
-                let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
-                // A strategy that panics takes down its robot, not the run (issue 13): step 3
-                // disables the robot and logs why. Nothing it did this round is kept.
-                let strategy = &mut agent.strategy;
-                let started = limit.map(|_| Instant::now());
-                let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
-                agent.slow = started
-                    .map(|t| t.elapsed())
-                    .filter(|&took| limit.is_some_and(|limit| took > limit));
-                match decided {
-                    Ok(action) => {
-                        agent.action = action;
-                        agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
-                        agent.hearers.clear();
-                        let broadcasts = agent
-                            .mind
-                            .output
-                            .outbox()
-                            .iter()
-                            .any(|(to, _)| *to == Recipient::Broadcast);
-                        if broadcasts && !radio_limited {
-                            hearers(robot_index, robot, kind.comm_radius_m, &mut agent.hearers);
+                if robot.alive {
+                    let kind = &types[robot.type_index];
+                    turn.sensed_m = agent.needs.senses().then_some(kind.view_radius_m);
+                    perceive(agent, turn, robot, kind, &snapshot, round);
+                    let rng = Simulation::rng_for(seed, robot.id, round);
+                    let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
+                    // A strategy that panics takes down its robot, not the run (issue 13):
+                    // step 3 disables the robot and logs why. Nothing it did this round is kept.
+                    let strategy = &mut agent.strategy;
+                    let started = limit.map(|_| Instant::now());
+                    let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
+                    turn.slow = started
+                        .map(|t| t.elapsed())
+                        .filter(|&took| limit.is_some_and(|limit| took > limit));
+                    match decided {
+                        Ok(action) => {
+                            agent.action = action;
+                            agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
+                            agent.hearers.clear();
+                            let broadcasts = agent
+                                .mind
+                                .output
+                                .outbox()
+                                .iter()
+                                .any(|(to, _)| *to == Recipient::Broadcast);
+                            if broadcasts && !radio_limited {
+                                match robot_index {
+                                    Some(index) => {
+                                        hearers(index, robot.id, turn.start, kind.comm_radius_m, &mut agent.hearers);
+                                    }
+                                    None => {
+                                        turn.hearers_pending = true;
+                                        pending.store(true, Ordering::Relaxed);
+                                    }
+                                }
+                            }
+                            // Step 3 for a robot whose turn depends on nobody, while its data
+                            // are at hand (issue 11: a pass of its own over every robot, or
+                            // step 3's sequential loop, cost more than the turns).
+                            turn.alone = resolve_alone(robot, agent, kind, &home);
                         }
-                        // Step 3 for a robot whose turn depends on nobody, while its data are
-                        // at hand (issue 11: a pass of its own over every robot, or step 3's
-                        // sequential loop, cost more than the turns).
-                        agent.alone = resolve_alone(robot, agent, kind, &home);
+                        Err(payload) => {
+                            agent.action = Action::Idle;
+                            agent.failure = Some(panic_message(payload.as_ref()));
+                        }
                     }
-                    Err(payload) => {
-                        agent.action = Action::Idle;
-                        agent.failure = Some(panic_message(payload.as_ref()));
-                    }
+                } else {
+                    agent.action = Action::Idle;
                 }
+                turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
+                turn.news = turn.known_changed
+                    || !agent.mind.perception.treasures.is_empty()
+                    || !agent.mind.output.events().is_empty();
             });
+        if pending.into_inner() {
+            self.rebuild_robot_index_at_start();
+            let index = &self.robot_index;
+            self.agents
+                .par_iter_mut()
+                .zip(self.turns.par_iter())
+                .zip(self.robots.par_iter())
+                .filter(|((_, turn), _)| turn.hearers_pending)
+                .for_each(|((agent, turn), robot)| {
+                    let range_m = self.types[robot.type_index].comm_radius_m;
+                    hearers(index, robot.id, turn.start, range_m, &mut agent.hearers);
+                });
+        }
         if self.decide_limit.is_some() {
             let slow = self
-                .agents
+                .turns
                 .iter()
                 .zip(&self.robots)
-                .filter_map(|(a, r)| a.slow.map(|t| (r.id, t)));
+                .filter_map(|(t, r)| t.slow.map(|took| (r.id, took)));
             self.report.slow_decisions.extend(slow);
         }
     }
@@ -99,14 +134,14 @@ impl Simulation {
 /// The robots other than `robot` within `range_m` of where it stands (the start-of-round
 /// index), by id: who hears its broadcasts. In step 2, in parallel, rather than in the
 /// sequential step 3, where the look-up and sort were a tenth of a crowded round.
-fn hearers(index: &RobotIndex, robot: &Robot, range_m: f64, out: &mut Vec<RobotId>) {
+fn hearers(index: &RobotIndex, id: RobotId, at: DVec2, range_m: f64, out: &mut Vec<RobotId>) {
     thread_local! {
         /// A bit per robot, all clear between calls.
         static HEARD: RefCell<Vec<u64>> = const { RefCell::new(Vec::new()) };
     }
-    index.for_each_within(robot.position, range_m, |id, _| {
-        if id != robot.id {
-            out.push(id);
+    index.for_each_within(at, range_m, |other, _| {
+        if other != id {
+            out.push(other);
         }
     });
     if out.len() <= 32 {

@@ -6,81 +6,48 @@
 //! moves what it needs out of the simulation, [`ExploredUpdate::run`] does the work, and
 //! [`ExploredUpdate::finish`] puts it back and credits the robots in id order.
 
-use glam::DVec2;
-
-use crate::engine::simulation::Simulation;
+use crate::engine::simulation::{Simulation, Turn};
 use crate::spatial::{CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap};
 use crate::world::Event;
-
-/// One robot as the explored-map update sees it at the start of the round.
-struct Viewer {
-    position: DVec2,
-    view_radius_m: f64,
-    /// Alive and sensing.
-    senses: bool,
-    /// Keeps its own known map (then `new_squares` is what it gained this round).
-    has_known: bool,
-}
 
 /// The explored-map update of one round, detached from the simulation.
 pub(super) struct ExploredUpdate {
     explored: KnownMap,
     views: Vec<Option<Disc>>,
-    viewers: Vec<Viewer>,
-    /// Each robot's new squares (moved out of its agent, given back in `finish`).
-    new_squares: Vec<Vec<CellSet>>,
-    /// Free cells each robot was first to see.
+    /// Free cells each robot was first to see (a buffer kept from round to round).
     fresh: Vec<u64>,
 }
 
 impl ExploredUpdate {
-    /// Move the explored map and each robot's start-of-round view out of `sim`.
+    /// Move the explored map, the robots' last views and the buffer out of `sim`.
     pub(super) fn take(sim: &mut Simulation) -> Self {
-        let viewers = sim
-            .robots
-            .iter()
-            .zip(&sim.agents)
-            .zip(&sim.start_positions)
-            .map(|((robot, agent), &position)| Viewer {
-                position,
-                view_radius_m: sim.types[robot.type_index].view_radius_m,
-                senses: agent.needs.senses() && robot.alive,
-                has_known: agent.mind.data.known.is_some(),
-            })
-            .collect();
-        let new_squares = sim
-            .agents
-            .iter_mut()
-            .map(|a| std::mem::take(&mut a.new_squares))
-            .collect();
         let grid = *sim.explored.tree().grid();
         Self {
             explored: std::mem::replace(&mut sim.explored, KnownMap::new(grid)),
             views: std::mem::take(&mut sim.explored_views),
-            viewers,
-            new_squares,
-            fresh: Vec::new(),
+            fresh: std::mem::take(&mut sim.explored_fresh),
         }
     }
 
-    /// Mark every sensing robot's view, in id order, counting the free cells it was first to
-    /// see.
-    pub(super) fn run(&mut self, obstacles: &ObstacleMap) {
-        self.fresh = vec![0; self.viewers.len()];
-        for (i, viewer) in self.viewers.iter().enumerate() {
-            if !viewer.senses {
+    /// Mark every sensing robot's view (from step 2's `turns`), in id order, counting the
+    /// free cells it was first to see.
+    pub(super) fn run(&mut self, obstacles: &ObstacleMap, turns: &[Turn]) {
+        self.fresh.clear();
+        self.fresh.resize(turns.len(), 0);
+        for (i, turn) in turns.iter().enumerate() {
+            let Some(radius) = turn.sensed_m else {
                 continue;
-            }
+            };
             let disc = Disc {
-                center: viewer.position,
-                radius: viewer.view_radius_m,
+                center: turn.start,
+                radius,
             };
             let mut fresh = 0;
             let mut count_free = |set| fresh += obstacles.tree().count_cells_in_set(set, false);
-            if viewer.has_known {
+            if turn.has_known {
                 // Only what its own map gained can be new to everyone (a descent per square
                 // instead of a walk along the view's rim).
-                for &set in &self.new_squares[i] {
+                for &set in &turn.new_squares {
                     self.explored.mark_cells_reporting(set, &mut count_free);
                 }
             } else {
@@ -102,16 +69,13 @@ impl ExploredUpdate {
         let before = sim.explored_free_cells;
         sim.explored = self.explored;
         sim.explored_views = self.views;
-        for ((robot, agent), (fresh, squares)) in sim
-            .robots
-            .iter_mut()
-            .zip(&mut sim.agents)
-            .zip(self.fresh.into_iter().zip(self.new_squares))
-        {
-            agent.new_squares = squares;
-            sim.explored_free_cells += fresh;
-            robot.stats.explored_m2 += fresh as f64 * cell_area;
+        for (robot, &fresh) in sim.robots.iter_mut().zip(&self.fresh) {
+            if fresh > 0 {
+                sim.explored_free_cells += fresh;
+                robot.stats.explored_m2 += fresh as f64 * cell_area;
+            }
         }
+        sim.explored_fresh = self.fresh;
         if before < sim.total_free_cells && sim.explored_free_cells == sim.total_free_cells {
             sim.report.events.insert(event_at, Event::MapExplored);
         }

@@ -55,11 +55,15 @@ impl Simulation {
         let mut explored = ExploredUpdate::take(self);
         let event_at = self.report.events.len();
         let map = std::sync::Arc::clone(&self.map);
+        // Both sides read the turns; neither writes them.
+        let turns = std::mem::take(&mut self.turns);
         let t = Instant::now();
-        let ((messages, bytes), ()) = rayon::join(|| self.resolve(round), || explored.run(&map.obstacles));
+        let ((messages, bytes), ()) =
+            rayon::join(|| self.resolve(round, &turns), || explored.run(&map.obstacles, &turns));
         let took = t.elapsed();
         self.phase_times.resolve += took;
         apart += took;
+        self.turns = turns;
         explored.finish(self, event_at);
         if self.radio_limited {
             let t = Instant::now();
@@ -70,7 +74,8 @@ impl Simulation {
         }
         self.rebuild_robot_indexes();
         // 4: observe (the caller hands the report to the observers).
-        self.report.metrics = self.metrics(round, messages, bytes);
+        let known_bytes = self.turns.iter().map(|t| t.known_bytes).sum();
+        self.report.metrics = self.metrics(round, messages, bytes, known_bytes);
         self.phase_times.other += started.elapsed().saturating_sub(apart);
         &self.report
     }

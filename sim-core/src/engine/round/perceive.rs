@@ -4,29 +4,40 @@
 use std::sync::Arc;
 
 use crate::agent::{SeenRobot, SeenTreasure};
-use crate::engine::simulation::{Agent, Simulation};
+use crate::engine::simulation::{Agent, Simulation, Turn};
 use crate::spatial::{RobotIndex, TreasureIndex};
 use crate::world::{Event, Inbox, Payload, Robot, RobotType, Sighting, TreasureState};
 
 impl Simulation {
     /// Move last round's messages into the receivers' perception.
     pub(super) fn deliver_messages(&mut self) {
+        if self.mailbag.is_empty() && !self.inboxes_held {
+            // Nothing sent last round, nothing held from the round before.
+            return;
+        }
         let bag = Arc::new(std::mem::take(&mut self.mailbag));
+        let mut held = false;
         for (agent, picks) in self.agents.iter_mut().zip(self.inboxes.iter_mut()) {
             // Last round's inbox gives its list back, to be filled again in step 3.
             let mut spare = agent.mind.perception.inbox.take_picks();
             if agent.needs.messages && !picks.is_empty() {
                 std::mem::swap(picks, &mut spare);
                 agent.mind.perception.inbox = Inbox::new(Arc::clone(&bag), spare);
+                held = true;
             } else {
                 picks.clear();
             }
         }
+        self.inboxes_held = held;
     }
 
     /// First sightings of treasures, credited in id order.
     pub(super) fn record_discoveries(&mut self, round: u64) {
-        for (robot, agent) in self.robots.iter_mut().zip(&self.agents) {
+        for ((robot, agent), turn) in self.robots.iter_mut().zip(&self.agents).zip(&self.turns) {
+            // Only robots with something to report are looked at (most have nothing).
+            if !turn.news {
+                continue;
+            }
             for t in &agent.mind.perception.treasures {
                 let state = &mut self.treasures[t.id.index()];
                 if state.found_round.is_none() {
@@ -38,7 +49,7 @@ impl Simulation {
                     });
                 }
             }
-            if agent.known_changed {
+            if turn.known_changed {
                 self.report.known_changed.push(robot.id);
             }
             for e in agent.mind.output.events() {
@@ -61,16 +72,23 @@ pub(super) struct Snapshot<'a> {
 }
 
 /// Step 1 for one robot: only what its strategy needs.
-pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world: &Snapshot, round: u64) {
+pub(super) fn perceive(
+    agent: &mut Agent,
+    turn: &mut Turn,
+    robot: &Robot,
+    kind: &RobotType,
+    world: &Snapshot,
+    round: u64,
+) {
     let needs = agent.needs;
     let p = robot.position;
     let view = kind.view_radius_m;
     let data = &mut agent.mind.data;
     let perception = &mut agent.mind.perception;
-    agent.new_squares.clear();
+    turn.has_known = data.known.is_some();
     if let Some(known) = data.known.as_mut() {
-        let squares = &mut agent.new_squares;
-        agent.known_changed |= known.mark_view_reporting(p, view, |sq| squares.push(sq));
+        let squares = &mut turn.new_squares;
+        turn.known_changed |= known.mark_view_reporting(p, view, |sq| squares.push(sq));
     }
     perception.robots.clear();
     if needs.robots {
@@ -149,7 +167,7 @@ pub(super) fn perceive(agent: &mut Agent, robot: &Robot, kind: &RobotType, world
                         && merged < MAX_MAP_MERGES_PER_ROUND
                     {
                         merged += 1;
-                        agent.known_changed |= known.merge(other);
+                        turn.known_changed |= known.merge(other);
                         agent.merged_from.insert(m.from, cells);
                     }
                 }

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::agent::Needs;
 use crate::agent::StrategyOutput;
-use crate::engine::simulation::{Agent, Outgoing, Simulation};
+use crate::engine::simulation::{Agent, Outgoing, Simulation, Turn};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
 use crate::world::{
     Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
@@ -23,7 +23,7 @@ impl Simulation {
     /// in parallel; the rest have theirs here, in id order. The result is that of one pass
     /// in id order (issue 11: this step was sequential, a third of a 2-thread round of
     /// spread-out walkers).
-    pub(super) fn resolve(&mut self, round: u64) -> (u64, u64) {
+    pub(super) fn resolve(&mut self, round: u64, turns: &[Turn]) -> (u64, u64) {
         let (mut messages, mut bytes) = (0, 0);
         // Held apart from `self` so the loop can mutate the simulation while it reads a type
         // (one count update a round, not one a robot: this loop is the round's sequential
@@ -31,7 +31,7 @@ impl Simulation {
         let types = Arc::clone(&self.types);
         let home = self.map.home;
         for i in 0..self.robots.len() {
-            if !self.robots[i].alive || self.agents[i].alone {
+            if !self.robots[i].alive || turns[i].alone {
                 continue;
             }
             if let Some(reason) = self.agents[i].failure.take() {
@@ -57,7 +57,7 @@ impl Simulation {
                 }
                 self.spend(i, kind.energy_per_message);
                 let size = payload.size_bytes();
-                self.send(i, kind, round, to, payload);
+                self.send(i, kind, round, to, payload, turns);
                 messages += 1;
                 bytes += size;
                 self.robots[i].stats.messages_sent += 1;
@@ -239,9 +239,9 @@ impl Simulation {
     }
 
     /// Address a message to the robots in range at send time (start-of-round positions).
-    fn send(&mut self, i: usize, kind: &RobotType, round: u64, to: Recipient, payload: Payload) {
+    fn send(&mut self, i: usize, kind: &RobotType, round: u64, to: Recipient, payload: Payload, turns: &[Turn]) {
         let from = self.robots[i].id;
-        let at = self.start_positions[i];
+        let at = turns[i].start;
         let bytes = payload.size_bytes();
         let message = Message {
             from,
@@ -264,10 +264,9 @@ impl Simulation {
             Recipient::Broadcast => &self.agents[i].hearers,
             Recipient::Direct(target) => {
                 direct = [target];
-                let in_range = self
-                    .start_positions
+                let in_range = turns
                     .get(target.index())
-                    .is_some_and(|p| target != from && p.distance(at) <= kind.comm_radius_m);
+                    .is_some_and(|t| target != from && t.start.distance(at) <= kind.comm_radius_m);
                 if in_range { &direct } else { &[] }
             }
         };
@@ -316,7 +315,7 @@ impl Simulation {
         senders.rebuild(
             (0..n)
                 .filter(|&i| first[i] != u32::MAX)
-                .map(|i| (self.robots[i].id, self.start_positions[i])),
+                .map(|i| (self.robots[i].id, self.turns[i].start)),
             max_range.clamp(1.0, 64.0),
         );
         // Receivers are independent (each reads the shared sends and writes its own inbox),
@@ -333,7 +332,7 @@ impl Simulation {
             max_range,
             robots: &self.robots,
             types: &self.types,
-            starts: &self.start_positions,
+            turns: &self.turns,
         };
         let words = outgoing.len().div_ceil(64);
         // Budgeted sends skip the bag until the end: picks are indices into `outgoing`.
@@ -400,7 +399,8 @@ struct Sends<'a> {
     max_range: f64,
     robots: &'a [crate::world::Robot],
     types: &'a [RobotType],
-    starts: &'a [DVec2],
+    /// Where each robot sent from (its start of the round).
+    turns: &'a [Turn],
 }
 
 impl Sends<'_> {
@@ -418,7 +418,7 @@ impl Sends<'_> {
             return;
         }
         let to = robot.id;
-        let here = self.starts[r];
+        let here = self.turns[r].start;
         let budget = self.types[robot.type_index].radio_bytes_per_round;
         let mut spent = 0u64;
         let mut fits = |bytes: u64| {
@@ -438,7 +438,7 @@ impl Sends<'_> {
         let mine = self.direct.partition_point(|e| e.0 < to.get());
         for &(_, k) in self.direct[mine..].iter().take_while(|e| e.0 == to.get()) {
             let o = &self.outgoing[k as usize];
-            if o.from != r && self.starts[o.from].distance(here) <= o.range_m && fits(o.bytes) {
+            if o.from != r && self.turns[o.from].start.distance(here) <= o.range_m && fits(o.bytes) {
                 accept(k);
             }
         }
