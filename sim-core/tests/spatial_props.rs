@@ -593,13 +593,15 @@ proptest! {
     }
 
     #[test]
-    fn robot_index_matches_brute_force(seed in any::<u64>(), n in 0usize..400, cell in 0.2f64..30.0) {
+    fn robot_index_matches_brute_force(seed in any::<u64>(), n in 0usize..400, cell in 0.2f64..30.0, dense in any::<bool>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let spread = rng.random_range(1.0..500.0);
+        // From robots sharing a few cells (laid out densely when allowed) to robots spread
+        // over thousands of cells each (hashed).
+        let spread = rng.random_range(0.1..5_000.0);
         let robots: Vec<(RobotId, DVec2)> = (0..n)
             .map(|i| (RobotId::new(i as u32), DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread))))
             .collect();
-        let mut index = RobotIndex::new();
+        let mut index = if dense { RobotIndex::dense_when_compact() } else { RobotIndex::new() };
         // Rebuilt twice, as every round does, to catch stale state.
         index.rebuild(robots.iter().rev().copied(), cell * 2.0);
         index.rebuild(robots.iter().copied(), cell);

@@ -264,11 +264,13 @@ impl Simulation {
             agents,
             treasures,
             treasure_index,
-            robot_index: RobotIndex::new(),
+            // Both visit robots in an order nothing depends on (perception and hearers are
+            // sorted by id, contact lists only asked whether anyone overlaps).
+            robot_index: RobotIndex::dense_when_compact(),
             robot_index_eager,
             turns: vec![Turn::default(); n],
             inboxes_held: false,
-            body_index: RobotIndex::new(),
+            body_index: RobotIndex::dense_when_compact(),
             mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
             explored: KnownMap::new(grid),

@@ -5,6 +5,12 @@
 //! Cells of `cell_m` metres are hashed into about two buckets per robot; a rebuild is one
 //! counting sort (O(n), no per-round allocation once warm), and a query looks at the buckets
 //! of the cells its disc covers. Memory is O(robots), whatever the map size.
+//!
+//! An index made with [`RobotIndex::dense_when_compact`] lays the cells out row by row
+//! instead, when the robots' cells span a rectangle of at most about sixteen cells a robot:
+//! a query then reads one run of entries per row of cells, without hashing (issue 11: the
+//! buckets of a contact query were a sixth of a random walker's round). Only the order in
+//! which a query visits robots differs.
 
 use std::ops::ControlFlow;
 
@@ -20,11 +26,22 @@ struct Entry {
     cell: (i32, i32),
 }
 
+/// How cells map to buckets.
+#[derive(Clone, Copy, Debug)]
+enum Layout {
+    /// Hashed into `mask + 1` buckets.
+    Hashed { mask: u64 },
+    /// Row by row over the `width` × `height` cells from `(x0, y0)`.
+    Dense { x0: i32, y0: i32, width: u32, height: u32 },
+}
+
 /// Robots by position.
 #[derive(Clone, Debug)]
 pub struct RobotIndex {
     cell_m: f64,
-    mask: u64,
+    layout: Layout,
+    /// May lay cells out densely.
+    dense_allowed: bool,
     /// `starts[b]..starts[b + 1]` are bucket b's entries.
     starts: Vec<u32>,
     entries: Vec<Entry>,
@@ -39,15 +56,25 @@ impl Default for RobotIndex {
 }
 
 impl RobotIndex {
-    /// An empty index.
+    /// An empty index whose queries visit robots in hashed-cell order.
     pub fn new() -> Self {
         Self {
             cell_m: 1.0,
-            mask: 0,
+            layout: Layout::Hashed { mask: 0 },
+            dense_allowed: false,
             starts: vec![0, 0],
             entries: Vec::new(),
             scratch: Vec::new(),
             cursor: Vec::new(),
+        }
+    }
+
+    /// An empty index that lays its cells out row by row when the robots are close
+    /// together (see the module docs); queries visit the same robots, in another order.
+    pub fn dense_when_compact() -> Self {
+        Self {
+            dense_allowed: true,
+            ..Self::new()
         }
     }
 
@@ -59,9 +86,16 @@ impl RobotIndex {
 
     #[inline]
     fn bucket(&self, cell: (i32, i32)) -> usize {
-        let h = u64::from(cell.0 as u32).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            ^ u64::from(cell.1 as u32).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
-        ((h ^ (h >> 29)) & self.mask) as usize
+        match self.layout {
+            Layout::Hashed { mask } => {
+                let h = u64::from(cell.0 as u32).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                    ^ u64::from(cell.1 as u32).wrapping_mul(0xC2B2_AE3D_27D4_EB4F);
+                ((h ^ (h >> 29)) & mask) as usize
+            }
+            Layout::Dense { x0, y0, width, .. } => {
+                (cell.1.abs_diff(y0) as usize) * width as usize + cell.0.abs_diff(x0) as usize
+            }
+        }
     }
 
     /// Replace the contents with `robots`, using cells of `cell_m` metres (pick about the
@@ -73,25 +107,42 @@ impl RobotIndex {
         );
         self.cell_m = cell_m;
         self.scratch.clear();
+        let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+        let cell_of = |p| floor(p / cell_m) as i32;
         self.scratch.extend(robots.into_iter().map(|(id, position)| {
-            (
-                0,
-                Entry {
-                    position,
-                    id,
-                    cell: (0, 0),
-                },
-            )
+            let cell = (cell_of(position.x), cell_of(position.y));
+            (lo, hi) = (
+                (lo.0.min(cell.0), lo.1.min(cell.1)),
+                (hi.0.max(cell.0), hi.1.max(cell.1)),
+            );
+            (0, Entry { position, id, cell })
         }));
-        let buckets = (2 * self.scratch.len()).next_power_of_two().max(16);
-        self.mask = buckets as u64 - 1;
+        let n = self.scratch.len();
+        let area = if n == 0 {
+            u64::MAX
+        } else {
+            (u64::from(hi.0.abs_diff(lo.0)) + 1).saturating_mul(u64::from(hi.1.abs_diff(lo.1)) + 1)
+        };
+        let buckets = if self.dense_allowed && area <= 16 * n as u64 + 4096 {
+            self.layout = Layout::Dense {
+                x0: lo.0,
+                y0: lo.1,
+                width: hi.0.abs_diff(lo.0) + 1,
+                height: hi.1.abs_diff(lo.1) + 1,
+            };
+            area as usize
+        } else {
+            let buckets = (2 * n).next_power_of_two().max(16);
+            self.layout = Layout::Hashed {
+                mask: buckets as u64 - 1,
+            };
+            buckets
+        };
         self.starts.clear();
         self.starts.resize(buckets + 1, 0);
-        for i in 0..self.scratch.len() {
-            let cell = self.cell_of(self.scratch[i].1.position);
-            let b = self.bucket(cell);
+        for i in 0..n {
+            let b = self.bucket(self.scratch[i].1.cell);
             self.scratch[i].0 = b as u32;
-            self.scratch[i].1.cell = cell;
             self.starts[b + 1] += 1;
         }
         for b in 0..buckets {
@@ -103,7 +154,7 @@ impl RobotIndex {
             cell: (0, 0),
         };
         self.entries.clear();
-        self.entries.resize(self.scratch.len(), placeholder);
+        self.entries.resize(n, placeholder);
         // Stable placement (input order within a bucket) keeps query order deterministic.
         self.cursor.clear();
         self.cursor.extend_from_slice(&self.starts);
@@ -148,6 +199,29 @@ impl RobotIndex {
             for e in &self.entries {
                 if e.position.distance_squared(p) <= r2 {
                     visit(e.id, e.position)?;
+                }
+            }
+            return ControlFlow::Continue(());
+        }
+        if let Layout::Dense {
+            x0: bx,
+            y0: by,
+            width,
+            height,
+        } = self.layout
+        {
+            // The rows of cells the disc covers, each one run of entries.
+            let (x0, x1) = (x0.max(bx), x1.min(bx + (width - 1) as i32));
+            let (y0, y1) = (y0.max(by), y1.min(by + (height - 1) as i32));
+            if x0 > x1 {
+                return ControlFlow::Continue(());
+            }
+            for cy in y0..=y1 {
+                let (a, b) = (self.bucket((x0, cy)), self.bucket((x1, cy)));
+                for e in &self.entries[self.starts[a] as usize..self.starts[b + 1] as usize] {
+                    if e.position.distance_squared(p) <= r2 {
+                        visit(e.id, e.position)?;
+                    }
                 }
             }
             return ControlFlow::Continue(());
