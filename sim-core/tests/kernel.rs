@@ -610,9 +610,10 @@ fn issue13_a_slow_decision_is_reported_with_its_robot_and_time() {
         slow
     };
     let slow = run(Some(std::time::Duration::from_millis(20)));
+    // Timed by the coarse clock (a tick of up to 10 ms): at least the 40 ms slept, less a tick.
     assert!(
         slow.iter()
-            .any(|&(round, robot, t)| (round, robot) == (3, 1) && t >= std::time::Duration::from_millis(40)),
+            .any(|&(round, robot, t)| (round, robot) == (3, 1) && t >= std::time::Duration::from_millis(30)),
         "{slow:?}"
     );
     assert!(run(None).is_empty());

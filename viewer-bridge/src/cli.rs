@@ -200,8 +200,8 @@ pub struct OutputArgs {
     /// No progress bar and no summary.
     #[arg(long, short)]
     pub quiet: bool,
-    /// Report a strategy that takes longer than this to decide one round (milliseconds;
-    /// 0: do not time decisions).
+    /// Report a strategy that takes longer than this to decide one round (milliseconds, timed
+    /// to a few milliseconds; 0: do not time decisions).
     #[arg(long, value_name = "MS", default_value_t = 100)]
     pub decide_limit_ms: u64,
     /// Where the recording goes.

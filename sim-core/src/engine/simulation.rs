@@ -306,6 +306,9 @@ impl Simulation {
     }
     /// Report decisions that take longer than `limit` (in the round report's
     /// `slow_decisions`); `None` does not time them. Default: [`DEFAULT_DECIDE_LIMIT`].
+    /// Decisions are timed with the system's coarse monotonic clock (a few milliseconds'
+    /// resolution, at a tenth of the cost of a precise clock read), so limits under about
+    /// ten milliseconds are approximate.
     pub fn with_decide_limit(mut self, limit: Option<Duration>) -> Self {
         self.decide_limit = limit;
         self
