@@ -34,6 +34,7 @@
 //! assert!((path.length_m - (2.0 * 5f64.sqrt() + 1.0)).abs() < 1e-12);
 //! ```
 
+mod anya;
 mod build;
 mod raster;
 pub mod reference;
