@@ -356,15 +356,15 @@ impl Search<'_> {
         self.push_cone(ri, y, l as f64, h as f64, false, false, up);
     }
 
-    /// Offer the goal from root `ri` if it lies strictly inside the band of cells between
-    /// line `y` and the next line `dir` of it, in the run `[lo, hi]` of free cells there
-    /// (which a cone of the root enters), and the ray from the root to it crosses line `y`
+    /// Offer the goal from root `ri` if it lies beyond line `y` (heading `up` or down) and
+    /// before the line `rows` further, in the run `[lo, hi]` of free cells of those rows (a
+    /// rectangle a cone of the root enters), and the ray from the root to it crosses line `y`
     /// within `[a, b]`.
     #[allow(clippy::cast_precision_loss, clippy::too_many_arguments)]
-    fn offer_in_band(&mut self, ri: u32, y: i64, up: bool, lo: i64, hi: i64, a: f64, b: f64) {
+    fn offer_in_band(&mut self, ri: u32, y: i64, up: bool, rows: i64, lo: i64, hi: i64, a: f64, b: f64) {
         let g = self.goal;
         let beyond = (g.y - y as f64) * if up { 1.0 } else { -1.0 };
-        if !(beyond > 0.0 && beyond < 1.0 && g.x >= lo as f64 && g.x <= hi as f64) {
+        if !(beyond > 0.0 && beyond < rows as f64 && g.x >= lo as f64 && g.x <= hi as f64) {
             return;
         }
         let r = self.roots[ri as usize].pos;
@@ -417,13 +417,22 @@ impl Search<'_> {
         if pa > pb {
             return;
         }
-        self.offer_in_band(c.root, c.y, c.up, lo, hi, pa, pb);
+        // The rows ahead whose free run is the same `[lo, hi]`, walled on both sides, form
+        // a rectangle the cone crosses with no corner on the way: cross it at once.
+        let dir = if c.up { 1 } else { -1 };
+        let ahead = if c.up { c.y } else { c.y - 1 };
+        let mut rows = 1;
+        while self.same_run(ahead + dir * rows, lo, hi) {
+            rows += 1;
+        }
+        self.offer_in_band(c.root, c.y, c.up, rows, lo, hi, pa, pb);
         let r = self.roots[c.root as usize].pos;
-        let next = if c.up { c.y + 1 } else { c.y - 1 };
-        // Rays cross the band ahead in proportion to their height above the root.
-        let t = (next as f64 - r.y) / (c.y as f64 - r.y);
-        let qa = snap(r.x + (pa - r.x) * t);
-        let qb = snap(r.x + (pb - r.x) * t);
+        let next = c.y + dir * rows;
+        // Rays cross the rows ahead in proportion to their height above the root.
+        let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
+        let t = ((c.y + dir) as f64 - r.y) / (c.y as f64 - r.y);
+        let qa = snap(r.x + (pa - r.x) * tk);
+        let qb = snap(r.x + (pb - r.x) * tk);
         // A ray that leaves the run sideways hits a blocked cell: cut at the run's ends.
         let (na, na_open) = if qa < lf { (lf, false) } else { (qa, pa_open) };
         let (nb, nb_open) = if qb > hf { (hf, false) } else { (qb, pb_open) };
@@ -459,7 +468,7 @@ impl Search<'_> {
             // Round the cell behind: along the line, and into the band ahead beyond the ray.
             (true, false) if dx >= 0.0 => {
                 let Some(ri) = self.add_root(e, c.y, c.root) else { return };
-                self.offer_in_band(ri, c.y, c.up, lo, hi, lf, hf);
+                self.offer_in_band(ri, c.y, c.up, 1, lo, hi, lf, hf);
                 self.walk(ri, c.y, side, e as f64);
                 if side > 0 {
                     self.push_cone(ri, next, proj.max(lf), hf, false, false, c.up);
@@ -471,7 +480,7 @@ impl Search<'_> {
             // between the ray and the cell.
             (false, true) if dx < 0.0 => {
                 let Some(ri) = self.add_root(e, c.y, c.root) else { return };
-                self.offer_in_band(ri, c.y, c.up, lo, hi, lf, hf);
+                self.offer_in_band(ri, c.y, c.up, 1, lo, hi, lf, hf);
                 if side > 0 {
                     self.push_cone(ri, next, proj.max(lf), hf, false, false, c.up);
                 } else {
@@ -480,6 +489,11 @@ impl Search<'_> {
             }
             _ => {}
         }
+    }
+
+    /// Whether the free cells of `row` around `lo` are exactly `lo..hi`.
+    fn same_run(&self, row: i64, lo: i64, hi: i64) -> bool {
+        self.raster.prev_blocked(row, lo) == lo - 1 && self.raster.next_blocked(row, lo) == hi
     }
 
     /// The first cell after `k` in `row` whose state differs from cell `k`'s (`i64::MAX` if
@@ -543,7 +557,7 @@ impl Search<'_> {
                     } else {
                         (r.prev_blocked(row, c - 1) + 1, c)
                     };
-                    self.offer_in_band(ti, y, up, l, h, l as f64, h as f64);
+                    self.offer_in_band(ti, y, up, 1, l, h, l as f64, h as f64);
                     self.push_cone_ints(ti, line, l, h, up);
                 }
             }
