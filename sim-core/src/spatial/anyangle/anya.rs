@@ -26,8 +26,7 @@
 #![allow(clippy::float_cmp)]
 
 use std::cmp::{Ordering, Reverse};
-use std::collections::hash_map::Entry as MapEntry;
-use std::collections::{BinaryHeap, HashMap};
+use std::collections::BinaryHeap;
 
 use glam::DVec2;
 
@@ -162,38 +161,85 @@ fn through(r: DVec2, y: f64, a: f64, b: f64, g: DVec2) -> f64 {
     r.distance(p) + p.distance(g2)
 }
 
+/// A search's buffers, kept per thread between queries (allocating and faulting them in
+/// anew was a tenth of a query's time).
+#[derive(Default)]
+struct Scratch {
+    roots: Vec<Root>,
+    cones: Vec<Cone>,
+    open: BinaryHeap<Reverse<Entry>>,
+    /// The best length found to each lattice corner (index `y * (width + 1) + x`), valid
+    /// where `stamp` holds this query's `epoch`.
+    best: Vec<f64>,
+    stamp: Vec<u32>,
+    epoch: u32,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
+}
+
 /// One query's search.
 struct Search<'a> {
     raster: &'a CellRaster,
     goal: DVec2,
-    roots: Vec<Root>,
-    cones: Vec<Cone>,
-    /// The best length found to each lattice corner, by [`key`].
-    best: HashMap<u64, f64, foldhash::fast::FixedState>,
-    open: BinaryHeap<Reverse<Entry>>,
+    roots: &'a mut Vec<Root>,
+    cones: &'a mut Vec<Cone>,
+    open: &'a mut BinaryHeap<Reverse<Entry>>,
+    best: &'a mut [f64],
+    stamp: &'a mut [u32],
+    epoch: u32,
+    /// An entry no greater than any in `open`, kept out of it: a cone's successor is often
+    /// the next to expand, and the heap need not see it.
+    slot: Option<Entry>,
     seq: u64,
-}
-
-#[inline]
-#[allow(clippy::cast_sign_loss)] // Lattice corners of the map are non-negative.
-fn key(x: i64, y: i64) -> u64 {
-    (x as u64) << 32 | (y as u64 & 0xffff_ffff)
 }
 
 /// The corners (cell units) a shortest legal path from `s` to `g` bends at, in order, or
 /// `None` when the goal cannot be reached. Both ends must be points a path may touch.
 pub(crate) fn shortest(raster: &CellRaster, s: DVec2, g: DVec2) -> Option<Vec<DVec2>> {
+    SCRATCH.with(|scratch| {
+        // A query on this thread is never re-entered; should it be, fresh buffers serve.
+        let mut fresh = None;
+        let mut borrowed = scratch.try_borrow_mut().ok();
+        let scratch = match borrowed.as_deref_mut() {
+            Some(s) => s,
+            None => fresh.insert(Scratch::default()),
+        };
+        search(raster, scratch, s, g)
+    })
+}
+
+fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Option<Vec<DVec2>> {
+    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)] // Map sides below 2^31.
+    let points = (raster.width() as usize + 1) * (raster.height() as usize + 1);
+    if scratch.best.len() < points {
+        scratch.best.resize(points, 0.0);
+        scratch.stamp.resize(points, 0);
+    }
+    scratch.epoch = scratch.epoch.wrapping_add(1);
+    if scratch.epoch == 0 {
+        // Stamps from 2^32 queries ago would read as current.
+        scratch.stamp.fill(0);
+        scratch.epoch = 1;
+    }
+    scratch.roots.clear();
+    scratch.cones.clear();
+    scratch.open.clear();
     let mut search = Search {
         raster,
         goal: g,
-        roots: Vec::new(),
-        cones: Vec::new(),
-        best: HashMap::default(),
-        open: BinaryHeap::new(),
+        roots: &mut scratch.roots,
+        cones: &mut scratch.cones,
+        open: &mut scratch.open,
+        best: &mut scratch.best,
+        stamp: &mut scratch.stamp,
+        epoch: scratch.epoch,
+        slot: None,
         seq: 0,
     };
     search.start(s);
-    while let Some(Reverse(e)) = search.open.pop() {
+    while let Some(e) = search.pop() {
         match e.item {
             Item::Goal(ri) => {
                 if segment_between_legal_ends_clear(raster, search.roots[ri as usize].pos, g) {
@@ -209,7 +255,36 @@ pub(crate) fn shortest(raster: &CellRaster, s: DVec2, g: DVec2) -> Option<Vec<DV
 impl Search<'_> {
     fn push(&mut self, f: f64, item: Item) {
         self.seq += 1;
-        self.open.push(Reverse(Entry { f, seq: self.seq, item }));
+        let e = Entry { f, seq: self.seq, item };
+        if self.slot.is_none() && self.open.peek().is_none_or(|Reverse(top)| e < *top) {
+            self.slot = Some(e);
+        } else {
+            self.open.push(Reverse(e));
+        }
+    }
+
+    /// The least entry of the slot and the heap.
+    fn pop(&mut self) -> Option<Entry> {
+        let Some(e) = self.slot.take() else {
+            return self.open.pop().map(|Reverse(e)| e);
+        };
+        match self.open.peek_mut() {
+            Some(mut top) if top.0 < e => Some(std::mem::replace(&mut top.0, e)),
+            _ => Some(e),
+        }
+    }
+
+    /// Index of lattice corner `(x, y)` of the map in `best`.
+    #[inline]
+    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)] // Corners of the map.
+    fn key(&self, x: i64, y: i64) -> usize {
+        (y * (self.raster.width() + 1) + x) as usize
+    }
+
+    /// The best length found to corner `k` this query.
+    #[inline]
+    fn best(&self, k: usize) -> Option<f64> {
+        (self.stamp[k] == self.epoch).then(|| self.best[k])
     }
 
     /// The corners from the start (excluded) to root `ri` (included).
@@ -239,17 +314,12 @@ impl Search<'_> {
         let pos = point(x, y);
         let from = &self.roots[via as usize];
         let g = from.g + from.pos.distance(pos);
-        match self.best.entry(key(x, y)) {
-            MapEntry::Occupied(mut e) => {
-                if *e.get() <= g + TIE {
-                    return None;
-                }
-                e.insert(g);
-            }
-            MapEntry::Vacant(e) => {
-                e.insert(g);
-            }
+        let k = self.key(x, y);
+        if self.best(k).is_some_and(|b| b <= g + TIE) {
+            return None;
         }
+        self.best[k] = g;
+        self.stamp[k] = self.epoch;
         self.roots.push(Root {
             pos,
             g,
@@ -263,7 +333,7 @@ impl Search<'_> {
     fn superseded(&self, ri: u32) -> bool {
         let root = &self.roots[ri as usize];
         match (lattice(root.pos.x), lattice(root.pos.y)) {
-            (Some(x), Some(y)) => self.best.get(&key(x, y)).is_some_and(|&b| b + TIE < root.g),
+            (Some(x), Some(y)) => self.best(self.key(x, y)).is_some_and(|b| b + TIE < root.g),
             _ => false,
         }
     }
@@ -331,7 +401,9 @@ impl Search<'_> {
             offered: false,
         });
         if let (Some(x), Some(y)) = (lattice(s.x), lattice(s.y)) {
-            self.best.insert(key(x, y), 0.0);
+            let k = self.key(x, y);
+            self.best[k] = 0.0;
+            self.stamp[k] = self.epoch;
         }
         if let Some(y0) = lattice(s.y) {
             self.walk(0, y0, 1, s.x);
