@@ -75,6 +75,12 @@ impl AnyAnglePlanner {
             }
         }
         let links = (0..vertices.len()).map(|_| OnceLock::new()).collect();
+        // A point robot's searches ask which region each end is in (a few milliseconds on a
+        // 768² map: part of building, not of the first query).
+        let regions = OnceLock::new();
+        if radius_m == 0.0 {
+            let _ = regions.set(super::regions::Regions::new(&raster));
+        }
         Ok(Self {
             grid,
             radius_m,
@@ -82,6 +88,7 @@ impl AnyAnglePlanner {
             vertices,
             links,
             obstacles: (radius_m > 0.0).then(|| obstacles.clone()),
+            regions,
         })
     }
 

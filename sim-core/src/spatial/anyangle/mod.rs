@@ -38,6 +38,7 @@ mod anya;
 mod build;
 mod raster;
 pub mod reference;
+mod regions;
 mod search;
 mod sight;
 
@@ -68,6 +69,8 @@ pub struct AnyAnglePlanner {
     links: Vec<std::sync::OnceLock<Box<[u32]>>>,
     /// The map, kept for exact swept-disc tests when the radius is positive.
     obstacles: Option<ObstacleMap>,
+    /// The free space's connected regions (found when a point robot's planner is built).
+    regions: std::sync::OnceLock<regions::Regions>,
 }
 
 /// A path: its waypoints in world coordinates from start to goal, and its length.
@@ -136,6 +139,7 @@ impl AnyAnglePlanner {
                 .map(|l| std::mem::size_of_val(l) + l.get().map_or(0, |n| n.len() * 4))
                 .sum::<usize>()
             + self.obstacles.as_ref().map_or(0, ObstacleMap::memory_bytes)
+            + self.regions.get().map_or(0, regions::Regions::memory_bytes)
     }
 
     /// Whether a robot of the planner's radius may move straight from `a` to `b` (world

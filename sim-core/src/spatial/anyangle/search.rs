@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 use glam::DVec2;
 
 use super::build::grazes;
-use super::{AnyAnglePath, AnyAnglePlanner, NoPath, anya};
+use super::{AnyAnglePath, AnyAnglePlanner, NoPath, anya, regions};
 
 /// A heap entry: estimated total length, then node (for a deterministic order among ties),
 /// and whether it is a link from the start not yet checked for sight.
@@ -77,11 +77,15 @@ impl AnyAnglePlanner {
             });
         }
         if self.obstacles.is_none() {
-            match self.anya_path(from, to) {
-                Some(found) => return found,
-                // A leg failed the exact sight test (never seen; a guard against rounding
-                // in the search's interval arithmetic): the visibility graph decides.
-                None => {}
+            // Ends in different regions: no search (it would sweep the start's region).
+            let regions = self.regions.get_or_init(|| regions::Regions::new(&self.raster));
+            if regions.of_point(s) != regions.of_point(g) {
+                return Err(NoPath::Unreachable(from, to));
+            }
+            // `None`: a leg failed the exact sight test (never seen; a guard against
+            // rounding in the search's interval arithmetic), and the visibility graph decides.
+            if let Some(found) = self.anya_path(from, to) {
+                return found;
             }
         }
         self.graph_path(from, to)

@@ -303,3 +303,22 @@ proptest! {
         prop_assert_eq!(r.prev_free(y, x), (-1..=x).rev().find(|&k| !r.blocked(k, y)));
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(1213), ..ProptestConfig::default() })]
+
+    /// Two points a path may touch are in the same region exactly when the brute force
+    /// joins them (the regions answer unreachable queries without a search).
+    #[test]
+    fn regions_agree_with_brute_force_reachability((w, h, cells, s, g) in small_map()) {
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let blocked = blocked_fn(w, h, &cells);
+        let (ps, pg) = (point(s), point(g));
+        prop_assume!(planner.is_leg_clear(ps, ps) && planner.is_leg_clear(pg, pg));
+        let regions = super::regions::Regions::new(&super::raster::CellRaster::from_obstacles(&map).unwrap());
+        let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+        prop_assert!(regions.of_point(ps).is_some() && regions.of_point(pg).is_some());
+        prop_assert_eq!(regions.of_point(ps) == regions.of_point(pg), best.is_some());
+    }
+}
