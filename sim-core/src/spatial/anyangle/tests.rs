@@ -322,3 +322,52 @@ proptest! {
         prop_assert_eq!(regions.of_point(ps) == regions.of_point(pg), best.is_some());
     }
 }
+
+/// Issue 12, item 2: a point robot's query on a planner just built costs what the search
+/// sweeps, not a sight test per corner of the map. On a 96 × 96 map of 12-cell rooms with
+/// doors and pillars, 60 queries between cell centres link no corner at all (the visibility
+/// graph is never built), and give the visibility graph's lengths.
+#[test]
+fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 96, 96).unwrap();
+    // Walls on every 12th row and column, a 2-cell door in each wall segment placed by a
+    // fixed hash, and a pillar in each room.
+    let door = |a: u32, b: u32| (a.wrapping_mul(7919) ^ b.wrapping_mul(104_729)) % 9 + 1;
+    let map = ObstacleMap::from_fn(grid, |x, y| {
+        let wall_x = x % 12 == 0 && !(y % 12 >= door(x, y / 12) && y % 12 < door(x, y / 12) + 2);
+        let wall_y = y % 12 == 0 && !(x % 12 >= door(y + 1, x / 12) && x % 12 < door(y + 1, x / 12) + 2);
+        let pillar = x % 12 == 6 && y % 12 == 5;
+        wall_x || wall_y || pillar
+    });
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let reference = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let mut state = 12u64;
+    let mut next = |n: u32| {
+        // A fixed linear congruential sequence: the same queries on every run.
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        u32::try_from(state >> 33).unwrap() % n
+    };
+    let (mut found, mut bends) = (0, 0);
+    for _ in 0..60 {
+        let from = grid.cell_center(next(96), next(96));
+        let to = grid.cell_center(next(96), next(96));
+        let fast = planner.path(from, to);
+        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+            reference.graph_path(from, to)
+        } else {
+            reference.path(from, to)
+        };
+        match (&fast, &slow) {
+            (Ok(f), Ok(s)) => {
+                assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m, "{f:?} vs {s:?}");
+                found += 1;
+                bends += f.waypoints.len() - 2;
+            }
+            _ => assert_eq!(fast, slow),
+        }
+    }
+    assert_eq!(planner.edge_count(), 0, "a point robot's queries linked corners");
+    assert!(reference.edge_count() > 0);
+    // The queries are not trivial: most are answered, round many corners.
+    assert!(found >= 40 && bends >= 100, "{found} paths, {bends} bends");
+}
