@@ -3,7 +3,8 @@
 //! Moving AI `.map`, optionally `map.map=queries.scen`), comma-separated; each runs the
 //! queries `smartteams-bench any-angle` runs (the scenario's, or 300 random pairs of free cell
 //! centres, seed 1), first ten each on a planner just built, then all on one planner.
-//! `SMARTTEAMS_ANYANGLE_LINK=1` links the whole visibility graph first, as the bench does.
+//! `SMARTTEAMS_ANYANGLE_LINK=1` links the whole visibility graph first, as the bench did;
+//! `SMARTTEAMS_ANYANGLE_QUERIES=N` runs N random queries instead of 300.
 //!
 //! `cargo test --profile ci -p editor --test anyangle_speed -- --ignored --nocapture`
 
@@ -70,6 +71,7 @@ fn anyangle_query_times() {
         return;
     };
     let link = std::env::var("SMARTTEAMS_ANYANGLE_LINK").is_ok_and(|v| v == "1");
+    let count = std::env::var("SMARTTEAMS_ANYANGLE_QUERIES").map_or(300, |v| v.parse().unwrap());
     for item in list.split(',') {
         let (map_path, scen) = match item.split_once('=') {
             Some((m, s)) => (Path::new(m), Some(Path::new(s))),
@@ -78,10 +80,11 @@ fn anyangle_query_times() {
         let map = load(map_path);
         let queries = match scen {
             Some(s) => scenario(s, &map),
-            None => random_queries(&map, 300, 1),
+            None => random_queries(&map, count, 1),
         };
         let mut cold = Vec::new();
-        for &(a, b) in queries.iter().take(10) {
+        let cold_n = std::env::var("SMARTTEAMS_ANYANGLE_COLD").map_or(10, |v| v.parse().unwrap());
+        for &(a, b) in queries.iter().take(cold_n) {
             let fresh = AnyAnglePlanner::build(&map, 0.0).unwrap();
             let t = Instant::now();
             let _ = fresh.path(a, b);
@@ -107,8 +110,8 @@ fn anyangle_query_times() {
         println!(
             "{}: first query on a new planner: mean {:.2} ms, median {:.2} ms, slowest {:.2} ms | {} queries ({reachable} reachable, total length {total_len:.6}): mean {mean:.3} ms, median {:.3} ms, slowest {max:.3} ms",
             map_path.display(),
-            cold.iter().sum::<f64>() / 10.0,
-            median(cold.clone()),
+            cold.iter().sum::<f64>() / cold.len().max(1) as f64,
+            if cold.is_empty() { 0.0 } else { median(cold.clone()) },
             cold.iter().copied().fold(0.0, f64::max),
             queries.len(),
             median(times),

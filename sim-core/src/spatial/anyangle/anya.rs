@@ -69,30 +69,26 @@ enum Item {
     Goal(u32),
 }
 
-/// A heap entry: estimated length, then the order of pushing (deterministic ties).
+/// [`Item`] in 32 bits (the top one tells a goal offer), keeping heap entries at 16 bytes.
+const GOAL_BIT: u32 = 1 << 31;
+
+/// A heap entry: estimated length, then the order of pushing (deterministic ties). The
+/// length is kept as its bits, which order non-negative floats as integers (cheaper to
+/// compare than `total_cmp`).
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
 struct Entry {
-    f: f64,
-    seq: u64,
-    item: Item,
+    f_bits: u64,
+    seq: u32,
+    item: u32,
 }
 
-impl PartialEq for Entry {
-    fn eq(&self, other: &Self) -> bool {
-        self.cmp(other) == Ordering::Equal
-    }
-}
-
-impl Eq for Entry {}
-
-impl PartialOrd for Entry {
-    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Entry {
-    fn cmp(&self, other: &Self) -> Ordering {
-        self.f.total_cmp(&other.f).then(self.seq.cmp(&other.seq))
+impl Entry {
+    fn item(&self) -> Item {
+        if self.item & GOAL_BIT == 0 {
+            Item::Cone(self.item)
+        } else {
+            Item::Goal(self.item & !GOAL_BIT)
+        }
     }
 }
 
@@ -169,10 +165,16 @@ struct Scratch {
     cones: Vec<Cone>,
     open: BinaryHeap<Reverse<Entry>>,
     /// The best length found to each lattice corner (index `y * (width + 1) + x`), valid
-    /// where `stamp` holds this query's `epoch`.
-    best: Vec<f64>,
-    stamp: Vec<u32>,
+    /// where stamped with this query's `epoch` (stamp and length side by side: one cache
+    /// miss, not two).
+    best: Vec<Mark>,
     epoch: u32,
+}
+
+#[derive(Clone, Copy, Default)]
+struct Mark {
+    epoch: u32,
+    g: f64,
 }
 
 thread_local! {
@@ -186,13 +188,12 @@ struct Search<'a> {
     roots: &'a mut Vec<Root>,
     cones: &'a mut Vec<Cone>,
     open: &'a mut BinaryHeap<Reverse<Entry>>,
-    best: &'a mut [f64],
-    stamp: &'a mut [u32],
+    best: &'a mut [Mark],
     epoch: u32,
     /// An entry no greater than any in `open`, kept out of it: a cone's successor is often
     /// the next to expand, and the heap need not see it.
     slot: Option<Entry>,
-    seq: u64,
+    seq: u32,
 }
 
 /// The corners (cell units) a shortest legal path from `s` to `g` bends at, in order, or
@@ -214,13 +215,12 @@ fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Opt
     #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)] // Map sides below 2^31.
     let points = (raster.width() as usize + 1) * (raster.height() as usize + 1);
     if scratch.best.len() < points {
-        scratch.best.resize(points, 0.0);
-        scratch.stamp.resize(points, 0);
+        scratch.best.resize(points, Mark::default());
     }
     scratch.epoch = scratch.epoch.wrapping_add(1);
     if scratch.epoch == 0 {
         // Stamps from 2^32 queries ago would read as current.
-        scratch.stamp.fill(0);
+        scratch.best.fill(Mark::default());
         scratch.epoch = 1;
     }
     scratch.roots.clear();
@@ -233,14 +233,13 @@ fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Opt
         cones: &mut scratch.cones,
         open: &mut scratch.open,
         best: &mut scratch.best,
-        stamp: &mut scratch.stamp,
         epoch: scratch.epoch,
         slot: None,
         seq: 0,
     };
     search.start(s);
     while let Some(e) = search.pop() {
-        match e.item {
+        match e.item() {
             Item::Goal(ri) => {
                 if segment_between_legal_ends_clear(raster, search.roots[ri as usize].pos, g) {
                     return Some(search.corners(ri));
@@ -254,8 +253,19 @@ fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Opt
 
 impl Search<'_> {
     fn push(&mut self, f: f64, item: Item) {
-        self.seq += 1;
-        let e = Entry { f, seq: self.seq, item };
+        // Over 2^31 roots or cones, or 2^32 entries, would need more memory than a map of
+        // 2^31 cells gives rise to; wrapping would only reorder ties.
+        self.seq = self.seq.wrapping_add(1);
+        let item = match item {
+            Item::Cone(i) => i,
+            Item::Goal(i) => i | GOAL_BIT,
+        };
+        // Lengths are sums of distances: never negative.
+        let e = Entry {
+            f_bits: f.to_bits(),
+            seq: self.seq,
+            item,
+        };
         if self.slot.is_none() && self.open.peek().is_none_or(|Reverse(top)| e < *top) {
             self.slot = Some(e);
         } else {
@@ -284,7 +294,8 @@ impl Search<'_> {
     /// The best length found to corner `k` this query.
     #[inline]
     fn best(&self, k: usize) -> Option<f64> {
-        (self.stamp[k] == self.epoch).then(|| self.best[k])
+        let m = self.best[k];
+        (m.epoch == self.epoch).then_some(m.g)
     }
 
     /// The corners from the start (excluded) to root `ri` (included).
@@ -318,8 +329,7 @@ impl Search<'_> {
         if self.best(k).is_some_and(|b| b <= g + TIE) {
             return None;
         }
-        self.best[k] = g;
-        self.stamp[k] = self.epoch;
+        self.best[k] = Mark { epoch: self.epoch, g };
         self.roots.push(Root {
             pos,
             g,
@@ -402,8 +412,10 @@ impl Search<'_> {
         });
         if let (Some(x), Some(y)) = (lattice(s.x), lattice(s.y)) {
             let k = self.key(x, y);
-            self.best[k] = 0.0;
-            self.stamp[k] = self.epoch;
+            self.best[k] = Mark {
+                epoch: self.epoch,
+                g: 0.0,
+            };
         }
         if let Some(y0) = lattice(s.y) {
             self.walk(0, y0, 1, s.x);

@@ -92,10 +92,30 @@ impl CellRaster {
     /// 0: south-west, 1: south-east, 2: north-west, 3: north-east.
     #[inline]
     pub(crate) fn around(&self, x: i64, y: i64) -> u8 {
-        u8::from(self.blocked(x - 1, y - 1))
-            | u8::from(self.blocked(x, y - 1)) << 1
-            | u8::from(self.blocked(x - 1, y)) << 2
-            | u8::from(self.blocked(x, y)) << 3
+        self.pair(x, y - 1) | self.pair(x, y) << 2
+    }
+
+    /// The blocked flags of cells `x - 1` (bit 0) and `x` (bit 1) of row `y`: one word read
+    /// where both are inside the map (four bounds-checked reads made `around` a tenth of a
+    /// search's instructions).
+    #[inline]
+    fn pair(&self, x: i64, y: i64) -> u8 {
+        if y < 0 || y >= self.height || x < 1 || x >= self.width {
+            return u8::from(self.blocked(x - 1, y)) | u8::from(self.blocked(x, y)) << 1;
+        }
+        // In range: non-negative and below u32::MAX.
+        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
+        let (x, row) = (x as usize, y as usize * self.stride);
+        let left = x - 1;
+        let bits = if left % 64 == 63 {
+            (self.words[row + left / 64] >> 63) | (self.words[row + x / 64] & 1) << 1
+        } else {
+            self.words[row + left / 64] >> (left % 64) & 3
+        };
+        // Two bits.
+        #[allow(clippy::cast_possible_truncation)]
+        let bits = bits as u8;
+        bits
     }
 
     /// Row `y`'s words, or `None` for a row outside the map (all blocked).
