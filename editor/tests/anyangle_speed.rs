@@ -46,7 +46,8 @@ fn random_queries(map: &ObstacleMap, count: usize, seed: u64) -> Vec<(DVec2, DVe
 fn scenario(path: &Path, map: &ObstacleMap) -> Vec<(DVec2, DVec2)> {
     let g = map.grid();
     let top = f64::from(g.height_cells());
-    let corner = |x: &str, y: &str| g.origin() + DVec2::new(x.parse().unwrap(), top - y.parse::<f64>().unwrap()) * g.cell_m();
+    let corner =
+        |x: &str, y: &str| g.origin() + DVec2::new(x.parse().unwrap(), top - y.parse::<f64>().unwrap()) * g.cell_m();
     std::fs::read_to_string(path)
         .unwrap()
         .lines()

@@ -25,7 +25,7 @@
 // Exact comparisons of snapped coordinates are intended.
 #![allow(clippy::float_cmp)]
 
-use std::cmp::{Ordering, Reverse};
+use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::DVec2;
@@ -551,7 +551,9 @@ impl Search<'_> {
         match (r.blocked(out_col, behind), r.blocked(out_col, ahead)) {
             // Round the cell behind: along the line, and into the band ahead beyond the ray.
             (true, false) if dx >= 0.0 => {
-                let Some(ri) = self.add_root(e, c.y, c.root) else { return };
+                let Some(ri) = self.add_root(e, c.y, c.root) else {
+                    return;
+                };
                 self.offer_in_band(ri, c.y, c.up, 1, lo, hi, lf, hf);
                 self.walk(ri, c.y, side, e as f64);
                 if side > 0 {
@@ -563,7 +565,9 @@ impl Search<'_> {
             // Round the cell ahead, when the ray heads away from it: into the band ahead
             // between the ray and the cell.
             (false, true) if dx < 0.0 => {
-                let Some(ri) = self.add_root(e, c.y, c.root) else { return };
+                let Some(ri) = self.add_root(e, c.y, c.root) else {
+                    return;
+                };
                 self.offer_in_band(ri, c.y, c.up, 1, lo, hi, lf, hf);
                 if side > 0 {
                     self.push_cone(ri, next, proj.max(lf), hf, false, false, c.up);
@@ -635,7 +639,11 @@ impl Search<'_> {
             if !nb && !nu && lb != ub {
                 // A convex corner just passed: bend round it into the band beyond.
                 if let Some(ti) = self.add_root(c, y, ri) {
-                    let (row, line, up) = if ub { (above, y + 1, true) } else { (below, y - 1, false) };
+                    let (row, line, up) = if ub {
+                        (above, y + 1, true)
+                    } else {
+                        (below, y - 1, false)
+                    };
                     let (l, h) = if side > 0 {
                         (c, r.next_blocked(row, c))
                     } else {

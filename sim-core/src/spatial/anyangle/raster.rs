@@ -136,7 +136,11 @@ impl CellRaster {
     #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
     fn next_with(&self, y: i64, x: i64, want_blocked: bool) -> Option<i64> {
         if x < 0 {
-            return if want_blocked { Some(x) } else { self.next_with(y, 0, false) };
+            return if want_blocked {
+                Some(x)
+            } else {
+                self.next_with(y, 0, false)
+            };
         }
         let Some(row) = self.row(y) else {
             return want_blocked.then_some(x);

@@ -66,11 +66,7 @@ impl Regions {
             }
         }
         let label = (0..runs.len()).map(|i| find(&mut parent, id(i))).collect();
-        Self {
-            row_start,
-            runs,
-            label,
-        }
+        Self { row_start, runs, label }
     }
 
     /// The region of free cell `(x, y)`, or `None` for a blocked cell.
@@ -91,10 +87,15 @@ impl Regions {
         }
         let (x, y) = (p.x as i64, p.y as i64);
         let (on_x, on_y) = (p.x == x as f64, p.y == y as f64);
-        [(x, y, true), (x - 1, y, on_x), (x, y - 1, on_y), (x - 1, y - 1, on_x && on_y)]
-            .into_iter()
-            .filter(|c| c.2)
-            .find_map(|(cx, cy, _)| self.of_cell(cx, cy))
+        [
+            (x, y, true),
+            (x - 1, y, on_x),
+            (x, y - 1, on_y),
+            (x - 1, y - 1, on_x && on_y),
+        ]
+        .into_iter()
+        .filter(|c| c.2)
+        .find_map(|(cx, cy, _)| self.of_cell(cx, cy))
     }
 
     /// Heap bytes.

@@ -218,7 +218,9 @@ fn anya(planner: &AnyAnglePlanner, from: DVec2, to: DVec2) -> Result<super::AnyA
     if planner.is_leg_clear(from, to) {
         return planner.path(from, to);
     }
-    planner.anya_path(from, to).expect("every leg of Anya's path passes the exact sight test")
+    planner
+        .anya_path(from, to)
+        .expect("every leg of Anya's path passes the exact sight test")
 }
 
 proptest! {
@@ -344,7 +346,9 @@ fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
     let mut state = 12u64;
     let mut next = |n: u32| {
         // A fixed linear congruential sequence: the same queries on every run.
-        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
         u32::try_from(state >> 33).unwrap() % n
     };
     let (mut found, mut bends) = (0, 0);
@@ -352,11 +356,12 @@ fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
         let from = grid.cell_center(next(96), next(96));
         let to = grid.cell_center(next(96), next(96));
         let fast = planner.path(from, to);
-        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
-            reference.graph_path(from, to)
-        } else {
-            reference.path(from, to)
-        };
+        let slow =
+            if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+                reference.graph_path(from, to)
+            } else {
+                reference.path(from, to)
+            };
         match (&fast, &slow) {
             (Ok(f), Ok(s)) => {
                 assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m, "{f:?} vs {s:?}");
