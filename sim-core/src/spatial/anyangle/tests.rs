@@ -376,3 +376,28 @@ fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
     // The queries are not trivial: most are answered, round many corners.
     assert!(found >= 40 && bends >= 100, "{found} paths, {bends} bends");
 }
+
+/// Point robots' planners accept maps with any number of corners (their searches link
+/// none); robots with a radius still refuse more than `MAX_VERTICES`.
+#[test]
+fn point_planners_take_maps_with_more_corners_than_the_graph_limit() {
+    // Isolated blocked cells every other cell: four convex corners each, 4 × 260² in all.
+    let grid = Grid::new(DVec2::ZERO, 1.0, 520, 520).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| x % 2 == 1 && y % 2 == 1);
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    assert!(planner.vertex_count() > super::MAX_VERTICES);
+    // From a corner of the map to the far corner of the last free cell column: round the
+    // pillars (the diagonal runs through their corners, where two blocked cells touch).
+    let (from, to) = (DVec2::new(0.0, 0.0), DVec2::new(520.0, 519.0));
+    let p = planner.path(from, to).unwrap();
+    assert!(
+        p.length_m > from.distance(to) && p.length_m < 520.0 + 519.0,
+        "{}",
+        p.length_m
+    );
+    for leg in p.waypoints.windows(2) {
+        assert!(planner.is_leg_clear(leg[0], leg[1]));
+    }
+    let e = AnyAnglePlanner::build(&map, 0.1).unwrap_err().to_string();
+    assert!(e.contains("corners"), "{e}");
+}
