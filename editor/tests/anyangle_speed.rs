@@ -99,7 +99,11 @@ fn anyangle_query_times() {
         for &(a, b) in &queries {
             let t = Instant::now();
             let found = planner.path(a, b);
-            times.push(t.elapsed().as_secs_f64() * 1e3);
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            if ms > 200.0 {
+                println!("slow query {a} -> {b}: {ms:.1} ms");
+            }
+            times.push(ms);
             if let Ok(p) = found {
                 reachable += 1;
                 total_len += p.length_m;

@@ -509,12 +509,26 @@ impl Search<'_> {
         while self.same_run(ahead + dir * rows, lo, hi) {
             rows += 1;
         }
-        self.offer_in_band(c.root, c.y, c.up, rows, lo, hi, pa, pb);
         let r = self.roots[c.root as usize].pos;
-        let next = c.y + dir * rows;
         // Rays cross the rows ahead in proportion to their height above the root.
-        let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
         let t = ((c.y + dir) as f64 - r.y) / (c.y as f64 - r.y);
+        if rows == 1 {
+            // Rows where the cone keeps a free cell between it and every blocked one have no
+            // corner at its ends and do not cut it: cross them at once too.
+            let clear = self.clear_rows(c, r, pa, pb, (lo, hi));
+            if clear > 1 {
+                let next = c.y + dir * clear;
+                let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
+                self.offer_in_cone(c.root, c.y, c.up, clear, pa, pb);
+                let (qa, qb) = (snap(r.x + (pa - r.x) * tk), snap(r.x + (pb - r.x) * tk));
+                self.push_cone(c.root, next, qa, qb, pa_open, pb_open, c.up);
+                self.bend_ends(c, (pa, pa_open), (pb, pb_open), lo, hi, t);
+                return;
+            }
+        }
+        self.offer_in_band(c.root, c.y, c.up, rows, lo, hi, pa, pb);
+        let next = c.y + dir * rows;
+        let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
         let qa = snap(r.x + (pa - r.x) * tk);
         let qb = snap(r.x + (pb - r.x) * tk);
         // A ray that leaves the run sideways hits a blocked cell: cut at the run's ends.
@@ -523,11 +537,71 @@ impl Search<'_> {
         if na <= nb {
             self.push_cone(c.root, next, na, nb, na_open, nb_open, c.up);
         }
+        self.bend_ends(c, (pa, pa_open), (pb, pb_open), lo, hi, t);
+    }
+
+    /// Bend cone `c`'s piece `[pa, pb]` (with their open flags) round its ends where they are
+    /// corners.
+    fn bend_ends(
+        &mut self,
+        c: &Cone,
+        (pa, pa_open): (f64, bool),
+        (pb, pb_open): (f64, bool),
+        lo: i64,
+        hi: i64,
+        t: f64,
+    ) {
         if !pb_open && let Some(e) = lattice(pb) {
             self.bend(c, e, 1, lo, hi, t);
         }
         if !pa_open && let Some(e) = lattice(pa) {
             self.bend(c, e, -1, lo, hi, t);
+        }
+    }
+
+    /// How many rows ahead of cone `c` (root at `r`), through `[pa, pb]` on its line, the
+    /// cone crosses with a free cell beside it on both sides all the way (0 if not the
+    /// first, whose free run is `first`).
+    #[allow(clippy::cast_precision_loss)]
+    fn clear_rows(&self, c: &Cone, r: DVec2, pa: f64, pb: f64, first: (i64, i64)) -> i64 {
+        let dir = if c.up { 1 } else { -1 };
+        let ahead = if c.up { c.y } else { c.y - 1 };
+        let (mut a0, mut b0) = (pa, pb);
+        let mut rows = 0;
+        loop {
+            let line = c.y + dir * (rows + 1);
+            let tk = (line as f64 - r.y) / (c.y as f64 - r.y);
+            let (a1, b1) = (r.x + (pa - r.x) * tk, r.x + (pb - r.x) * tk);
+            let (lo, hi) = (floor_i(a0.min(a1)) - 1, ceil_i(b0.max(b1)));
+            // The first row's run is known: no scan for the common case of a cone that
+            // touches a wall there.
+            let blocked_within = if rows == 0 {
+                lo < first.0 || hi >= first.1
+            } else {
+                self.raster.next_blocked(ahead + dir * rows, lo) <= hi
+            };
+            if blocked_within {
+                return rows;
+            }
+            rows += 1;
+            (a0, b0) = (a1, b1);
+        }
+    }
+
+    /// Offer the goal from root `ri` if it lies beyond line `y` (heading `up` or down) and
+    /// before the line `rows` further, and the ray from the root to it crosses line `y` within
+    /// `[a, b]`: inside a cone whose rows are free.
+    #[allow(clippy::cast_precision_loss)]
+    fn offer_in_cone(&mut self, ri: u32, y: i64, up: bool, rows: i64, a: f64, b: f64) {
+        let g = self.goal;
+        let beyond = (g.y - y as f64) * if up { 1.0 } else { -1.0 };
+        if !(beyond > 0.0 && beyond < rows as f64) {
+            return;
+        }
+        let r = self.roots[ri as usize].pos;
+        let x = r.x + (g.x - r.x) * (y as f64 - r.y) / (g.y - r.y);
+        if x >= a - EPS && x <= b + EPS {
+            self.offer(ri);
         }
     }
 
