@@ -8,11 +8,15 @@
 //! the next row line, cut into one interval per run of free cells there (observable
 //! successors), and bends round the corners at the cut ends, which become roots of cones into
 //! the part of the band the old root does not see and of walks along the row line
-//! (non-observable successors). Paths along a row line (Anya's flat nodes) are walked at once,
+//! (non-observable successors). Where nothing can happen for several bands, the cone crosses
+//! them in one step: rows whose free run is the same walled run (a rectangle), or rows where
+//! the cone keeps a free cell beside it on both sides (no corner at its ends, nothing cuts
+//! it). Paths along a row line (Anya's flat nodes) are walked at once,
 //! bit-scan by bit-scan, to the end of the free stretch, rooting cones at the convex corners on
 //! the way. A* orders the nodes by the root's distance plus the shortest way from the root
 //! through the interval to the goal; a corner reached again no shorter is pruned
-//! (root-level pruning, as in Polyanya).
+//! (root-level pruning, as in Polyanya: a bend that only the longer way there would make is
+//! on no shortest path, since the shorter way plus a straight leg beats it).
 //!
 //! The start and the goal may be any points where a robot may stand: a start inside a band of
 //! cells sees the run of free cells around it on the band's two lines; the goal is offered to
