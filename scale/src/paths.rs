@@ -1,6 +1,6 @@
-//! The any-angle path bench (issue 12): a map's visibility graph size and build time, then
-//! query times and, where the queries carry published optima, how far the paths are from
-//! them.
+//! The any-angle path bench (issue 12): a map's corners and the planner's build time (and,
+//! for robots with a radius, the visibility graph's size and linking time), then query times
+//! and, where the queries carry published optima, how far the paths are from them.
 
 use std::path::Path;
 use std::time::Instant;
@@ -113,11 +113,12 @@ pub fn random_queries(map: &ObstacleMap, count: usize, seed: u64) -> Vec<PathQue
 pub struct PathBench {
     /// Corners in the visibility graph.
     pub vertices: usize,
-    /// Its edges.
+    /// Its edges (0 for point robots: none is linked).
     pub edges: usize,
-    /// Seconds to build the planner (find the corners).
+    /// Seconds to build the planner (find the corners, and a point robot's free regions).
     pub build_s: f64,
-    /// Seconds to link every corner (the whole visibility graph, on all threads).
+    /// Seconds to link every corner (the whole visibility graph, on all threads); 0 for
+    /// point robots, whose queries (Anya) search no graph.
     pub link_s: f64,
     /// Mean time of a query on a planner just built (what `smartteams-editor path` pays
     /// beyond the build), over the first ten queries, milliseconds.
@@ -128,7 +129,7 @@ pub struct PathBench {
     pub queries: usize,
     /// Queries with a path.
     pub reachable: usize,
-    /// Mean query on the linked graph, milliseconds.
+    /// Mean query (on the linked graph, for robots with a radius), milliseconds.
     pub mean_query_ms: f64,
     /// Slowest query, milliseconds.
     pub max_query_ms: f64,
@@ -140,7 +141,8 @@ pub struct PathBench {
 }
 
 /// Build the planner for `radius_m`; time the first ten queries each on a planner just
-/// built; link every corner; then run every query once, one after another.
+/// built; link every corner if the robot has a radius (point robots' queries search no
+/// graph); then run every query once, one after another.
 pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<PathBench> {
     let t = Instant::now();
     let planner = AnyAnglePlanner::build(map, radius_m)?;
@@ -154,7 +156,9 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
         cold += t.elapsed().as_secs_f64() * 1e3;
     }
     let t = Instant::now();
-    planner.link_all();
+    if radius_m > 0.0 {
+        planner.link_all();
+    }
     let link_s = t.elapsed().as_secs_f64();
     let (mut total, mut max, mut reachable, mut mismatches) = (0.0, 0.0f64, 0, 0);
     let mut excess = Vec::new();
@@ -238,9 +242,6 @@ pub fn nav_bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64, compar
     } else {
         None
     };
-    if let Some(p) = &exact {
-        p.link_all();
-    }
     let (mut total, mut max, mut reachable) = (0.0, 0.0f64, 0);
     let mut excess = Vec::new();
     for q in queries {

@@ -12,9 +12,10 @@ use super::{AnyAnglePlanner, Vertex};
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::{Error, Result};
 
-/// Most corners the planner accepts. Linking a corner costs one line-of-sight test per corner
-/// of the map, so a search that expands `k` corners costs `k` times that the first time; a
-/// map with many more corners is refused rather than taking minutes a query.
+/// Most corners a planner for robots with a radius accepts. Linking a corner costs one
+/// line-of-sight test per corner of the map, so a search that expands `k` corners costs `k`
+/// times that the first time; a map with many more corners is refused rather than taking
+/// minutes a query. Point robots' searches (Anya) link no corner: any number is accepted.
 pub const MAX_VERTICES: usize = 250_000;
 
 /// Whether a line along `d` through a corner whose one blocked cell lies in `quadrant`
@@ -33,10 +34,12 @@ pub(crate) fn grazes(quadrant: u8, d: DVec2) -> bool {
 
 impl AnyAnglePlanner {
     /// The planner for `obstacles` and robots of `radius_m` (0 for points: the any-angle
-    /// rules of the Moving AI benchmarks): the map's corners, linked later as searches reach
-    /// them (or all at once with [`link_all`](Self::link_all)). Fails on a negative or
-    /// non-finite radius, a map too large for one bit per cell, or more than
-    /// [`MAX_VERTICES`] corners.
+    /// rules of the Moving AI benchmarks): the map's cells as bits and its corners, and for
+    /// point robots the free space's connected regions. Robots with a radius search the
+    /// visibility graph of the corners, linked as searches reach them (or all at once with
+    /// [`link_all`](Self::link_all)); point robots' searches (Anya) link none. Fails on a
+    /// negative or non-finite radius, a map too large for one bit per cell, or, for a radius
+    /// above 0, more than [`MAX_VERTICES`] corners.
     pub fn build(obstacles: &ObstacleMap, radius_m: f64) -> Result<Self> {
         if !(radius_m.is_finite() && radius_m >= 0.0) {
             return Err(Error::InvalidParameter(format!(
@@ -67,7 +70,7 @@ impl AnyAnglePlanner {
                     vertices.push(v);
                 }
             }
-            if vertices.len() > MAX_VERTICES {
+            if radius_m > 0.0 && vertices.len() > MAX_VERTICES {
                 return Err(Error::InvalidParameter(format!(
                     "any-angle paths link obstacle corners pairwise; this map has more than \
                      {MAX_VERTICES} corners (more than the planner handles)"
@@ -75,6 +78,12 @@ impl AnyAnglePlanner {
             }
         }
         let links = (0..vertices.len()).map(|_| OnceLock::new()).collect();
+        // A point robot's searches ask which region each end is in (a few milliseconds on a
+        // 768² map: part of building, not of the first query).
+        let regions = OnceLock::new();
+        if radius_m == 0.0 {
+            let _ = regions.set(super::regions::Regions::new(&raster));
+        }
         Ok(Self {
             grid,
             radius_m,
@@ -82,6 +91,7 @@ impl AnyAnglePlanner {
             vertices,
             links,
             obstacles: (radius_m > 0.0).then(|| obstacles.clone()),
+            regions,
         })
     }
 
@@ -105,7 +115,8 @@ impl AnyAnglePlanner {
 
     /// Link every corner now, on all threads, testing each pair once (otherwise corners are
     /// linked as searches reach them): the whole visibility graph, for figures and for
-    /// planners shared by many queries.
+    /// planners of robots with a radius shared by many queries (point robots' queries do
+    /// not use it).
     pub fn link_all(&self) {
         let n = self.vertices.len();
         let upper: Vec<Vec<u32>> = (0..n)

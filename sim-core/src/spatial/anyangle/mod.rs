@@ -1,15 +1,27 @@
 //! Any-angle shortest paths (issue 12): polylines with real-valued vertices among the map's
 //! blocked cells, exact for point robots.
 //!
-//! A shortest path among polygonal obstacles bends only at their convex corners, so the
-//! planner links the convex corners of the blocked cells that see each other (a visibility
-//! graph: its size follows the obstacles' outlines, not the number of cells) and searches it
-//! with A*, joining the start and the goal to the corners they see. Only pairs whose joining
-//! line grazes both corners are linked, which keeps about a quarter of the visible pairs and
-//! no shortest path needs the rest. A corner is linked when a search first expands it, so a
-//! planner costs nothing to build beyond finding the corners; links from the start are
-//! checked only when the search takes them (lazy A*), links to the goal only from corners
-//! the search expands.
+//! A shortest path among polygonal obstacles bends only at their convex corners. Point robots
+//! (radius 0) are routed by **Anya** (`anya`: Harabor, Grastien, Öz and Aksakalli, "Optimal
+//! Any-Angle Pathfinding In Practice", JAIR 2016): an A* search over *cones*, intervals of a
+//! grid row line seen from a root (the start or a corner the path bends at), pushed from row
+//! line to row line through the runs of free cells (a rectangle of equal runs at once) and
+//! bent round the corners at their ends. It needs no preprocessing and costs what the search
+//! sweeps, not what the map holds: no visibility graph is built. The planner also finds the
+//! free space's connected regions when it is built (`regions`), so that ends in different
+//! regions are answered at once instead of by a search sweeping the start's region. Every
+//! leg of the path Anya returns is checked again by the exact sight test; should one fail
+//! (rounding in the interval arithmetic; not seen in any test), the visibility graph below
+//! answers instead.
+//!
+//! Robots with a radius use the visibility graph: the planner links the convex corners that
+//! see each other (its size follows the obstacles' outlines, not the number of cells) and
+//! searches it with A*, joining the start and the goal to the corners they see. Only pairs
+//! whose joining line grazes both corners are linked, which keeps about a quarter of the
+//! visible pairs and no shortest path needs the rest. A corner is linked when a search first
+//! expands it (one sight test per corner of the map); links from the start are checked only
+//! when the search takes them (lazy A*), links to the goal only from corners the search
+//! expands.
 //!
 //! The rules are those of the Moving AI any-angle benchmarks: a path may run along the edge of
 //! a blocked cell, but not along an edge that two blocked cells share, nor through a point
@@ -34,9 +46,11 @@
 //! assert!((path.length_m - (2.0 * 5f64.sqrt() + 1.0)).abs() < 1e-12);
 //! ```
 
+mod anya;
 mod build;
 mod raster;
 pub mod reference;
+mod regions;
 mod search;
 mod sight;
 
@@ -67,6 +81,8 @@ pub struct AnyAnglePlanner {
     links: Vec<std::sync::OnceLock<Box<[u32]>>>,
     /// The map, kept for exact swept-disc tests when the radius is positive.
     obstacles: Option<ObstacleMap>,
+    /// The free space's connected regions (found when a point robot's planner is built).
+    regions: std::sync::OnceLock<regions::Regions>,
 }
 
 /// A path: its waypoints in world coordinates from start to goal, and its length.
@@ -135,6 +151,7 @@ impl AnyAnglePlanner {
                 .map(|l| std::mem::size_of_val(l) + l.get().map_or(0, |n| n.len() * 4))
                 .sum::<usize>()
             + self.obstacles.as_ref().map_or(0, ObstacleMap::memory_bytes)
+            + self.regions.get().map_or(0, regions::Regions::memory_bytes)
     }
 
     /// Whether a robot of the planner's radius may move straight from `a` to `b` (world

@@ -92,10 +92,138 @@ impl CellRaster {
     /// 0: south-west, 1: south-east, 2: north-west, 3: north-east.
     #[inline]
     pub(crate) fn around(&self, x: i64, y: i64) -> u8 {
-        u8::from(self.blocked(x - 1, y - 1))
-            | u8::from(self.blocked(x, y - 1)) << 1
-            | u8::from(self.blocked(x - 1, y)) << 2
-            | u8::from(self.blocked(x, y)) << 3
+        self.pair(x, y - 1) | self.pair(x, y) << 2
+    }
+
+    /// The blocked flags of cells `x - 1` (bit 0) and `x` (bit 1) of row `y`: one word read
+    /// where both are inside the map (four bounds-checked reads made `around` a tenth of a
+    /// search's instructions).
+    #[inline]
+    fn pair(&self, x: i64, y: i64) -> u8 {
+        if y < 0 || y >= self.height || x < 1 || x >= self.width {
+            return u8::from(self.blocked(x - 1, y)) | u8::from(self.blocked(x, y)) << 1;
+        }
+        // In range: non-negative and below u32::MAX.
+        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
+        let (x, row) = (x as usize, y as usize * self.stride);
+        let left = x - 1;
+        let bits = if left % 64 == 63 {
+            (self.words[row + left / 64] >> 63) | (self.words[row + x / 64] & 1) << 1
+        } else {
+            self.words[row + left / 64] >> (left % 64) & 3
+        };
+        // Two bits.
+        #[allow(clippy::cast_possible_truncation)]
+        let bits = bits as u8;
+        bits
+    }
+
+    /// Row `y`'s words, or `None` for a row outside the map (all blocked).
+    #[inline]
+    fn row(&self, y: i64) -> Option<&[u64]> {
+        if y < 0 || y >= self.height {
+            return None;
+        }
+        // In range: non-negative and below u32::MAX.
+        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
+        let start = y as usize * self.stride;
+        Some(&self.words[start..start + self.stride])
+    }
+
+    /// The first cell at or after `x` in row `y` whose bit equals `want_blocked` (cells
+    /// past the right edge are blocked), scanning a word at a time.
+    #[inline]
+    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
+    fn next_with(&self, y: i64, x: i64, want_blocked: bool) -> Option<i64> {
+        if x < 0 {
+            return if want_blocked {
+                Some(x)
+            } else {
+                self.next_with(y, 0, false)
+            };
+        }
+        let Some(row) = self.row(y) else {
+            return want_blocked.then_some(x);
+        };
+        if x >= self.width {
+            return want_blocked.then_some(x);
+        }
+        // x is in 0..width here.
+        let (mut i, bit) = (x as usize / 64, x as u32 % 64);
+        let flip = if want_blocked { 0 } else { !0 };
+        let mut w = (row[i] ^ flip) & (!0u64 << bit);
+        loop {
+            if w != 0 {
+                let k = (i * 64) as i64 + i64::from(w.trailing_zeros());
+                // Bits past the edge are 0 in storage: free ones there are not cells.
+                return if k < self.width {
+                    Some(k)
+                } else {
+                    want_blocked.then_some(self.width)
+                };
+            }
+            i += 1;
+            if i == row.len() {
+                return want_blocked.then_some(self.width);
+            }
+            w = row[i] ^ flip;
+        }
+    }
+
+    /// The last cell at or before `x` in row `y` whose bit equals `want_blocked` (cells left
+    /// of the map are blocked).
+    #[inline]
+    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
+    fn prev_with(&self, y: i64, x: i64, want_blocked: bool) -> Option<i64> {
+        let Some(row) = self.row(y) else {
+            return want_blocked.then_some(x);
+        };
+        if x >= self.width {
+            if want_blocked {
+                return Some(x);
+            }
+            return self.prev_with(y, self.width - 1, false);
+        }
+        if x < 0 {
+            return want_blocked.then_some(x);
+        }
+        let (mut i, bit) = (x as usize / 64, x as u32 % 64);
+        let flip = if want_blocked { 0 } else { !0 };
+        let mut w = (row[i] ^ flip) & (!0u64 >> (63 - bit));
+        loop {
+            if w != 0 {
+                return Some((i * 64) as i64 + 63 - i64::from(w.leading_zeros()));
+            }
+            if i == 0 {
+                return want_blocked.then_some(-1);
+            }
+            i -= 1;
+            w = row[i] ^ flip;
+        }
+    }
+
+    /// The first blocked cell at or after `x` in row `y` (the map's width if none inside).
+    #[inline]
+    pub(crate) fn next_blocked(&self, y: i64, x: i64) -> i64 {
+        self.next_with(y, x, true).unwrap_or(self.width)
+    }
+
+    /// The last blocked cell at or before `x` in row `y` (-1 if none inside).
+    #[inline]
+    pub(crate) fn prev_blocked(&self, y: i64, x: i64) -> i64 {
+        self.prev_with(y, x, true).unwrap_or(-1)
+    }
+
+    /// The first free cell at or after `x` in row `y`, if any.
+    #[inline]
+    pub(crate) fn next_free(&self, y: i64, x: i64) -> Option<i64> {
+        self.next_with(y, x, false)
+    }
+
+    /// The last free cell at or before `x` in row `y`, if any.
+    #[inline]
+    pub(crate) fn prev_free(&self, y: i64, x: i64) -> Option<i64> {
+        self.prev_with(y, x, false)
     }
 
     /// Heap bytes.

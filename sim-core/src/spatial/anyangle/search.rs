@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 use glam::DVec2;
 
 use super::build::grazes;
-use super::{AnyAnglePath, AnyAnglePlanner, NoPath};
+use super::{AnyAnglePath, AnyAnglePlanner, NoPath, anya, regions};
 
 /// A heap entry: estimated total length, then node (for a deterministic order among ties),
 /// and whether it is a link from the start not yet checked for sight.
@@ -76,6 +76,48 @@ impl AnyAnglePlanner {
                 length_m: from.distance(to),
             });
         }
+        if self.obstacles.is_none() {
+            // Ends in different regions: no search (it would sweep the start's region).
+            let regions = self.regions.get_or_init(|| regions::Regions::new(&self.raster));
+            if regions.of_point(s) != regions.of_point(g) {
+                return Err(NoPath::Unreachable(from, to));
+            }
+            // `None`: a leg failed the exact sight test (never seen; a guard against
+            // rounding in the search's interval arithmetic), and the visibility graph decides.
+            if let Some(found) = self.anya_path(from, to) {
+                return found;
+            }
+        }
+        self.graph_path(from, to)
+    }
+
+    /// A point robot's shortest path by Anya (`anya`): the answer, or `None` if a leg of the
+    /// path it found fails the exact sight test. The ends must be checked already.
+    pub(crate) fn anya_path(&self, from: DVec2, to: DVec2) -> Option<Result<AnyAnglePath, NoPath>> {
+        let (s, g) = (self.to_cells(from), self.to_cells(to));
+        let Some(corners) = anya::shortest(&self.raster, s, g) else {
+            return Some(Err(NoPath::Unreachable(from, to)));
+        };
+        let mut prev = s;
+        for &c in corners.iter().chain(std::iter::once(&g)) {
+            if !self.clear(prev, c) {
+                return None;
+            }
+            prev = c;
+        }
+        let mut waypoints = Vec::with_capacity(corners.len() + 2);
+        waypoints.push(from);
+        waypoints.extend(corners.iter().map(|&c| self.to_world(c)));
+        waypoints.push(to);
+        let length_m = waypoints.windows(2).map(|w| w[0].distance(w[1])).sum();
+        Some(Ok(AnyAnglePath { waypoints, length_m }))
+    }
+
+    /// The shortest path by A* over the visibility graph of the (grown) corners: robots with
+    /// a radius, and the reference the tests hold Anya to. The ends must be checked already
+    /// and not see each other.
+    pub(crate) fn graph_path(&self, from: DVec2, to: DVec2) -> Result<AnyAnglePath, NoPath> {
+        let (s, g) = (self.to_cells(from), self.to_cells(to));
         let n = self.vertices.len();
         // Node n is the goal. The start is the root and never re-entered.
         let mut closed = vec![false; n + 1];

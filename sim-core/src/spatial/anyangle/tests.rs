@@ -189,3 +189,215 @@ fn nonsense_radii_are_refused() {
         assert!(e.contains("radius"), "{e}");
     }
 }
+
+/// Width, height, blocked cells and two points on the quarter-cell lattice (ends on cell
+/// corners, edges, centres and between).
+type QuarterMap = (u32, u32, Vec<bool>, (i64, i64), (i64, i64));
+
+fn quarter_map(max_side: u32) -> impl Strategy<Value = QuarterMap> {
+    (2u32..=max_side, 2u32..=max_side, 0.0f64..0.5).prop_flat_map(|(w, h, density)| {
+        (
+            Just(w),
+            Just(h),
+            proptest::collection::vec(proptest::bool::weighted(density), (w * h) as usize),
+            (0..=4 * i64::from(w), 0..=4 * i64::from(h)),
+            (0..=4 * i64::from(w), 0..=4 * i64::from(h)),
+        )
+    })
+}
+
+/// Anya's answer for a planner's checked ends: the search's own result, never the
+/// visibility-graph fallback (a failed leg is a test failure here).
+fn anya(planner: &AnyAnglePlanner, from: DVec2, to: DVec2) -> Result<super::AnyAnglePath, NoPath> {
+    if !planner.is_leg_clear(from, from) {
+        return Err(NoPath::StartBlocked(from));
+    }
+    if !planner.is_leg_clear(to, to) {
+        return Err(NoPath::GoalBlocked(to));
+    }
+    if planner.is_leg_clear(from, to) {
+        return planner.path(from, to);
+    }
+    planner
+        .anya_path(from, to)
+        .expect("every leg of Anya's path passes the exact sight test")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3000, rng_seed: proptest::test_runner::RngSeed::Fixed(1212), ..ProptestConfig::default() })]
+
+    /// Issue 12: Anya (radius 0) gives the visibility-graph search's length exactly (to
+    /// 1e-9 relative), between any two points of the quarter-cell lattice, reaches what it
+    /// reaches, is never shorter than the straight line, and every leg passes the exact sight
+    /// test; the brute force over all lattice points agrees for ends on cell corners.
+    #[test]
+    fn anya_equals_the_visibility_graph_and_the_brute_force((w, h, cells, s4, g4) in quarter_map(12)) {
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let (from, to) = (point(s4) / 4.0, point(g4) / 4.0);
+        let fast = anya(&planner, from, to);
+        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+            planner.graph_path(from, to)
+        } else {
+            planner.path(from, to)
+        };
+        match (&fast, &slow) {
+            (Ok(f), Ok(s)) => {
+                prop_assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m.max(1.0), "Anya {} vs graph {}: {:?} vs {:?}", f.length_m, s.length_m, f.waypoints, s.waypoints);
+                prop_assert!(f.length_m >= from.distance(to) - 1e-12);
+                prop_assert_eq!(f.waypoints[0], from);
+                prop_assert_eq!(*f.waypoints.last().unwrap(), to);
+                for leg in f.waypoints.windows(2) {
+                    prop_assert!(planner.is_leg_clear(leg[0], leg[1]), "illegal leg {leg:?}");
+                }
+            }
+            (Err(a), Err(b)) => prop_assert_eq!(a, b),
+            _ => prop_assert!(false, "Anya {fast:?} vs graph {slow:?}"),
+        }
+        if s4.0 % 4 == 0 && s4.1 % 4 == 0 && g4.0 % 4 == 0 && g4.1 % 4 == 0 && w * h <= 64 {
+            let blocked = blocked_fn(w, h, &cells);
+            let (s, g) = ((s4.0 / 4, s4.1 / 4), (g4.0 / 4, g4.1 / 4));
+            let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+            match &fast {
+                Ok(p) => {
+                    let best = best.expect("Anya found a path the brute force did not");
+                    prop_assert!((p.length_m - best).abs() < 1e-9, "Anya {} vs brute force {best}", p.length_m);
+                    for leg in p.waypoints.windows(2) {
+                        prop_assert!(segment_is_legal(&blocked, lattice(leg[0]), lattice(leg[1])), "illegal leg {leg:?}");
+                    }
+                }
+                Err(e) => prop_assert!(best.is_none() || matches!(e, NoPath::StartBlocked(_) | NoPath::GoalBlocked(_)), "Anya says {e}, brute force finds {best:?}"),
+            }
+        }
+    }
+
+    /// Same on larger maps with few, long walls (long cones, many bends), ends anywhere.
+    #[test]
+    fn anya_equals_the_visibility_graph_on_sparse_maps((w, h, cells, _, _) in quarter_map(40), s in (0.0f64..1.0, 0.0f64..1.0), g in (0.0f64..1.0, 0.0f64..1.0)) {
+        // Thin the cells out to a sparse map: keep one blocked cell in three, in segments.
+        let cells: Vec<bool> = cells.iter().enumerate().map(|(i, &b)| b && (i / 3) % 3 == 0).collect();
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let size = DVec2::new(f64::from(w), f64::from(h));
+        let (from, to) = (DVec2::new(s.0, s.1) * size, DVec2::new(g.0, g.1) * size);
+        let fast = anya(&planner, from, to);
+        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+            planner.graph_path(from, to)
+        } else {
+            planner.path(from, to)
+        };
+        match (&fast, &slow) {
+            (Ok(f), Ok(s)) => prop_assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m.max(1.0), "Anya {} vs graph {}: {:?} vs {:?}", f.length_m, s.length_m, f.waypoints, s.waypoints),
+            (Err(a), Err(b)) => prop_assert_eq!(a, b),
+            _ => prop_assert!(false, "Anya {fast:?} vs graph {slow:?}"),
+        }
+    }
+
+    /// The raster's word-at-a-time scans find what a cell-by-cell look finds.
+    #[test]
+    fn raster_scans_agree_with_cell_by_cell((w, h, cells, _, _) in quarter_map(150), y in -1i64..152, x in -2i64..152) {
+        let map = map_of(w, h, &cells);
+        let r = super::raster::CellRaster::from_obstacles(&map).unwrap();
+        let far = i64::from(w).max(x) + 3;
+        prop_assert_eq!(r.next_blocked(y, x), (x..=far).find(|&k| r.blocked(k, y)).unwrap());
+        prop_assert_eq!(r.prev_blocked(y, x), (x.min(-1)..=x).rev().find(|&k| r.blocked(k, y)).unwrap());
+        prop_assert_eq!(r.next_free(y, x), (x..far).find(|&k| !r.blocked(k, y)));
+        prop_assert_eq!(r.prev_free(y, x), (-1..=x).rev().find(|&k| !r.blocked(k, y)));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(1213), ..ProptestConfig::default() })]
+
+    /// Two points a path may touch are in the same region exactly when the brute force
+    /// joins them (the regions answer unreachable queries without a search).
+    #[test]
+    fn regions_agree_with_brute_force_reachability((w, h, cells, s, g) in small_map()) {
+        let map = map_of(w, h, &cells);
+        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+        let blocked = blocked_fn(w, h, &cells);
+        let (ps, pg) = (point(s), point(g));
+        prop_assume!(planner.is_leg_clear(ps, ps) && planner.is_leg_clear(pg, pg));
+        let regions = super::regions::Regions::new(&super::raster::CellRaster::from_obstacles(&map).unwrap());
+        let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+        prop_assert!(regions.of_point(ps).is_some() && regions.of_point(pg).is_some());
+        prop_assert_eq!(regions.of_point(ps) == regions.of_point(pg), best.is_some());
+    }
+}
+
+/// Issue 12, item 2: a point robot's query on a planner just built costs what the search
+/// sweeps, not a sight test per corner of the map. On a 96 × 96 map of 12-cell rooms with
+/// doors and pillars, 60 queries between cell centres link no corner at all (the visibility
+/// graph is never built), and give the visibility graph's lengths.
+#[test]
+fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 96, 96).unwrap();
+    // Walls on every 12th row and column, a 2-cell door in each wall segment placed by a
+    // fixed hash, and a pillar in each room.
+    let door = |a: u32, b: u32| (a.wrapping_mul(7919) ^ b.wrapping_mul(104_729)) % 9 + 1;
+    let map = ObstacleMap::from_fn(grid, |x, y| {
+        let wall_x = x % 12 == 0 && !(y % 12 >= door(x, y / 12) && y % 12 < door(x, y / 12) + 2);
+        let wall_y = y % 12 == 0 && !(x % 12 >= door(y + 1, x / 12) && x % 12 < door(y + 1, x / 12) + 2);
+        let pillar = x % 12 == 6 && y % 12 == 5;
+        wall_x || wall_y || pillar
+    });
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let reference = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let mut state = 12u64;
+    let mut next = |n: u32| {
+        // A fixed linear congruential sequence: the same queries on every run.
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        u32::try_from(state >> 33).unwrap() % n
+    };
+    let (mut found, mut bends) = (0, 0);
+    for _ in 0..60 {
+        let from = grid.cell_center(next(96), next(96));
+        let to = grid.cell_center(next(96), next(96));
+        let fast = planner.path(from, to);
+        let slow =
+            if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+                reference.graph_path(from, to)
+            } else {
+                reference.path(from, to)
+            };
+        match (&fast, &slow) {
+            (Ok(f), Ok(s)) => {
+                assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m, "{f:?} vs {s:?}");
+                found += 1;
+                bends += f.waypoints.len() - 2;
+            }
+            _ => assert_eq!(fast, slow),
+        }
+    }
+    assert_eq!(planner.edge_count(), 0, "a point robot's queries linked corners");
+    assert!(reference.edge_count() > 0);
+    // The queries are not trivial: most are answered, round many corners.
+    assert!(found >= 40 && bends >= 100, "{found} paths, {bends} bends");
+}
+
+/// Point robots' planners accept maps with any number of corners (their searches link
+/// none); robots with a radius still refuse more than `MAX_VERTICES`.
+#[test]
+fn point_planners_take_maps_with_more_corners_than_the_graph_limit() {
+    // Isolated blocked cells every other cell: four convex corners each, 4 × 260² in all.
+    let grid = Grid::new(DVec2::ZERO, 1.0, 520, 520).unwrap();
+    let map = ObstacleMap::from_fn(grid, |x, y| x % 2 == 1 && y % 2 == 1);
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    assert!(planner.vertex_count() > super::MAX_VERTICES);
+    // From a corner of the map to the far corner of the last free cell column: round the
+    // pillars (the diagonal runs through their corners, where two blocked cells touch).
+    let (from, to) = (DVec2::new(0.0, 0.0), DVec2::new(520.0, 519.0));
+    let p = planner.path(from, to).unwrap();
+    assert!(
+        p.length_m > from.distance(to) && p.length_m < 520.0 + 519.0,
+        "{}",
+        p.length_m
+    );
+    for leg in p.waypoints.windows(2) {
+        assert!(planner.is_leg_clear(leg[0], leg[1]));
+    }
+    let e = AnyAnglePlanner::build(&map, 0.1).unwrap_err().to_string();
+    assert!(e.contains("corners"), "{e}");
+}
