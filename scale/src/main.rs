@@ -263,16 +263,20 @@ fn any_angle(
             worst * 100.0
         )
     });
+    // Point robots are planned by Anya, which links no corners.
+    let graph = if radius_m > 0.0 {
+        format!("all linked in {:.2} s: {} edges", b.link_s, b.edges)
+    } else {
+        "no visibility graph (Anya)".to_owned()
+    };
     println!(
-        "any-angle: {} | {} cells, {} leaves | {} corners found in {:.3} s, first query on a new planner {:.1} ms | all linked in {:.2} s: {} edges, {:.1} MB | {} queries ({} reachable, {} disagree with the octile column), mean {:.3} ms, slowest {:.3} ms{excess}",
+        "any-angle: {} | {} cells, {} leaves | {} corners found in {:.3} s, first query on a new planner {:.1} ms | {graph}, {:.1} MB | {} queries ({} reachable, {} disagree with the octile column), mean {:.3} ms, slowest {:.3} ms{excess}",
         map.display(),
         u64::from(obstacles.grid().width_cells()) * u64::from(obstacles.grid().height_cells()),
         obstacles.leaf_count(),
         b.vertices,
         b.build_s,
         b.cold_query_ms,
-        b.link_s,
-        b.edges,
         b.memory_bytes as f64 / 1e6,
         b.queries,
         b.reachable,
