@@ -67,6 +67,11 @@ fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
     });
 }
 
+thread_local! {
+    /// A worker's buffers for a round's announcements and the merged claims.
+    static SCRATCH: std::cell::RefCell<(Vec<Update>, Claims)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
 /// `frontier` and `cooperative`.
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Frontier {
@@ -115,26 +120,29 @@ impl Strategy for Frontier {
             // Only claims near enough to matter are kept, so crowds stay cheap.
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();
-            // This round's announcements (no buffers kept between rounds: with a crowd of
-            // robots each holding hundreds of claims, spare copies cost megabytes).
-            let mut updates: Vec<Update> = ctx
-                .messages()
-                .iter()
-                .filter_map(|m| match *m.payload {
+            let round = ctx.round;
+            // This round's announcements, and the merge, in buffers of the worker thread, not
+            // of the robot (with a crowd of robots each holding hundreds of claims, spare
+            // copies per robot cost megabytes; fresh ones each round, grown as they filled,
+            // put a tenth of a crowded round in the allocator).
+            SCRATCH.with_borrow_mut(|(updates, merged)| {
+                updates.clear();
+                updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
                     Payload::Position { goal, .. } => Some((m.from.get(), goal.filter(|g| g.distance(p) <= near))),
                     _ => None,
-                })
-                .collect();
-            let round = ctx.round;
-            if !updates.is_empty() {
-                // Inboxes come in sender order; sort (stably: a sender's last word wins) if not.
-                if !updates.is_sorted_by_key(|u| u.0) {
-                    updates.sort_by_key(|u| u.0);
+                }));
+                if !updates.is_empty() {
+                    // Inboxes come in sender order; sort (stably: a sender's last word wins)
+                    // if not.
+                    if !updates.is_sorted_by_key(|u| u.0) {
+                        updates.sort_by_key(|u| u.0);
+                    }
+                    merge_claims(&self.claims, updates, round, merged);
+                    self.claims.clear();
+                    self.claims.reserve_exact(merged.len());
+                    self.claims.extend_from_slice(merged);
                 }
-                let mut merged = Claims::with_capacity(self.claims.len() + updates.len());
-                merge_claims(&self.claims, &updates, round, &mut merged);
-                self.claims = merged;
-            }
+            });
             if round.is_multiple_of(10) {
                 self.claims
                     .retain(|(_, g, heard)| round <= *heard + 50 && g.distance(p) <= near);
