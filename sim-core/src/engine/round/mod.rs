@@ -4,10 +4,12 @@
 //!    round and reads the messages delivered to it.
 //! 2. **Decide** (parallel, fused with 1): its strategy picks one action and any messages;
 //!    each robot owns its strategy and data, nothing shared is written.
-//! 3. **Resolve** (sequential, by robot id): the physical unit charges energy and refuses or
-//!    trims what is illegal (speed, energy, obstacles, other robots, abilities, capacity),
-//!    then applies the rest; messages are addressed to whoever was in range at send time.
-//!    Meanwhile another thread marks the views of step 1 in the collective explored map.
+//! 3. **Resolve** (by robot id): the physical unit charges energy and refuses or trims what
+//!    is illegal (speed, energy, obstacles, other robots, abilities, capacity), then applies
+//!    the rest; messages are addressed to whoever was in range at send time. A robot whose
+//!    turn depends on nobody has it in step 2, in parallel (same outcome as in id order);
+//!    the rest follow in id order while another thread marks the views of step 1 in the
+//!    collective explored map.
 //! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
 //!
 //! Randomness comes from generators seeded by (run seed, robot, round), and every shared
