@@ -8,6 +8,98 @@ use std::hash::Hash;
 /// `SipHash` was the largest single cost of perception in crowds (issue 11 profile).
 type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 
+/// A key a [`MemoryList`] can remember items by. Keys that are small dense numbers (robot
+/// and treasure ids) say so with [`dense_index`](Self::dense_index), and are then looked up
+/// in a table instead of hashed (issue 11: hashed look-ups of the sightings a robot hears
+/// were a sixth of the paper-scale round); the default hashes every key.
+pub trait ListKey: Eq + Hash + Copy {
+    /// The key as a small index, if it is one.
+    fn dense_index(self) -> Option<usize> {
+        None
+    }
+}
+
+impl ListKey for crate::spatial::RobotId {
+    fn dense_index(self) -> Option<usize> {
+        Some(self.index())
+    }
+}
+
+impl ListKey for crate::spatial::TreasureId {
+    fn dense_index(self) -> Option<usize> {
+        Some(self.index())
+    }
+}
+
+/// Integers are dense when not negative.
+macro_rules! dense_unsigned {
+    ($($t:ty),*) => {$(
+        impl ListKey for $t {
+            fn dense_index(self) -> Option<usize> {
+                usize::try_from(self).ok()
+            }
+        }
+    )*};
+}
+dense_unsigned!(u8, u16, u32, u64, usize, i32, i64);
+
+impl ListKey for char {}
+
+/// Where a list keeps each key's slot: a table indexed by the key for dense keys up to
+/// sixteen times the items kept (so a list's table costs at most 64 bytes an item), a hash
+/// map for the rest.
+#[derive(Clone, Debug)]
+struct SlotIndex<K> {
+    table: Vec<u32>,
+    map: FastMap<K, u32>,
+    len: usize,
+}
+
+impl<K: ListKey> SlotIndex<K> {
+    fn new() -> Self {
+        Self {
+            table: Vec::new(),
+            map: FastMap::default(),
+            len: 0,
+        }
+    }
+
+    fn get(&self, key: K) -> Option<u32> {
+        if let Some(&i) = key.dense_index().and_then(|d| self.table.get(d))
+            && i != NIL
+        {
+            return Some(i);
+        }
+        // A dense key may be in the map if the table was shorter when it came.
+        self.map.get(&key).copied()
+    }
+
+    /// Index a key that is not indexed yet.
+    fn insert(&mut self, key: K, slot: u32) {
+        self.len += 1;
+        match key.dense_index() {
+            Some(d) if d < 16 * (self.len + 4) => {
+                if d >= self.table.len() {
+                    self.table.resize(d + 1, NIL);
+                }
+                self.table[d] = slot;
+            }
+            _ => {
+                self.map.insert(key, slot);
+            }
+        }
+    }
+
+    fn remove(&mut self, key: K) -> Option<u32> {
+        let removed = match key.dense_index().and_then(|d| self.table.get_mut(d)) {
+            Some(i) if *i != NIL => Some(std::mem::replace(i, NIL)),
+            _ => self.map.remove(&key),
+        };
+        self.len -= usize::from(removed.is_some());
+        removed
+    }
+}
+
 /// How much a [`MemoryList`] keeps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Retention {
@@ -40,14 +132,14 @@ struct Slot<K, T> {
 #[serde(bound(serialize = "K: serde::Serialize, T: serde::Serialize"))]
 #[serde(bound(deserialize = "K: serde::Deserialize<'de>, T: serde::Deserialize<'de>"))]
 #[serde(try_from = "ListState<K, T>")]
-pub struct MemoryList<K: Eq + Hash + Copy, T> {
+pub struct MemoryList<K: ListKey, T> {
     retention: Retention,
     slots: Vec<Slot<K, T>>,
     /// Slots of forgotten items, reused first.
     free: Vec<u32>,
     /// Rebuilt from the slots when a checkpoint is read.
     #[serde(skip)]
-    index: FastMap<K, u32>,
+    index: SlotIndex<K>,
     oldest: u32,
     newest: u32,
 }
@@ -62,7 +154,7 @@ struct ListState<K, T> {
     newest: u32,
 }
 
-impl<K: Eq + Hash + Copy, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
+impl<K: ListKey, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
     type Error = String;
 
     fn try_from(s: ListState<K, T>) -> Result<Self, String> {
@@ -71,7 +163,7 @@ impl<K: Eq + Hash + Copy, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
         if !(link_ok(s.oldest) && link_ok(s.newest) && s.free.iter().all(|&i| (i as usize) < n)) {
             return Err("a memory list links to a slot it does not have".into());
         }
-        let mut index = FastMap::default();
+        let mut index = SlotIndex::new();
         // Live slots are those on the list from oldest to newest.
         let mut at = s.oldest;
         let mut steps = 0;
@@ -79,6 +171,9 @@ impl<K: Eq + Hash + Copy, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
             let slot = s.slots.get(at as usize).ok_or("a memory list links out of its slots")?;
             if !link_ok(slot.newer) || steps > n {
                 return Err("a memory list's links are broken".into());
+            }
+            if index.get(slot.key).is_some() {
+                return Err("a memory list remembers a key twice".into());
             }
             index.insert(slot.key, at);
             at = slot.newer;
@@ -95,14 +190,14 @@ impl<K: Eq + Hash + Copy, T> TryFrom<ListState<K, T>> for MemoryList<K, T> {
     }
 }
 
-impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
+impl<K: ListKey, T: Clone> MemoryList<K, T> {
     /// An empty list.
     pub fn new(retention: Retention) -> Self {
         Self {
             retention,
             slots: Vec::new(),
             free: Vec::new(),
-            index: FastMap::default(),
+            index: SlotIndex::new(),
             oldest: NIL,
             newest: NIL,
         }
@@ -110,7 +205,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
 
     /// Record that `item` (key `key`) was seen in `round`.
     pub fn record(&mut self, key: K, item: T, round: u64) {
-        if let Some(&i) = self.index.get(&key) {
+        if let Some(i) = self.index.get(key) {
             let slot = &mut self.slots[i as usize];
             slot.item = item;
             slot.round = round;
@@ -141,7 +236,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
 
     /// Forget an item.
     pub fn forget(&mut self, key: K) {
-        if let Some(i) = self.index.remove(&key) {
+        if let Some(i) = self.index.remove(key) {
             self.unlink(i);
             self.slots[i as usize].older = FREED;
             self.free.push(i);
@@ -153,7 +248,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         while self.oldest != NIL {
             let oldest = &self.slots[self.oldest as usize];
             let expired = match self.retention {
-                Retention::LastN(n) => self.index.len() > n,
+                Retention::LastN(n) => self.index.len > n,
                 Retention::LastRounds(m) => oldest.round + m < round,
             };
             if !expired {
@@ -196,12 +291,12 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
 
     /// Number of items remembered.
     pub fn len(&self) -> usize {
-        self.index.len()
+        self.index.len
     }
 
     /// Whether nothing is remembered.
     pub fn is_empty(&self) -> bool {
-        self.index.is_empty()
+        self.index.len == 0
     }
 
     /// Items with the round each was last seen, oldest first.
@@ -225,7 +320,7 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
 
     /// The live item of a key.
     pub fn get(&self, key: K) -> Option<&T> {
-        self.index.get(&key).map(|&i| &self.slots[i as usize].item)
+        self.index.get(key).map(|i| &self.slots[i as usize].item)
     }
 
     /// Check the list's invariants: every key maps to a slot holding it, the links run
@@ -239,22 +334,24 @@ impl<K: Eq + Hash + Copy, T: Clone> MemoryList<K, T> {
         while at != NIL {
             let s = &self.slots[at as usize];
             assert_eq!(s.older, prev, "back link of slot {at}");
-            assert_eq!(self.index.get(&s.key), Some(&at), "index entry of slot {at}");
+            assert_eq!(self.index.get(s.key), Some(at), "index entry of slot {at}");
             assert!(s.round >= last_round, "rounds decrease at slot {at}");
             last_round = s.round;
             seen += 1;
-            assert!(seen <= self.index.len(), "the list has a cycle or extra slots");
+            assert!(seen <= self.index.len, "the list has a cycle or extra slots");
             prev = at;
             at = s.newer;
         }
         assert_eq!(prev, self.newest, "newest end");
-        assert_eq!(seen, self.index.len(), "listed vs indexed items");
+        assert_eq!(seen, self.index.len, "listed vs indexed items");
+        let indexed = self.index.map.len() + self.index.table.iter().filter(|&&i| i != NIL).count();
+        assert_eq!(indexed, seen, "index entries vs items");
         assert_eq!(self.slots.len(), seen + self.free.len(), "slots leaked");
         for &f in &self.free {
             assert_eq!(self.slots[f as usize].older, FREED, "free slot {f} not marked");
         }
         if let Retention::LastN(n) = self.retention {
-            assert!(self.index.len() <= n, "more than {n} kept");
+            assert!(self.index.len <= n, "more than {n} kept");
         }
     }
 }
@@ -301,22 +398,35 @@ mod tests {
     }
 
     /// The list against a brute-force model (a vector of (key, item, round) in sighting
-    /// order), through random records, forgets and evictions under both policies.
+    /// order), through random records, forgets and evictions under both policies: small
+    /// dense keys (a table), keys some of which are too large for the table (a table and a
+    /// map, issue 11), keys that are never dense (a map), and keys that move between them.
     #[test]
     fn matches_a_brute_force_model() {
+        use rand::Rng;
+        check_against_model(|rng| rng.random_range(0..12u8));
+        check_against_model(|rng| [0, 1_000, 1_000_000_000][rng.random_range(0..3)] + rng.random_range(0..6u64));
+        check_against_model(|rng| char::from(b'a' + rng.random_range(0..12u8)));
+        // Keys that go to the map while the list is short and would fit the table once it
+        // has grown (and the table grows past them).
+        check_against_model(|rng| rng.random_range(0..200u32));
+    }
+
+    fn check_against_model<K: ListKey + std::fmt::Debug>(mut draw: impl FnMut(&mut rand_chacha::ChaCha8Rng) -> K) {
         use rand::{Rng, SeedableRng};
         for (seed, retention) in [
             (1, Retention::LastN(5)),
             (2, Retention::LastRounds(4)),
             (3, Retention::LastN(1)),
+            (4, Retention::LastN(100)),
         ] {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
             let mut list = MemoryList::new(retention);
-            let mut model: Vec<(u8, u32, u64)> = Vec::new();
+            let mut model: Vec<(K, u32, u64)> = Vec::new();
             let mut round = 0;
             for step in 0..3_000u32 {
                 round += u64::from(rng.random_bool(0.3));
-                let key = rng.random_range(0..12u8);
+                let key = draw(&mut rng);
                 model.retain(|e| e.0 != key);
                 if rng.random_bool(0.1) {
                     list.forget(key);
