@@ -231,6 +231,18 @@ thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
 }
 
+/// Heap bytes this thread's search buffers hold.
+#[cfg(test)]
+pub(crate) fn scratch_bytes() -> usize {
+    SCRATCH.with(|s| {
+        let s = s.borrow();
+        s.roots.capacity() * size_of::<Root>()
+            + s.cones.capacity() * size_of::<Cone>()
+            + s.open.capacity() * size_of::<Reverse<Entry>>()
+            + s.best.g.capacity() * (size_of::<(u64, f64)>() + 1)
+    })
+}
+
 /// What a search found.
 pub(crate) enum Outcome {
     /// The corners a shortest path bends at, in order.
