@@ -58,24 +58,6 @@ pub enum Error {
         /// Why.
         cause: std::io::Error,
     },
-    /// An input file that makes no sense: where and what.
-    #[error("{}:{line}: {problem}", path.display())]
-    BadInput {
-        /// The file.
-        path: std::path::PathBuf,
-        /// 1-based line.
-        line: usize,
-        /// What is wrong.
-        problem: String,
-    },
-    /// An input file that cannot be read.
-    #[error("{}: {cause}", path.display())]
-    Read {
-        /// The file.
-        path: std::path::PathBuf,
-        /// Why.
-        cause: std::io::Error,
-    },
     /// Worker threads could not start.
     #[error("cannot start worker threads: {0}")]
     Threads(#[from] rayon::ThreadPoolBuildError),

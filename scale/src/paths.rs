@@ -2,111 +2,13 @@
 //! for robots with a radius, the visibility graph's size and linking time), then query times
 //! and, where the queries carry published optima, how far the paths are from them.
 
-use std::path::Path;
 use std::time::Instant;
 
-use editor::import::{ImportOptions, import};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use sim_core::glam::DVec2;
+/// The bench's queries and maps, shared with the editor's timing harness.
+pub use editor::path::{PathQuery, load_map, random_queries, read_scenario};
 use sim_core::spatial::{AnyAnglePlanner, KnownMap, NavGraph, ObstacleMap, Terrain};
-use sim_core::world::MapData;
 
-use crate::{Error, Result};
-
-/// One query, in world coordinates, with the published lengths where known.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PathQuery {
-    /// Start.
-    pub from: DVec2,
-    /// Goal.
-    pub to: DVec2,
-    /// The octile optimum (a Moving AI scenario's 9th column; 0 = unreachable).
-    pub octile: Option<f64>,
-    /// The any-angle optimum (a 10th column, where the file has one).
-    pub optimum: Option<f64>,
-}
-
-/// A map for the bench: a Moving AI `.map` (imported as `smartteams-editor import` does)
-/// or a Smart Teams map file.
-pub fn load_map(path: &Path) -> Result<ObstacleMap> {
-    if path.extension().is_some_and(|e| e == "map") {
-        Ok(import(path, &ImportOptions::default())?)
-    } else {
-        Ok(MapData::load(path)?.obstacles)
-    }
-}
-
-/// The queries of a Moving AI scenario file (`.scen`, or the same columns with an any-angle
-/// optimum in a 10th): corners `(x, y)` with `y` down, as world points of `map`.
-pub fn read_scenario(path: &Path, map: &ObstacleMap) -> Result<Vec<PathQuery>> {
-    let bad = |line: usize, problem: String| Error::BadInput {
-        path: path.to_path_buf(),
-        line,
-        problem,
-    };
-    let text = std::fs::read_to_string(path).map_err(|cause| Error::Read {
-        path: path.to_path_buf(),
-        cause,
-    })?;
-    let g = map.grid();
-    let top = f64::from(g.height_cells());
-    let mut queries = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        if line.starts_with("version") || line.starts_with('#') || line.trim().is_empty() {
-            continue;
-        }
-        let f: Vec<&str> = line.split('\t').collect();
-        if f.len() < 9 {
-            return Err(bad(
-                i + 1,
-                format!("expected at least 9 tab-separated columns, found {}", f.len()),
-            ));
-        }
-        let num = |c: usize| -> Result<f64> {
-            f[c].trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| bad(i + 1, format!("column {}: expected a number, found {:?}", c + 1, f[c])))
-        };
-        let corner = |x: f64, y: f64| g.origin() + DVec2::new(x, top - y) * g.cell_m();
-        queries.push(PathQuery {
-            from: corner(num(4)?, num(5)?),
-            to: corner(num(6)?, num(7)?),
-            octile: Some(num(8)?),
-            optimum: if f.len() > 9 { Some(num(9)?) } else { None },
-        });
-    }
-    Ok(queries)
-}
-
-/// `count` queries between centres of free cells drawn with `seed`; none on a map without a
-/// free cell (where drawing would never end).
-pub fn random_queries(map: &ObstacleMap, count: usize, seed: u64) -> Vec<PathQuery> {
-    if map.free_area_m2() <= 0.0 {
-        return Vec::new();
-    }
-    let g = map.grid();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut free_centre = || loop {
-        let c = g.cell_center(
-            rng.random_range(0..g.width_cells()),
-            rng.random_range(0..g.height_cells()),
-        );
-        if map.is_point_free(c) {
-            return c;
-        }
-    };
-    (0..count)
-        .map(|_| PathQuery {
-            from: free_centre(),
-            to: free_centre(),
-            octile: None,
-            optimum: None,
-        })
-        .collect()
-}
+use crate::Result;
 
 /// What the bench measured.
 #[derive(Clone, Debug, PartialEq)]

@@ -45,6 +45,7 @@ pub(super) struct Agent {
 /// agent (issue 11: those passes over every agent were a fifth of a 2-thread round of
 /// random walkers).
 #[derive(Clone, Debug, Default)]
+#[allow(clippy::struct_excessive_bools)] // Independent facts of one round, each read by its own pass.
 pub(super) struct Turn {
     /// Where it stood at the start of the round.
     pub(super) start: DVec2,
@@ -188,6 +189,7 @@ pub struct PhaseTimes {
 impl Simulation {
     /// Set up a run of a validated scenario: place the robots where the scenario put them,
     /// hand each its strategy, build the indexes and the navigation graph.
+    #[allow(clippy::too_many_lines)] // The set-up's steps in order; split, they would only pass the parts around.
     pub fn new(scenario: Scenario) -> Result<Self> {
         let ScenarioParts {
             name,

@@ -82,14 +82,11 @@ impl Simulation {
                                 .iter()
                                 .any(|(to, _)| *to == Recipient::Broadcast);
                             if broadcasts && !radio_limited {
-                                match robot_index {
-                                    Some(index) => {
-                                        hearers(index, robot.id, turn.start, kind.comm_radius_m, &mut agent.hearers);
-                                    }
-                                    None => {
-                                        turn.hearers_pending = true;
-                                        pending.store(true, Ordering::Relaxed);
-                                    }
+                                if let Some(index) = robot_index {
+                                    hearers(index, robot.id, turn.start, kind.comm_radius_m, &mut agent.hearers);
+                                } else {
+                                    turn.hearers_pending = true;
+                                    pending.store(true, Ordering::Relaxed);
                                 }
                             }
                             // Step 3 for a robot whose turn depends on nobody, while its data

@@ -22,23 +22,34 @@
 //! cells sees the run of free cells around it on the band's two lines; the goal is offered to
 //! a node whose cone reaches it, at the cost of the straight leg from the root, and the leg's
 //! sight is tested (exactly, `sight`) only when the search takes the offer. Interval ends are
-//! rationals of small integers (ratios of lattice distances), so ends within `EPS` of an
-//! integer are that integer. Ends that are points a path may not touch (a diagonal touch of
-//! two blocked cells) are *open*: no ray through them and no bend at them.
+//! rationals of small integers (ratios of lattice distances), so ends within a tolerance
+//! relative to the map's size (`SNAP_ULPS`) of an integer are that integer. Ends that are
+//! points a path may not touch (a diagonal touch of two blocked cells) are *open*: no ray
+//! through them and no bend at them.
 
 // Exact comparisons of snapped coordinates are intended.
 #![allow(clippy::float_cmp)]
 
 use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::collections::{BinaryHeap, HashMap};
 
 use glam::DVec2;
 
 use super::raster::CellRaster;
 use super::sight::{corner_passable, segment_between_legal_ends_clear};
 
-/// Coordinates within this of an integer are that integer.
-const EPS: f64 = 1e-9;
+/// Interval ends within `SNAP_ULPS · (W + 1)(H + 1) · f64::EPSILON` of an integer are that
+/// integer (`W × H` cells; 2e-9 on a 768² map). Relative, not absolute, so that it holds on
+/// large maps: a true end `r.x + (e.x - r.x) · (y - r.y) / (e.y - r.y)` (root `r`, corner `e`)
+/// that is not an integer lies at least `1 / H` from one (`1 / (2H + 1)` from a cell-centre
+/// start), and the computed end carries a few roundings of a coordinate up to `W`, magnified
+/// by up to `H` where a cone is carried from a line near its root to one far off; the
+/// tolerance lies between the two while `(W + 1)(H + 1)² < 2^47`: every map up to 52,000
+/// cells a side (every square map the raster accepts) and strips of 2^31 cells up to 65,000
+/// rows high. Beyond that, or from a start just off a row line, an end may be mis-snapped by
+/// about the tolerance: a leg then fails the exact sight test (the visibility graph answers)
+/// or the path is that much longer than the optimum.
+const SNAP_ULPS: f64 = 16.0;
 /// Ways to a corner within this of each other are equally long (the later is pruned).
 const TIE: f64 = 1e-9;
 /// No root: the start's parent.
@@ -108,13 +119,6 @@ fn nearest(x: f64) -> f64 {
     }
 }
 
-/// `x`, or the integer within [`EPS`] of it.
-#[inline]
-fn snap(x: f64) -> f64 {
-    let n = nearest(x);
-    if (x - n).abs() < EPS { n } else { x }
-}
-
 /// `x` as an integer, if it is one (coordinates of the map are far below 2^31).
 #[inline]
 #[allow(clippy::cast_possible_truncation)]
@@ -162,27 +166,93 @@ fn through(r: DVec2, y: f64, a: f64, b: f64, g: DVec2) -> f64 {
 }
 
 /// A search's buffers, kept per thread between queries (allocating and faulting them in
-/// anew was a tenth of a query's time).
+/// anew was a tenth of a query's time). They grow with the largest search run on the thread
+/// (what it sweeps, never the map's size) and are cut back to [`KEEP`] entries after a search
+/// that needed more, so a thread's scratch stays bounded across any number of queries and
+/// maps.
 #[derive(Default)]
 struct Scratch {
     roots: Vec<Root>,
     cones: Vec<Cone>,
     open: BinaryHeap<Reverse<Entry>>,
-    /// The best length found to each lattice corner (index `y * (width + 1) + x`), valid
-    /// where stamped with this query's `epoch` (stamp and length side by side: one cache
-    /// miss, not two).
-    best: Vec<Mark>,
-    epoch: u32,
+    best: Best,
 }
 
-#[derive(Clone, Copy, Default)]
-struct Mark {
-    epoch: u32,
-    g: f64,
+/// Entries of each buffer a thread keeps between searches (some 20 MiB in all): ten times
+/// what the longest searches on 768² mazes use.
+const KEEP: usize = 1 << 18;
+
+impl Scratch {
+    fn trim(&mut self) {
+        if self.roots.capacity() > KEEP {
+            self.roots = Vec::new();
+        }
+        if self.cones.capacity() > KEEP {
+            self.cones = Vec::new();
+        }
+        if self.open.capacity() > KEEP {
+            self.open = BinaryHeap::new();
+        }
+        self.best.trim();
+    }
+}
+
+/// The best length found to each lattice corner this query, for the corners the search has
+/// rooted at (a sparse map: memory follows what the search sweeps, not the map's size; a
+/// fixed hasher, and never iterated, so results are deterministic).
+#[derive(Default)]
+struct Best {
+    g: HashMap<u64, f64, foldhash::fast::FixedState>,
+}
+
+impl Best {
+    fn clear(&mut self) {
+        self.g.clear();
+    }
+
+    fn trim(&mut self) {
+        if self.g.capacity() > KEEP {
+            self.g = HashMap::default();
+        }
+    }
+
+    #[inline]
+    fn get(&self, k: u64) -> Option<f64> {
+        self.g.get(&k).copied()
+    }
+
+    #[inline]
+    fn set(&mut self, k: u64, g: f64) {
+        self.g.insert(k, g);
+    }
 }
 
 thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::default();
+}
+
+/// Heap bytes this thread's search buffers hold.
+#[cfg(test)]
+pub(crate) fn scratch_bytes() -> usize {
+    SCRATCH.with(|s| {
+        let s = s.borrow();
+        s.roots.capacity() * size_of::<Root>()
+            + s.cones.capacity() * size_of::<Cone>()
+            + s.open.capacity() * size_of::<Reverse<Entry>>()
+            + s.best.g.capacity() * (size_of::<(u64, f64)>() + 1)
+    })
+}
+
+/// What a search found.
+pub(crate) enum Outcome {
+    /// The corners a shortest path bends at, in order.
+    Found(Vec<DVec2>),
+    /// The goal cannot be reached.
+    Unreachable,
+    /// The search gave up: more than 2^31 roots or cones (the heap's item index holds 31
+    /// bits). No map the raster accepts is expected to need that many; the caller falls
+    /// back.
+    GaveUp,
 }
 
 /// One query's search.
@@ -192,17 +262,20 @@ struct Search<'a> {
     roots: &'a mut Vec<Root>,
     cones: &'a mut Vec<Cone>,
     open: &'a mut BinaryHeap<Reverse<Entry>>,
-    best: &'a mut [Mark],
-    epoch: u32,
+    best: &'a mut Best,
+    /// Ends within this of an integer are that integer (see [`SNAP_ULPS`]).
+    eps: f64,
+    /// Set when an index would reach [`GOAL_BIT`]: the search stops and gives up.
+    full: bool,
     /// An entry no greater than any in `open`, kept out of it: a cone's successor is often
     /// the next to expand, and the heap need not see it.
     slot: Option<Entry>,
     seq: u32,
 }
 
-/// The corners (cell units) a shortest legal path from `s` to `g` bends at, in order, or
-/// `None` when the goal cannot be reached. Both ends must be points a path may touch.
-pub(crate) fn shortest(raster: &CellRaster, s: DVec2, g: DVec2) -> Option<Vec<DVec2>> {
+/// A shortest legal path from `s` to `g` (cell units): the corners it bends at, or that
+/// there is none, or that the search gave up. Both ends must be points a path may touch.
+pub(crate) fn shortest(raster: &CellRaster, s: DVec2, g: DVec2) -> Outcome {
     SCRATCH.with(|scratch| {
         // A query on this thread is never re-entered; should it be, fresh buffers serve.
         let mut fresh = None;
@@ -211,25 +284,19 @@ pub(crate) fn shortest(raster: &CellRaster, s: DVec2, g: DVec2) -> Option<Vec<DV
             Some(s) => s,
             None => fresh.insert(Scratch::default()),
         };
-        search(raster, scratch, s, g)
+        let found = search(raster, scratch, s, g);
+        scratch.trim();
+        found
     })
 }
 
-fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Option<Vec<DVec2>> {
-    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)] // Map sides below 2^31.
-    let points = (raster.width() as usize + 1) * (raster.height() as usize + 1);
-    if scratch.best.len() < points {
-        scratch.best.resize(points, Mark::default());
-    }
-    scratch.epoch = scratch.epoch.wrapping_add(1);
-    if scratch.epoch == 0 {
-        // Stamps from 2^32 queries ago would read as current.
-        scratch.best.fill(Mark::default());
-        scratch.epoch = 1;
-    }
+fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Outcome {
     scratch.roots.clear();
     scratch.cones.clear();
     scratch.open.clear();
+    scratch.best.clear();
+    #[allow(clippy::cast_precision_loss)] // Sides below 2^31.
+    let area = (raster.width() + 1) as f64 * (raster.height() + 1) as f64;
     let mut search = Search {
         raster,
         goal: g,
@@ -237,28 +304,36 @@ fn search(raster: &CellRaster, scratch: &mut Scratch, s: DVec2, g: DVec2) -> Opt
         cones: &mut scratch.cones,
         open: &mut scratch.open,
         best: &mut scratch.best,
-        epoch: scratch.epoch,
+        eps: SNAP_ULPS * area * f64::EPSILON,
+        full: false,
         slot: None,
         seq: 0,
     };
     search.start(s);
     while let Some(e) = search.pop() {
+        if search.full {
+            return Outcome::GaveUp;
+        }
         match e.item() {
             Item::Goal(ri) => {
                 if segment_between_legal_ends_clear(raster, search.roots[ri as usize].pos, g) {
-                    return Some(search.corners(ri));
+                    return Outcome::Found(search.corners(ri));
                 }
             }
             Item::Cone(ci) => search.expand(ci),
         }
     }
-    None
+    if search.full {
+        Outcome::GaveUp
+    } else {
+        Outcome::Unreachable
+    }
 }
 
 impl Search<'_> {
     fn push(&mut self, f: f64, item: Item) {
-        // Over 2^31 roots or cones, or 2^32 entries, would need more memory than a map of
-        // 2^31 cells gives rise to; wrapping would only reorder ties.
+        // Roots and cones are kept below `GOAL_BIT` (`full`); 2^32 entries would take 64 GiB
+        // of heap, and wrapping would only reorder ties.
         self.seq = self.seq.wrapping_add(1);
         let item = match item {
             Item::Cone(i) => i,
@@ -288,18 +363,36 @@ impl Search<'_> {
         }
     }
 
-    /// Index of lattice corner `(x, y)` of the map in `best`.
+    /// Key of lattice corner `(x, y)` of the map in `best`.
     #[inline]
-    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)] // Corners of the map.
-    fn key(&self, x: i64, y: i64) -> usize {
-        (y * (self.raster.width() + 1) + x) as usize
+    #[allow(clippy::cast_sign_loss)] // Corners of the map.
+    fn key(&self, x: i64, y: i64) -> u64 {
+        (y * (self.raster.width() + 1) + x) as u64
     }
 
     /// The best length found to corner `k` this query.
     #[inline]
-    fn best(&self, k: usize) -> Option<f64> {
-        let m = self.best[k];
-        (m.epoch == self.epoch).then_some(m.g)
+    fn best(&self, k: u64) -> Option<f64> {
+        self.best.get(k)
+    }
+
+    /// `x`, or the integer within `eps` of it.
+    #[inline]
+    fn snap(&self, x: f64) -> f64 {
+        let n = nearest(x);
+        if (x - n).abs() < self.eps { n } else { x }
+    }
+
+    /// A new index into the roots or cones, or `None` (and the search gives up) if it would
+    /// collide with the heap entry's goal bit.
+    fn index(&mut self, len: usize) -> Option<u32> {
+        match u32::try_from(len) {
+            Ok(i) if i < GOAL_BIT => Some(i),
+            _ => {
+                self.full = true;
+                None
+            }
+        }
     }
 
     /// The corners from the start (excluded) to root `ri` (included).
@@ -333,14 +426,15 @@ impl Search<'_> {
         if self.best(k).is_some_and(|b| b <= g + TIE) {
             return None;
         }
-        self.best[k] = Mark { epoch: self.epoch, g };
+        let ri = self.index(self.roots.len())?;
+        self.best.set(k, g);
         self.roots.push(Root {
             pos,
             g,
             prev: via,
             offered: false,
         });
-        Some(u32::try_from(self.roots.len() - 1).expect("fewer roots than lattice points"))
+        Some(ri)
     }
 
     /// Whether a better way to root `ri`'s corner has been found since it was made.
@@ -373,7 +467,7 @@ impl Search<'_> {
     /// Queue the cone from root `ri` through `[a, b]` on line `y`, unless it holds no ray.
     #[allow(clippy::too_many_arguments, clippy::fn_params_excessive_bools)]
     fn push_cone(&mut self, ri: u32, y: i64, a: f64, b: f64, mut a_open: bool, mut b_open: bool, up: bool) {
-        let (a, b) = (snap(a), snap(b));
+        let (a, b) = (self.snap(a), self.snap(b));
         if a > b {
             return;
         }
@@ -393,7 +487,9 @@ impl Search<'_> {
         let root = &self.roots[ri as usize];
         #[allow(clippy::cast_precision_loss)]
         let f = root.g + through(root.pos, y as f64, a, b, self.goal);
-        let ci = u32::try_from(self.cones.len()).expect("fewer than 2^32 cones a query");
+        let Some(ci) = self.index(self.cones.len()) else {
+            return;
+        };
         self.cones.push(Cone {
             root: ri,
             y,
@@ -416,10 +512,7 @@ impl Search<'_> {
         });
         if let (Some(x), Some(y)) = (lattice(s.x), lattice(s.y)) {
             let k = self.key(x, y);
-            self.best[k] = Mark {
-                epoch: self.epoch,
-                g: 0.0,
-            };
+            self.best.set(k, 0.0);
         }
         if let Some(y0) = lattice(s.y) {
             self.walk(0, y0, 1, s.x);
@@ -461,7 +554,7 @@ impl Search<'_> {
         } else {
             r.x + (g.x - r.x) * (y as f64 - r.y) / (g.y - r.y)
         };
-        if x >= a - EPS && x <= b + EPS {
+        if x >= a - self.eps && x <= b + self.eps {
             self.offer(ri);
         }
     }
@@ -473,7 +566,7 @@ impl Search<'_> {
             return;
         }
         #[allow(clippy::cast_precision_loss)]
-        if self.goal.y == c.y as f64 && self.goal.x >= c.a - EPS && self.goal.x <= c.b + EPS {
+        if self.goal.y == c.y as f64 && self.goal.x >= c.a - self.eps && self.goal.x <= c.b + self.eps {
             self.offer(c.root);
         }
         let ahead = if c.up { c.y } else { c.y - 1 };
@@ -524,7 +617,7 @@ impl Search<'_> {
                 let next = c.y + dir * clear;
                 let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
                 self.offer_in_cone(c.root, c.y, c.up, clear, pa, pb);
-                let (qa, qb) = (snap(r.x + (pa - r.x) * tk), snap(r.x + (pb - r.x) * tk));
+                let (qa, qb) = (self.snap(r.x + (pa - r.x) * tk), self.snap(r.x + (pb - r.x) * tk));
                 self.push_cone(c.root, next, qa, qb, pa_open, pb_open, c.up);
                 self.bend_ends(c, (pa, pa_open), (pb, pb_open), lo, hi, t);
                 return;
@@ -533,8 +626,8 @@ impl Search<'_> {
         self.offer_in_band(c.root, c.y, c.up, rows, lo, hi, pa, pb);
         let next = c.y + dir * rows;
         let tk = (next as f64 - r.y) / (c.y as f64 - r.y);
-        let qa = snap(r.x + (pa - r.x) * tk);
-        let qb = snap(r.x + (pb - r.x) * tk);
+        let qa = self.snap(r.x + (pa - r.x) * tk);
+        let qb = self.snap(r.x + (pb - r.x) * tk);
         // A ray that leaves the run sideways hits a blocked cell: cut at the run's ends.
         let (na, na_open) = if qa < lf { (lf, false) } else { (qa, pa_open) };
         let (nb, nb_open) = if qb > hf { (hf, false) } else { (qb, pb_open) };
@@ -604,7 +697,7 @@ impl Search<'_> {
         }
         let r = self.roots[ri as usize].pos;
         let x = r.x + (g.x - r.x) * (y as f64 - r.y) / (g.y - r.y);
-        if x >= a - EPS && x <= b + EPS {
+        if x >= a - self.eps && x <= b + self.eps {
             self.offer(ri);
         }
     }
@@ -623,7 +716,7 @@ impl Search<'_> {
         }
         let root = self.roots[c.root as usize].pos;
         let dx = (e as f64 - root.x) * side as f64;
-        let proj = snap(root.x + (e as f64 - root.x) * t);
+        let proj = self.snap(root.x + (e as f64 - root.x) * t);
         let next = if c.up { c.y + 1 } else { c.y - 1 };
         let (lf, hf) = (lo as f64, hi as f64);
         match (r.blocked(out_col, behind), r.blocked(out_col, ahead)) {

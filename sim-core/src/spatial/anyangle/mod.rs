@@ -11,8 +11,13 @@
 //! free space's connected regions when it is built (`regions`), so that ends in different
 //! regions are answered at once instead of by a search sweeping the start's region. Every
 //! leg of the path Anya returns is checked again by the exact sight test; should one fail
-//! (rounding in the interval arithmetic; not seen in any test), the visibility graph below
-//! answers instead.
+//! (rounding in the interval arithmetic; not seen in any test), or Anya find no path between
+//! ends in one region, or give up (more than 2^31 search nodes), the visibility graph below
+//! answers instead. A point robot's planner keeps no corner list for that: the graph is built
+//! then, and on a map with more than [`MAX_VERTICES`] corners the answer is
+//! [`NoPath::Undecided`] rather than a search that could take hours. A query's memory
+//! follows what it sweeps (the corners it bends at, its cones), never the map's size; the
+//! buffers each thread keeps between queries are capped.
 //!
 //! Robots with a radius use the visibility graph: the planner links the convex corners that
 //! see each other (its size follows the obstacles' outlines, not the number of cells) and
@@ -76,13 +81,16 @@ pub struct AnyAnglePlanner {
     grid: Grid,
     radius_m: f64,
     raster: raster::CellRaster,
-    vertices: Vec<Vertex>,
-    /// Each corner's neighbours in the visibility graph, once linked.
-    links: Vec<std::sync::OnceLock<Box<[u32]>>>,
+    /// Corners a path may bend at (the graph's, or for point robots the map's convex ones).
+    corners: usize,
+    /// The visibility graph: built with the planner for robots with a radius; for point
+    /// robots only if Anya's answer needs checking (never seen), and then `None` above
+    /// [`MAX_VERTICES`] corners.
+    graph: std::sync::OnceLock<Option<build::Graph>>,
     /// The map, kept for exact swept-disc tests when the radius is positive.
     obstacles: Option<ObstacleMap>,
-    /// The free space's connected regions (found when a point robot's planner is built).
-    regions: std::sync::OnceLock<regions::Regions>,
+    /// The free space's connected regions: point robots' planners only.
+    regions: Option<regions::Regions>,
 }
 
 /// A path: its waypoints in world coordinates from start to goal, and its length.
@@ -94,7 +102,7 @@ pub struct AnyAnglePath {
     pub length_m: f64,
 }
 
-/// Why there is no path: an answer about the map, not a failure of the planner.
+/// Why there is no path: an answer about the map, except [`NoPath::Undecided`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum NoPath {
     /// The start is blocked (inside an obstacle, outside the map, or too close to an obstacle
@@ -104,6 +112,11 @@ pub enum NoPath {
     GoalBlocked(DVec2),
     /// Both ends are free but no path joins them.
     Unreachable(DVec2, DVec2),
+    /// Not decided: a point robot's search (Anya) failed, which no test has seen (a leg
+    /// that fails the exact sight test, more than 2^31 search nodes, or no path between ends
+    /// in one region), and the map has more corners than the visibility graph that would
+    /// decide instead accepts ([`MAX_VERTICES`]).
+    Undecided(DVec2, DVec2),
 }
 
 impl std::fmt::Display for NoPath {
@@ -113,6 +126,12 @@ impl std::fmt::Display for NoPath {
             Self::StartBlocked(p) => write!(f, "start ({}, {}) is {blocked}", p.x, p.y),
             Self::GoalBlocked(p) => write!(f, "goal ({}, {}) is {blocked}", p.x, p.y),
             Self::Unreachable(a, b) => write!(f, "goal ({}, {}) cannot be reached from ({}, {})", b.x, b.y, a.x, a.y),
+            Self::Undecided(a, b) => write!(
+                f,
+                "the search from ({}, {}) to ({}, {}) failed and the map has more than {MAX_VERTICES} \
+                 corners for the visibility graph that would decide",
+                a.x, a.y, b.x, b.y
+            ),
         }
     }
 }
@@ -120,20 +139,19 @@ impl std::fmt::Display for NoPath {
 impl std::error::Error for NoPath {}
 
 impl AnyAnglePlanner {
-    /// Corners in the graph.
+    /// Corners in the graph: the grown corners a robot with a radius may stand at, or for
+    /// point robots every convex corner of the map.
     pub fn vertex_count(&self) -> usize {
-        self.vertices.len()
+        self.corners
     }
 
     /// Edges among the corners linked so far (each counted once); all of them after
-    /// [`link_all`](Self::link_all).
+    /// [`link_all`](Self::link_all). Point robots' searches link none.
     pub fn edge_count(&self) -> usize {
-        self.links
-            .iter()
-            .filter_map(|l| l.get())
-            .map(|l| l.len())
-            .sum::<usize>()
-            / 2
+        self.graph
+            .get()
+            .and_then(Option::as_ref)
+            .map_or(0, build::Graph::edge_count)
     }
 
     /// The robot radius the planner was built for, metres.
@@ -141,17 +159,17 @@ impl AnyAnglePlanner {
         self.radius_m
     }
 
-    /// Heap bytes of the graph and the cell raster.
+    /// Heap bytes of the graph, the cell raster, the map (robots with a radius) and the
+    /// regions (point robots).
     pub fn memory_bytes(&self) -> usize {
         self.raster.memory_bytes()
-            + self.vertices.capacity() * std::mem::size_of::<Vertex>()
             + self
-                .links
-                .iter()
-                .map(|l| std::mem::size_of_val(l) + l.get().map_or(0, |n| n.len() * 4))
-                .sum::<usize>()
+                .graph
+                .get()
+                .and_then(Option::as_ref)
+                .map_or(0, build::Graph::memory_bytes)
             + self.obstacles.as_ref().map_or(0, ObstacleMap::memory_bytes)
-            + self.regions.get().map_or(0, regions::Regions::memory_bytes)
+            + self.regions.as_ref().map_or(0, regions::Regions::memory_bytes)
     }
 
     /// Whether a robot of the planner's radius may move straight from `a` to `b` (world

@@ -6,7 +6,7 @@ use std::collections::BinaryHeap;
 use glam::DVec2;
 
 use super::build::grazes;
-use super::{AnyAnglePath, AnyAnglePlanner, NoPath, anya, regions};
+use super::{AnyAnglePath, AnyAnglePlanner, NoPath, Vertex, anya};
 
 /// A heap entry: estimated total length, then node (for a deterministic order among ties),
 /// and whether it is a link from the start not yet checked for sight.
@@ -52,7 +52,7 @@ impl Front {
             self.parent[node] = via;
             self.open.push(Reverse(Open {
                 f: d + at.distance(self.goal),
-                node: u32::try_from(node).expect("vertex count is bounded"),
+                node: u32::try_from(node).expect("at most MAX_VERTICES corners"),
                 unchecked: false,
             }));
         }
@@ -76,27 +76,33 @@ impl AnyAnglePlanner {
                 length_m: from.distance(to),
             });
         }
-        if self.obstacles.is_none() {
+        if let Some(regions) = &self.regions {
             // Ends in different regions: no search (it would sweep the start's region).
-            let regions = self.regions.get_or_init(|| regions::Regions::new(&self.raster));
             if regions.of_point(s) != regions.of_point(g) {
                 return Err(NoPath::Unreachable(from, to));
             }
-            // `None`: a leg failed the exact sight test (never seen; a guard against
-            // rounding in the search's interval arithmetic), and the visibility graph decides.
-            if let Some(found) = self.anya_path(from, to) {
-                return found;
+            match self.anya_path(from, to) {
+                Some(Ok(path)) => return Ok(path),
+                // A path exists between ends in one 4-connected region: an Anya bug. Tests
+                // (debug assertions on) stop here; a release build asks the visibility graph.
+                Some(Err(_)) => debug_assert!(false, "Anya finds no path from {s} to {g} in one region"),
+                // A leg failed the exact sight test or the search gave up (never seen): the
+                // visibility graph decides.
+                None => {}
             }
         }
         self.graph_path(from, to)
     }
 
     /// A point robot's shortest path by Anya (`anya`): the answer, or `None` if a leg of the
-    /// path it found fails the exact sight test. The ends must be checked already.
+    /// path it found fails the exact sight test or the search gave up. The ends must be
+    /// checked already.
     pub(crate) fn anya_path(&self, from: DVec2, to: DVec2) -> Option<Result<AnyAnglePath, NoPath>> {
         let (s, g) = (self.to_cells(from), self.to_cells(to));
-        let Some(corners) = anya::shortest(&self.raster, s, g) else {
-            return Some(Err(NoPath::Unreachable(from, to)));
+        let corners = match anya::shortest(&self.raster, s, g) {
+            anya::Outcome::Found(corners) => corners,
+            anya::Outcome::Unreachable => return Some(Err(NoPath::Unreachable(from, to))),
+            anya::Outcome::GaveUp => return None,
         };
         let mut prev = s;
         for &c in corners.iter().chain(std::iter::once(&g)) {
@@ -114,23 +120,29 @@ impl AnyAnglePlanner {
     }
 
     /// The shortest path by A* over the visibility graph of the (grown) corners: robots with
-    /// a radius, and the reference the tests hold Anya to. The ends must be checked already
-    /// and not see each other.
+    /// a radius, point robots should Anya fail, and the reference the tests hold Anya to.
+    /// The ends must be checked already and not see each other. A point robot's planner
+    /// builds the graph first, and answers [`NoPath::Undecided`] if it would have more than
+    /// [`MAX_VERTICES`](super::MAX_VERTICES) corners.
     pub(crate) fn graph_path(&self, from: DVec2, to: DVec2) -> Result<AnyAnglePath, NoPath> {
+        let Some(graph) = self.graph() else {
+            return Err(NoPath::Undecided(from, to));
+        };
+        let vertices = &graph.vertices;
         let (s, g) = (self.to_cells(from), self.to_cells(to));
-        let n = self.vertices.len();
+        let n = vertices.len();
         // Node n is the goal. The start is the root and never re-entered.
         let mut closed = vec![false; n + 1];
         // Every corner the start might see enters unchecked; its sight line is tested only
         // if the search takes it (it is then the best way to that corner, or the test fails
         // and the corner waits for another way in).
         let open = (0..n)
-            .filter(|&i| grazes(self.vertices[i].quadrant, s - self.vertices[i].pos))
+            .filter(|&i| grazes(vertices[i].quadrant, s - vertices[i].pos))
             .map(|i| {
-                let at = self.vertices[i].pos;
+                let at = vertices[i].pos;
                 Reverse(Open {
                     f: s.distance(at) + at.distance(g),
-                    node: u32::try_from(i).expect("vertex count is bounded"),
+                    node: u32::try_from(i).expect("at most MAX_VERTICES corners"),
                     unchecked: true,
                 })
             })
@@ -149,7 +161,7 @@ impl AnyAnglePlanner {
             if unchecked {
                 // Entries with a shorter way to `u` came first (and closed it): this one is
                 // the best, if the start does see `u`.
-                let at = self.vertices[u].pos;
+                let at = vertices[u].pos;
                 if !self.clear(s, at) {
                     continue;
                 }
@@ -158,17 +170,17 @@ impl AnyAnglePlanner {
             }
             closed[u] = true;
             if u == n {
-                return Ok(self.trace(from, to, &front.parent));
+                return Ok(self.trace(vertices, from, to, &front.parent));
             }
-            let (pu, du) = (self.vertices[u].pos, front.dist[u]);
+            let (pu, du) = (vertices[u].pos, front.dist[u]);
             // Whether a corner sees the goal is asked only when the search expands it (once).
-            if grazes(self.vertices[u].quadrant, g - pu) && self.clear(g, pu) {
+            if grazes(vertices[u].quadrant, g - pu) && self.clear(g, pu) {
                 front.relax(n, g, node, du + pu.distance(g));
             }
-            for &v in self.neighbours(u) {
+            for &v in self.neighbours(graph, u) {
                 let v = v as usize;
                 if !closed[v] {
-                    let at = self.vertices[v].pos;
+                    let at = vertices[v].pos;
                     front.relax(v, at, node, du + pu.distance(at));
                 }
             }
@@ -177,11 +189,11 @@ impl AnyAnglePlanner {
     }
 
     /// The path found by a search, from the goal's parents back to the start.
-    fn trace(&self, from: DVec2, to: DVec2, parent: &[u32]) -> AnyAnglePath {
+    fn trace(&self, vertices: &[Vertex], from: DVec2, to: DVec2, parent: &[u32]) -> AnyAnglePath {
         let mut waypoints = vec![to];
-        let mut at = parent[self.vertices.len()];
+        let mut at = parent[vertices.len()];
         while at != NONE {
-            waypoints.push(self.to_world(self.vertices[at as usize].pos));
+            waypoints.push(self.to_world(vertices[at as usize].pos));
             at = parent[at as usize];
         }
         waypoints.push(from);

@@ -2,7 +2,7 @@ use glam::DVec2;
 use proptest::prelude::*;
 
 use super::reference::{segment_is_legal, shortest_length};
-use super::{AnyAnglePlanner, NoPath};
+use super::{AnyAnglePath, AnyAnglePlanner, NoPath};
 use crate::spatial::{Grid, ObstacleMap};
 
 fn map_of(width: u32, height: u32, cells: &[bool]) -> ObstacleMap {
@@ -42,34 +42,163 @@ fn small_map() -> impl Strategy<Value = SmallMap> {
     })
 }
 
+/// Anya's answer for a planner's checked ends: the search's own result, never the
+/// visibility-graph fallback (a failed leg is a test failure here).
+fn anya(planner: &AnyAnglePlanner, from: DVec2, to: DVec2) -> Result<AnyAnglePath, NoPath> {
+    if !planner.is_leg_clear(from, from) {
+        return Err(NoPath::StartBlocked(from));
+    }
+    if !planner.is_leg_clear(to, to) {
+        return Err(NoPath::GoalBlocked(to));
+    }
+    if planner.is_leg_clear(from, to) {
+        return planner.path(from, to);
+    }
+    planner
+        .anya_path(from, to)
+        .expect("every leg of Anya's path passes the exact sight test")
+}
+
+/// The visibility graph's answer for the same ends (what Anya is held to): its search where
+/// one is needed, `path` where an end is blocked or the ends see each other.
+fn reference(planner: &AnyAnglePlanner, from: DVec2, to: DVec2) -> Result<AnyAnglePath, NoPath> {
+    if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
+        planner.graph_path(from, to)
+    } else {
+        planner.path(from, to)
+    }
+}
+
+/// Anya's answer `fast` agrees with the visibility graph's `slow`: the same length (to 1e-9
+/// relative) or the same reason for no path; a found path runs from `from` to `to`, is no
+/// shorter than the straight line, and every leg passes the exact sight test.
+fn agree(
+    planner: &AnyAnglePlanner,
+    from: DVec2,
+    to: DVec2,
+    fast: &Result<AnyAnglePath, NoPath>,
+    slow: &Result<AnyAnglePath, NoPath>,
+) -> Result<(), TestCaseError> {
+    match (fast, slow) {
+        (Ok(f), Ok(s)) => {
+            prop_assert!(
+                (f.length_m - s.length_m).abs() <= 1e-9 * s.length_m.max(1.0),
+                "Anya {} vs graph {}: {:?} vs {:?}",
+                f.length_m,
+                s.length_m,
+                f.waypoints,
+                s.waypoints
+            );
+            prop_assert!(f.length_m >= from.distance(to) - 1e-12);
+            prop_assert_eq!(f.waypoints[0], from);
+            prop_assert_eq!(*f.waypoints.last().unwrap(), to);
+            for leg in f.waypoints.windows(2) {
+                prop_assert!(planner.is_leg_clear(leg[0], leg[1]), "illegal leg {leg:?}");
+            }
+        }
+        (Err(a), Err(b)) => prop_assert_eq!(a, b),
+        _ => prop_assert!(false, "Anya {fast:?} vs graph {slow:?}"),
+    }
+    Ok(())
+}
+
+/// Anya's answer between lattice points `s` and `g` agrees with the brute force over all
+/// lattice points (which holds every shortest path, as those bend only at cell corners), and
+/// each leg is legal by the reference's cell-by-cell test.
+fn agree_with_brute_force(
+    (w, h, cells): (u32, u32, &[bool]),
+    s: (i64, i64),
+    g: (i64, i64),
+    fast: &Result<AnyAnglePath, NoPath>,
+) -> Result<(), TestCaseError> {
+    let blocked = blocked_fn(w, h, cells);
+    let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
+    match fast {
+        Ok(p) => {
+            let best = best.expect("Anya found a path the brute force did not");
+            prop_assert!(
+                (p.length_m - best).abs() < 1e-9,
+                "Anya {} vs brute force {best}",
+                p.length_m
+            );
+            for leg in p.waypoints.windows(2) {
+                prop_assert!(
+                    segment_is_legal(&blocked, lattice(leg[0]), lattice(leg[1])),
+                    "illegal leg {leg:?}"
+                );
+            }
+        }
+        Err(e) => prop_assert!(
+            best.is_none() || matches!(e, NoPath::StartBlocked(_) | NoPath::GoalBlocked(_)),
+            "Anya says {e}, brute force finds {best:?}"
+        ),
+    }
+    Ok(())
+}
+
+/// Point robots (Anya, called directly) between lattice points a path may touch, drawn
+/// among those of maps up to 8 × 8: the brute force's length exactly, and every leg legal by
+/// the reference. Cases that need a search (the ends do not see each other) are counted, so that
+/// the check cannot quietly stop running.
+#[test]
+fn anya_between_corners_is_as_short_as_brute_force() {
+    use proptest::sample::Index;
+    use proptest::test_runner::{Config, RngSeed, TestRunner};
+    let maps = (2u32..=8, 2u32..=8, 0.0f64..0.45).prop_flat_map(|(w, h, density)| {
+        (
+            Just(w),
+            Just(h),
+            proptest::collection::vec(proptest::bool::weighted(density), (w * h) as usize),
+            any::<Index>(),
+            any::<Index>(),
+        )
+    });
+    let config = Config {
+        cases: 1500,
+        rng_seed: RngSeed::Fixed(1214),
+        ..Config::default()
+    };
+    let searched = std::cell::Cell::new(0);
+    TestRunner::new(config)
+        .run(&maps, |(w, h, cells, si, gi)| {
+            let planner = AnyAnglePlanner::build(&map_of(w, h, &cells), 0.0).unwrap();
+            let points: Vec<(i64, i64)> = (0..=i64::from(h))
+                .flat_map(|y| (0..=i64::from(w)).map(move |x| (x, y)))
+                .filter(|&p| planner.is_leg_clear(point(p), point(p)))
+                .collect();
+            if points.is_empty() {
+                return Ok(());
+            }
+            let (s, g) = (points[si.index(points.len())], points[gi.index(points.len())]);
+            if !planner.is_leg_clear(point(s), point(g)) {
+                searched.set(searched.get() + 1);
+            }
+            let fast = anya(&planner, point(s), point(g));
+            agree_with_brute_force((w, h, &cells), s, g, &fast)
+        })
+        .unwrap();
+    assert!(searched.get() >= 300, "only {} of 1500 cases searched", searched.get());
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..ProptestConfig::default() })]
 
-    /// The planner's length equals the brute-force optimum over all lattice points (which
-    /// contains every shortest path, as those bend only at cell corners), and each leg is legal
-    /// by the reference's cell-by-cell test.
+    /// Linking every corner up front (`link_all`, pairs tested once on all threads) gives
+    /// the graph that searches link corner by corner on the way, for point robots and robots
+    /// with a radius, and the same graph search.
     #[test]
-    fn point_paths_are_legal_and_as_short_as_brute_force((w, h, cells, s, g) in small_map()) {
+    fn link_all_gives_the_graph_linked_on_the_way((w, h, cells, s, g) in small_map(), r in prop_oneof![Just(0.0), 0.05f64..0.45]) {
         let map = map_of(w, h, &cells);
-        let blocked = blocked_fn(w, h, &cells);
-        let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
-        let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
-        // Linking every corner up front gives the graph that searches link on the way.
-        let linked = AnyAnglePlanner::build(&map, 0.0).unwrap();
-        linked.link_all();
-        prop_assert_eq!(linked.path(point(s), point(g)), planner.path(point(s), point(g)));
-        match planner.path(point(s), point(g)) {
-            Ok(path) => {
-                let best = best.expect("the planner found a path the brute force did not");
-                prop_assert!((path.length_m - best).abs() < 1e-9, "planner {} vs brute force {best}", path.length_m);
-                prop_assert_eq!(path.waypoints[0], point(s));
-                prop_assert_eq!(*path.waypoints.last().unwrap(), point(g));
-                for leg in path.waypoints.windows(2) {
-                    prop_assert!(segment_is_legal(&blocked, lattice(leg[0]), lattice(leg[1])), "illegal leg {leg:?}");
-                }
-            }
-            Err(e) => prop_assert!(best.is_none(), "planner says {e}, brute force finds {best:?}"),
+        let lazy = AnyAnglePlanner::build(&map, r).unwrap();
+        let all = AnyAnglePlanner::build(&map, r).unwrap();
+        all.link_all();
+        let (from, to) = (point(s), point(g));
+        prop_assert_eq!(reference(&lazy, from, to), reference(&all, from, to));
+        let (lg, ag) = (lazy.graph().unwrap(), all.graph().unwrap());
+        for u in 0..lg.vertices.len() {
+            prop_assert_eq!(lazy.neighbours(lg, u), all.neighbours(ag, u), "corner {}", u);
         }
+        prop_assert_eq!(lazy.edge_count(), all.edge_count());
     }
 
     /// The planner's own leg test agrees with the reference on every pair of lattice points.
@@ -206,23 +335,6 @@ fn quarter_map(max_side: u32) -> impl Strategy<Value = QuarterMap> {
     })
 }
 
-/// Anya's answer for a planner's checked ends: the search's own result, never the
-/// visibility-graph fallback (a failed leg is a test failure here).
-fn anya(planner: &AnyAnglePlanner, from: DVec2, to: DVec2) -> Result<super::AnyAnglePath, NoPath> {
-    if !planner.is_leg_clear(from, from) {
-        return Err(NoPath::StartBlocked(from));
-    }
-    if !planner.is_leg_clear(to, to) {
-        return Err(NoPath::GoalBlocked(to));
-    }
-    if planner.is_leg_clear(from, to) {
-        return planner.path(from, to);
-    }
-    planner
-        .anya_path(from, to)
-        .expect("every leg of Anya's path passes the exact sight test")
-}
-
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3000, rng_seed: proptest::test_runner::RngSeed::Fixed(1212), ..ProptestConfig::default() })]
 
@@ -236,38 +348,9 @@ proptest! {
         let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
         let (from, to) = (point(s4) / 4.0, point(g4) / 4.0);
         let fast = anya(&planner, from, to);
-        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
-            planner.graph_path(from, to)
-        } else {
-            planner.path(from, to)
-        };
-        match (&fast, &slow) {
-            (Ok(f), Ok(s)) => {
-                prop_assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m.max(1.0), "Anya {} vs graph {}: {:?} vs {:?}", f.length_m, s.length_m, f.waypoints, s.waypoints);
-                prop_assert!(f.length_m >= from.distance(to) - 1e-12);
-                prop_assert_eq!(f.waypoints[0], from);
-                prop_assert_eq!(*f.waypoints.last().unwrap(), to);
-                for leg in f.waypoints.windows(2) {
-                    prop_assert!(planner.is_leg_clear(leg[0], leg[1]), "illegal leg {leg:?}");
-                }
-            }
-            (Err(a), Err(b)) => prop_assert_eq!(a, b),
-            _ => prop_assert!(false, "Anya {fast:?} vs graph {slow:?}"),
-        }
+        agree(&planner, from, to, &fast, &reference(&planner, from, to))?;
         if s4.0 % 4 == 0 && s4.1 % 4 == 0 && g4.0 % 4 == 0 && g4.1 % 4 == 0 && w * h <= 64 {
-            let blocked = blocked_fn(w, h, &cells);
-            let (s, g) = ((s4.0 / 4, s4.1 / 4), (g4.0 / 4, g4.1 / 4));
-            let best = shortest_length(&blocked, i64::from(w), i64::from(h), s, g);
-            match &fast {
-                Ok(p) => {
-                    let best = best.expect("Anya found a path the brute force did not");
-                    prop_assert!((p.length_m - best).abs() < 1e-9, "Anya {} vs brute force {best}", p.length_m);
-                    for leg in p.waypoints.windows(2) {
-                        prop_assert!(segment_is_legal(&blocked, lattice(leg[0]), lattice(leg[1])), "illegal leg {leg:?}");
-                    }
-                }
-                Err(e) => prop_assert!(best.is_none() || matches!(e, NoPath::StartBlocked(_) | NoPath::GoalBlocked(_)), "Anya says {e}, brute force finds {best:?}"),
-            }
+            agree_with_brute_force((w, h, &cells), (s4.0 / 4, s4.1 / 4), (g4.0 / 4, g4.1 / 4), &fast)?;
         }
     }
 
@@ -281,16 +364,7 @@ proptest! {
         let size = DVec2::new(f64::from(w), f64::from(h));
         let (from, to) = (DVec2::new(s.0, s.1) * size, DVec2::new(g.0, g.1) * size);
         let fast = anya(&planner, from, to);
-        let slow = if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
-            planner.graph_path(from, to)
-        } else {
-            planner.path(from, to)
-        };
-        match (&fast, &slow) {
-            (Ok(f), Ok(s)) => prop_assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m.max(1.0), "Anya {} vs graph {}: {:?} vs {:?}", f.length_m, s.length_m, f.waypoints, s.waypoints),
-            (Err(a), Err(b)) => prop_assert_eq!(a, b),
-            _ => prop_assert!(false, "Anya {fast:?} vs graph {slow:?}"),
-        }
+        agree(&planner, from, to, &fast, &reference(&planner, from, to))?;
     }
 
     /// The raster's word-at-a-time scans find what a cell-by-cell look finds.
@@ -328,7 +402,8 @@ proptest! {
 /// Issue 12, item 2: a point robot's query on a planner just built costs what the search
 /// sweeps, not a sight test per corner of the map. On a 96 × 96 map of 12-cell rooms with
 /// doors and pillars, 60 queries between cell centres link no corner at all (the visibility
-/// graph is never built), and give the visibility graph's lengths.
+/// graph is never built), and give the visibility graph's lengths (Anya asked directly, and
+/// `path` gives the same).
 #[test]
 fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
     let grid = Grid::new(DVec2::ZERO, 1.0, 96, 96).unwrap();
@@ -342,7 +417,7 @@ fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
         wall_x || wall_y || pillar
     });
     let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
-    let reference = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let reference_planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
     let mut state = 12u64;
     let mut next = |n: u32| {
         // A fixed linear congruential sequence: the same queries on every run.
@@ -355,49 +430,97 @@ fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
     for _ in 0..60 {
         let from = grid.cell_center(next(96), next(96));
         let to = grid.cell_center(next(96), next(96));
-        let fast = planner.path(from, to);
-        let slow =
-            if planner.is_leg_clear(from, from) && planner.is_leg_clear(to, to) && !planner.is_leg_clear(from, to) {
-                reference.graph_path(from, to)
-            } else {
-                reference.path(from, to)
-            };
-        match (&fast, &slow) {
-            (Ok(f), Ok(s)) => {
-                assert!((f.length_m - s.length_m).abs() <= 1e-9 * s.length_m, "{f:?} vs {s:?}");
-                found += 1;
-                bends += f.waypoints.len() - 2;
-            }
-            _ => assert_eq!(fast, slow),
+        let fast = anya(&planner, from, to);
+        assert_eq!(planner.path(from, to), fast);
+        agree(&planner, from, to, &fast, &reference(&reference_planner, from, to)).unwrap();
+        if let Ok(f) = &fast {
+            found += 1;
+            bends += f.waypoints.len() - 2;
         }
     }
     assert_eq!(planner.edge_count(), 0, "a point robot's queries linked corners");
-    assert!(reference.edge_count() > 0);
+    assert!(
+        planner.graph.get().is_none(),
+        "a point robot's queries built the visibility graph"
+    );
+    assert!(reference_planner.edge_count() > 0);
     // The queries are not trivial: most are answered, round many corners.
     assert!(found >= 40 && bends >= 100, "{found} paths, {bends} bends");
 }
 
 /// Point robots' planners accept maps with any number of corners (their searches link
-/// none); robots with a radius still refuse more than `MAX_VERTICES`.
+/// none, and no corner list is kept); the visibility graph they would fall back on refuses
+/// more than `MAX_VERTICES` (`Undecided`), as robots with a radius do at build.
 #[test]
 fn point_planners_take_maps_with_more_corners_than_the_graph_limit() {
-    // Isolated blocked cells every other cell: four convex corners each, 4 × 260² in all.
-    let grid = Grid::new(DVec2::ZERO, 1.0, 520, 520).unwrap();
-    let map = ObstacleMap::from_fn(grid, |x, y| x % 2 == 1 && y % 2 == 1);
+    // Pillars (single blocked cells) at odd columns and rows: four convex corners each.
+    let pillars = |n: u32| {
+        ObstacleMap::from_fn(Grid::new(DVec2::ZERO, 1.0, n, n).unwrap(), |x, y| {
+            x % 2 == 1 && y % 2 == 1
+        })
+    };
+    // From the map's corner (0, 0) to (n, n - 1), n even. The diagonal y = x - 1 runs
+    // through cells (k, k - 1), never a pillar, touching pillars only at their corners, and
+    // ends at the goal; the straight line from the start first meets it at (2, 1) (a steeper
+    // one enters pillar (1, 1)). So the optimum is √5 + (n - 2)√2, which the brute force
+    // confirms on small maps of the pattern.
+    let optimum = |n: u32| 5f64.sqrt() + f64::from(n - 2) * 2f64.sqrt();
+    for n in [4, 6, 8] {
+        let cells: Vec<bool> = (0..n * n).map(|i| (i % n) % 2 == 1 && (i / n) % 2 == 1).collect();
+        let best = shortest_length(
+            &blocked_fn(n, n, &cells),
+            i64::from(n),
+            i64::from(n),
+            (0, 0),
+            (i64::from(n), i64::from(n) - 1),
+        );
+        assert!(
+            (best.unwrap() - optimum(n)).abs() < 1e-12,
+            "{n}: {best:?} vs {}",
+            optimum(n)
+        );
+    }
+    let map = pillars(520);
     let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
     assert!(planner.vertex_count() > super::MAX_VERTICES);
-    // From a corner of the map to the far corner of the last free cell column: round the
-    // pillars (the diagonal runs through their corners, where two blocked cells touch).
     let (from, to) = (DVec2::new(0.0, 0.0), DVec2::new(520.0, 519.0));
-    let p = planner.path(from, to).unwrap();
+    let p = anya(&planner, from, to).unwrap();
+    assert_eq!(planner.path(from, to).as_ref(), Ok(&p));
     assert!(
-        p.length_m > from.distance(to) && p.length_m < 520.0 + 519.0,
-        "{}",
-        p.length_m
+        (p.length_m - optimum(520)).abs() < 1e-9,
+        "{} vs {}",
+        p.length_m,
+        optimum(520)
     );
-    for leg in p.waypoints.windows(2) {
-        assert!(planner.is_leg_clear(leg[0], leg[1]));
-    }
+    // To (2, 1), then along the diagonal (Anya may list corners it passes straight through).
+    assert_eq!(p.waypoints[1], DVec2::new(2.0, 1.0), "{:?}", p.waypoints);
+    assert!(
+        p.waypoints[1..].iter().map(|&w| lattice(w)).all(|(x, y)| x - y == 1),
+        "{:?}",
+        p.waypoints
+    );
+    // No corner list was kept, and the fallback refuses rather than link 269,361 corners.
+    assert!(planner.graph.get().is_none());
+    assert_eq!(planner.graph_path(from, to), Err(NoPath::Undecided(from, to)));
+    planner.link_all();
+    assert_eq!(planner.edge_count(), 0);
     let e = AnyAnglePlanner::build(&map, 0.1).unwrap_err().to_string();
     assert!(e.contains("corners"), "{e}");
+}
+
+/// A query's memory follows what it sweeps, not the map: a short query on a 2048² map (the
+/// old per-thread buffer: 16 bytes per lattice point, 67 MB) leaves a few kilobytes of
+/// scratch.
+#[test]
+fn a_query_on_a_large_map_keeps_little_scratch() {
+    let n = 2048;
+    let map = ObstacleMap::from_fn(Grid::new(DVec2::ZERO, 1.0, n, n).unwrap(), |x, y| {
+        x == 1000 && (990..1010).contains(&y)
+    });
+    let planner = AnyAnglePlanner::build(&map, 0.0).unwrap();
+    let (from, to) = (DVec2::new(995.5, 1000.5), DVec2::new(1005.5, 1000.5));
+    let p = anya(&planner, from, to).unwrap();
+    assert_eq!(p.waypoints.len(), 4, "over the wall's two top corners: {p:?}");
+    let bytes = super::anya::scratch_bytes();
+    assert!(bytes < 1 << 20, "{bytes} bytes of scratch");
 }
