@@ -253,6 +253,45 @@ fn results_do_not_depend_on_the_thread_count() {
     assert_ne!(a.0, b.0);
 }
 
+/// Issue 11: turns that depend on nobody, resolved in step 2 in parallel, give exactly the
+/// run that resolving every turn in id order gives: a crowd of random walkers that bump into
+/// each other, explorers that talk, and workers that dig and carry (every round's metrics,
+/// events and robot bits), on 2 threads.
+#[test]
+fn issue11_turns_resolved_alone_give_the_id_order_run() {
+    let treasures = vec![TreasureSpec {
+        position: DVec2::new(30.5, 30.5),
+        quantity: 3,
+    }];
+    let trace = |alone: bool| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        pool.install(|| {
+            let s = scenario(
+                rooms_map(treasures.clone()),
+                7,
+                200,
+                vec![
+                    (30, RobotType::explorer(), "random_walk"),
+                    (6, RobotType::explorer(), "cooperative"),
+                    (2, RobotType::excavator(), "excavator"),
+                    (2, RobotType::transporter(), "transporter"),
+                ],
+            );
+            let mut sim = new_sim(s, &StrategyRegistry::with_builtins())
+                .unwrap()
+                .with_turns_resolved_alone(alone);
+            let mut t = Trace::default();
+            run_checked(&mut sim, &mut [&mut t]);
+            t
+        })
+    };
+    let (alone, in_order) = (trace(true), trace(false));
+    assert_eq!(alone.0.len(), 200);
+    for (round, (a, b)) in alone.0.iter().zip(&in_order.0).enumerate() {
+        assert_eq!(a, b, "round {} differs", round + 1);
+    }
+}
+
 /// A strategy that always asks for the same action, and records what came of it.
 struct Cheat(fn(&Ctx) -> Action);
 

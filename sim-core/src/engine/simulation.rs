@@ -117,6 +117,8 @@ pub struct Simulation {
     pub(super) strategies_failed: u32,
     /// Decisions slower than this are reported (`None`: not timed).
     pub(super) decide_limit: Option<Duration>,
+    /// Turns that depend on nobody are resolved in step 2 (see `resolve_alone`).
+    pub(super) resolve_alone: bool,
     pub(super) rounds: u64,
     pub(super) round: u64,
     pub(super) map: Arc<MapData>,
@@ -255,6 +257,7 @@ impl Simulation {
             seed,
             strategies_failed: 0,
             decide_limit: Some(DEFAULT_DECIDE_LIMIT),
+            resolve_alone: true,
             phase_times: PhaseTimes::default(),
             rounds,
             round: 0,
@@ -313,6 +316,15 @@ impl Simulation {
     /// ten milliseconds are approximate.
     pub fn with_decide_limit(mut self, limit: Option<Duration>) -> Self {
         self.decide_limit = limit;
+        self
+    }
+
+    /// Whether a robot whose turn depends on no other robot (idle, or moving with nobody
+    /// within reach; no messages, no treasure, no energy running out) has its turn resolved
+    /// in step 2, in parallel, instead of in step 3's pass in id order. Default: `true`.
+    /// Results are the same either way (`false` is there to check that, and to profile).
+    pub fn with_turns_resolved_alone(mut self, enabled: bool) -> Self {
+        self.resolve_alone = enabled;
         self
     }
 

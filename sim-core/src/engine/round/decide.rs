@@ -37,6 +37,7 @@ impl Simulation {
         let robot_index = self.robot_index_eager.then_some(&self.robot_index);
         let radio_limited = self.radio_limited;
         let home = self.map.home;
+        let alone_allowed = self.resolve_alone;
         let pending = AtomicBool::new(false);
         self.agents
             .par_iter_mut()
@@ -92,7 +93,7 @@ impl Simulation {
                             // Step 3 for a robot whose turn depends on nobody, while its data
                             // are at hand (issue 11: a pass of its own over every robot, or
                             // step 3's sequential loop, cost more than the turns).
-                            turn.alone = resolve_alone(robot, agent, kind, &home);
+                            turn.alone = alone_allowed && resolve_alone(robot, agent, kind, &home);
                         }
                         Err(payload) => {
                             agent.action = Action::Idle;
