@@ -110,6 +110,7 @@ pub(super) struct Outgoing {
 
 /// A running simulation. Its state changes only through its own methods (set-up here, the
 /// round steps in `round/`).
+#[allow(clippy::struct_excessive_bools)] // Independent settings and facts of a run, each read by its own step.
 pub struct Simulation {
     pub(super) name: String,
     pub(super) seed: u64,
