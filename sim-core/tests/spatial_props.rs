@@ -761,7 +761,7 @@ proptest! {
     fn classify_cells_agrees_with_classify_cell_by_cell(
         seed in any::<u64>(),
         cell_m in 0.05f64..5.0,
-        kind in 0usize..7,
+        kind in 0usize..9,
     ) {
         use sim_core::spatial::{BlockCells, CellMasks, Clipped, DiscBeyond};
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -786,6 +786,10 @@ proptest! {
             // A robot's move (short, a small radius) and a segment.
             5 => Box::new(Capsule { a: p, b: p + (q - p) * 0.1, radius: r * 0.2 }),
             6 => Box::new(Capsule { a: snapped, b: q, radius: 0.0 }),
+            // Issue 12: a route's shortcut (a long slanting leg), and one nearly level, whose
+            // rows are bounded without dividing by its rise.
+            7 => Box::new(Capsule { a: p, b: q, radius: r * 0.3 }),
+            8 => Box::new(Capsule { a: snapped, b: DVec2::new(q.x, snapped.y + (q.y - p.y) * 1e-5), radius: r * 0.3 }),
             _ => Box::new(Clipped { shape: disc, clip: Aabb { min: p.min(q), max: p.max(q) } }),
         };
         let got = shape.classify_cells(&cells).expect("this shape classifies cells at once");

@@ -22,7 +22,7 @@ pub use geometry::{
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
-pub use nav::{Frontier, LazyNavGraph, NavGraph, NavNodeId, Piece, Route, Terrain};
+pub use nav::{Frontier, LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
 pub use obstacle_map::ObstacleMap;
 pub use quadtree::{BitGrid, CellSet, Components, PartialCells, Region, RegionQuadtree, Square};
 pub use robot_index::RobotIndex;

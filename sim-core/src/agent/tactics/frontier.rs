@@ -6,6 +6,7 @@ use super::Tactic;
 use super::navigator::Navigator;
 use crate::agent::ctx::Ctx;
 use crate::agent::strategy::Needs;
+use crate::spatial::PieceMemo;
 use crate::world::Action;
 
 /// Walks to the nearest frontier (by route: known free space bordering the unknown) and
@@ -17,6 +18,9 @@ pub struct FrontierSeeking {
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
     failed_at: Option<u64>,
+    /// What the searches learnt of this robot's map (worked out again after a restore).
+    #[serde(skip)]
+    memo: PieceMemo,
 }
 
 impl FrontierSeeking {
@@ -40,8 +44,9 @@ impl FrontierSeeking {
             .is_none_or(|t| ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < 0.5 * ctx.kind.view_radius_m);
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            if let Some(route) = Navigator::frontier_route(ctx, None, &avoid(), avoid_radius_m)
-                .or_else(|| Navigator::frontier_route(ctx, None, &[], 0.0))
+            let memo = &mut self.memo;
+            if let Some(route) = Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m)
+                .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0))
             {
                 self.target = route.waypoints.last().copied();
                 self.nav.follow(route);

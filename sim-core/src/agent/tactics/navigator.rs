@@ -6,7 +6,7 @@ use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, Route, Shape};
+use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -101,6 +101,19 @@ impl Navigator {
         avoid: &[DVec2],
         avoid_radius_m: f64,
     ) -> Option<Route> {
+        Self::frontier_route_memo(ctx, &mut PieceMemo::default(), frontier, avoid, avoid_radius_m)
+    }
+
+    /// [`frontier_route`](Self::frontier_route) that remembers, in `memo`, which pieces the
+    /// robot's known map touches and covers (a strategy keeps one per robot: its next
+    /// search asks about much the same pieces). The route is the same.
+    pub fn frontier_route_memo(
+        ctx: &Ctx,
+        memo: &mut PieceMemo,
+        frontier: Option<&Frontier>,
+        avoid: &[DVec2],
+        avoid_radius_m: f64,
+    ) -> Option<Route> {
         let terrain = ctx.terrain()?;
         let known = terrain.known;
         let nav = ctx.nav();
@@ -109,9 +122,10 @@ impl Navigator {
         let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
         // The goal test of a node asks its neighbours whether the known map touches them,
         // and the search asks again right after, when it expands the node: the answers are
-        // kept in between (each is a descent of the known map's tree).
+        // kept in between (a "no" is not in the memo).
         let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
-        let touches = |m: NavNodeId| nav.touched_by(known, m);
+        let memo = RefCell::new(memo);
+        let touches = |m: NavNodeId| memo.borrow_mut().touched(nav, known, m);
         nav.search(
             p,
             terrain,
@@ -124,7 +138,7 @@ impl Navigator {
                 if frontier.is_some_and(|f| !f.contains(n)) {
                     return None;
                 }
-                if !nav.covered_by(known, n) {
+                if !memo.borrow_mut().covered(nav, known, n) {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
                 let mut cache = touched.borrow_mut();

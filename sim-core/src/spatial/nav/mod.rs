@@ -21,10 +21,12 @@ use crate::spatial::quadtree::Square;
 
 mod frontier;
 mod funnel;
+mod memo;
 mod pieces;
 
 pub use frontier::Frontier;
 use funnel::Portal;
+pub use memo::PieceMemo;
 pub use pieces::Piece;
 
 /// A node of the navigation graph (a piece of free space).

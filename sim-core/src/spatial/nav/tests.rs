@@ -341,6 +341,65 @@ fn issue12_incremental_frontier_equals_from_scratch() {
     }
 }
 
+/// Issue 12: a robot's memo of touched and covered pieces answers exactly as its map does,
+/// while the map grows by views, marks and merges, with more pieces than the memo has
+/// slots, each asked several times between changes.
+#[test]
+fn issue12_piece_memo_answers_as_the_map_does() {
+    use rand::{Rng, SeedableRng};
+    for seed in 0..8u64 {
+        let mut memo = PieceMemo::default();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let (w, h) = (rng.random_range(70..120u32), rng.random_range(70..120u32));
+        let grid = Grid::new(DVec2::ZERO, 1.0, w, h).unwrap();
+        let density = rng.random_range(0.05..0.3);
+        let map = ObstacleMap::from_fn(grid, |_, _| rng.random_bool(density));
+        let g = NavGraph::build(&map);
+        let mut known = KnownMap::new(grid);
+        let point = |rng: &mut rand_chacha::ChaCha8Rng| {
+            DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)))
+        };
+        let (mut asked, mut yes) = (0, 0);
+        for step in 0..80 {
+            match rng.random_range(0..4) {
+                0 | 1 => {
+                    known.mark_view(point(&mut rng), rng.random_range(1.0..6.0));
+                }
+                2 => {
+                    let (a, b) = (point(&mut rng), point(&mut rng));
+                    known.mark(&Aabb::from_corners(a.min(b), a.max(b)));
+                }
+                _ => {
+                    let mut other = KnownMap::new(grid);
+                    other.mark_view(point(&mut rng), rng.random_range(2.0..10.0));
+                    known.merge(&other);
+                }
+            }
+            for _ in 0..3 {
+                for _ in 0..200 {
+                    let n = NavNodeId(rng.random_range(0..g.len() as u32));
+                    let (touched, covered) = (g.touched_by(&known, n), g.covered_by(&known, n));
+                    if rng.random_bool(0.5) {
+                        assert_eq!(memo.touched(&g, &known, n), touched, "seed {seed}, step {step}, {n:?}");
+                        assert_eq!(memo.covered(&g, &known, n), covered, "seed {seed}, step {step}, {n:?}");
+                    } else {
+                        assert_eq!(memo.covered(&g, &known, n), covered, "seed {seed}, step {step}, {n:?}");
+                        assert_eq!(memo.touched(&g, &known, n), touched, "seed {seed}, step {step}, {n:?}");
+                    }
+                    asked += 1;
+                    yes += usize::from(touched) + usize::from(covered);
+                }
+            }
+        }
+        // Both answers came up often, so both kinds of fact were kept and read.
+        let no = 2 * asked - yes;
+        assert!(
+            g.len() > 512 && yes > asked / 5 && no > asked / 5,
+            "seed {seed}: {yes} yes, {no} no"
+        );
+    }
+}
+
 /// Issue 12, item 1: planning optimistically through unknown space. 30 × 20 with a wall at
 /// x = 15 from the bottom up to y = 17 (a gap above it); the robot at (3, 3.5) has seen only
 /// a disc of 5 m around itself, the goal is at (27, 3.5) beyond the wall.
