@@ -41,32 +41,80 @@ fn merge_claims(claims: &[(u32, DVec2, u32)], updates: &[Update], round: u32, ou
 /// in id order. Claims were heard in the last 60 rounds (older ones are forgotten every
 /// 10), so the cut is found by counting claims per round heard, without sorting.
 fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
-    if claims.len() <= max {
-        return;
+    if let Some(mut keep) = newest_cut(claims, max, round) {
+        claims.retain(|c| keep.keeps(c));
     }
-    let age = |heard: u32| (round.saturating_sub(u64::from(heard))).min(63) as usize;
+}
+
+/// [`keep_newest`] of `claims`, written into `out` (its capacity fitted to what is kept):
+/// the merged claims are cut while they are copied back (issue 12: a copy, then a pass to
+/// count and a pass to cut the robot's own list, were a tenth of `bench-1000`).
+fn keep_newest_into(claims: &[(u32, DVec2, u32)], max: usize, round: u64, out: &mut Claims) {
+    out.clear();
+    match newest_cut(claims, max, round) {
+        None => {
+            out.reserve_exact(claims.len());
+            out.extend_from_slice(claims);
+        }
+        Some(mut keep) => {
+            out.reserve_exact(max);
+            out.extend(claims.iter().filter(|c| keep.keeps(c)));
+        }
+    }
+}
+
+/// Which claims [`keep_newest`] keeps: those heard less than `cut` rounds ago, and the
+/// first `room` (in id order) of those heard `cut` rounds ago (63: that long or longer).
+struct NewestCut {
+    round: u64,
+    cut: usize,
+    room: usize,
+}
+
+impl NewestCut {
+    fn age(&self, heard: u32) -> usize {
+        (self.round.saturating_sub(u64::from(heard))).min(63) as usize
+    }
+
+    /// Whether claim `c` is kept (called once per claim, in id order).
+    #[inline]
+    fn keeps(&mut self, c: &(u32, DVec2, u32)) -> bool {
+        // `age < cut` without the clamp (the cut is at most 63).
+        if self.round.saturating_sub(u64::from(c.2)) < self.cut as u64 {
+            return true;
+        }
+        if self.room > 0 && self.age(c.2) == self.cut {
+            self.room -= 1;
+            return true;
+        }
+        false
+    }
+}
+
+/// The cut of [`keep_newest`], or `None` if all `claims` fit in `max`.
+fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<NewestCut> {
+    if claims.len() <= max {
+        return None;
+    }
+    let mut keep = NewestCut {
+        round,
+        cut: 63,
+        room: 0,
+    };
     let mut per_age = [0usize; 64];
-    for c in claims.iter() {
-        per_age[age(c.2)] += 1;
+    for c in claims {
+        per_age[keep.age(c.2)] += 1;
     }
     // The oldest age kept, and how many claims of that age fit.
-    let (mut cut, mut room) = (63, 0);
     let mut kept = 0;
     for (a, &n) in per_age.iter().enumerate() {
         if kept + n >= max {
-            (cut, room) = (a, max - kept);
+            (keep.cut, keep.room) = (a, max - kept);
             break;
         }
         kept += n;
     }
-    claims.retain(|c| match age(c.2).cmp(&cut) {
-        std::cmp::Ordering::Less => true,
-        std::cmp::Ordering::Equal if room > 0 => {
-            room -= 1;
-            true
-        }
-        _ => false,
-    });
+    Some(keep)
 }
 
 /// A round as a claim keeps it (see [`Claims`]).
@@ -145,9 +193,14 @@ impl Strategy for Frontier {
                         updates.sort_by_key(|u| u.0);
                     }
                     merge_claims(&self.claims, updates, heard_in(round), merged);
-                    self.claims.clear();
-                    self.claims.reserve_exact(merged.len());
-                    self.claims.extend_from_slice(merged);
+                    if round.is_multiple_of(10) {
+                        // Old and far claims are forgotten before the cut (below).
+                        self.claims.clear();
+                        self.claims.reserve_exact(merged.len());
+                        self.claims.extend_from_slice(merged);
+                    } else {
+                        keep_newest_into(merged, share.max_claims, round, &mut self.claims);
+                    }
                 }
             });
             if round.is_multiple_of(10) {
@@ -181,7 +234,7 @@ mod tests {
     use glam::DVec2;
     use proptest::prelude::*;
 
-    use super::{Update, keep_newest, merge_claims};
+    use super::{Update, keep_newest, keep_newest_into, merge_claims};
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(3), ..ProptestConfig::default() })]
@@ -221,8 +274,12 @@ mod tests {
             by_recency.sort_by_key(|c| (std::cmp::Reverse(c.2), c.0));
             by_recency.truncate(max);
             by_recency.sort_by_key(|c| c.0);
+            let mut copied = Vec::new();
+            keep_newest_into(&claims, max, round, &mut copied);
             keep_newest(&mut claims, max, round);
-            prop_assert_eq!(claims, by_recency);
+            prop_assert_eq!(&claims, &by_recency);
+            // Issue 12: cut while copied, the same claims.
+            prop_assert_eq!(copied, by_recency);
         }
     }
 }
