@@ -58,7 +58,11 @@ fn keep_newest_into(claims: &[(u32, DVec2, u32)], max: usize, round: u64, out: &
         }
         Some(mut keep) => {
             out.reserve_exact(max);
-            out.extend(claims.iter().filter(|c| keep.keeps(c)));
+            for c in claims {
+                if keep.keeps(c) {
+                    out.push(*c);
+                }
+            }
         }
     }
 }
@@ -69,6 +73,8 @@ struct NewestCut {
     round: u64,
     cut: usize,
     room: usize,
+    /// `round - cut`: claims heard later are kept.
+    newer_than: i64,
 }
 
 impl NewestCut {
@@ -79,8 +85,8 @@ impl NewestCut {
     /// Whether claim `c` is kept (called once per claim, in id order).
     #[inline]
     fn keeps(&mut self, c: &(u32, DVec2, u32)) -> bool {
-        // `age < cut` without the clamp (the cut is at most 63).
-        if self.round.saturating_sub(u64::from(c.2)) < self.cut as u64 {
+        // `age < cut`: heard after `round - cut` (the cut is at most 63, below the clamp).
+        if i64::from(c.2) > self.newer_than {
             return true;
         }
         if self.room > 0 && self.age(c.2) == self.cut {
@@ -100,6 +106,7 @@ fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<Ne
         round,
         cut: 63,
         room: 0,
+        newer_than: 0,
     };
     let mut per_age = [0usize; 64];
     for c in claims {
@@ -114,6 +121,7 @@ fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<Ne
         }
         kept += n;
     }
+    keep.newer_than = i64::try_from(round).unwrap_or(i64::MAX) - keep.cut as i64;
     Some(keep)
 }
 
