@@ -201,7 +201,10 @@ impl Simulation {
         };
         let mut step = d;
         let mut tries = 0;
-        while step.length() > 1e-9 && self.overlaps_any(&near, from + step, kind.radius_m) {
+        // The robot in the way of one halving is mostly in the way of the next: it is asked
+        // first (whether anyone overlaps does not depend on the order asked).
+        let mut blocker = 0;
+        while step.length() > 1e-9 && self.overlaps_any(&near, from + step, kind.radius_m, &mut blocker) {
             step *= 0.5;
             tries += 1;
             if tries > 8 {
@@ -229,13 +232,24 @@ impl Simulation {
         Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m)
     }
 
-    /// Whether a disc at `p` would overlap one of `near` where it stands now.
-    fn overlaps_any(&self, near: &[u32], p: DVec2, radius: f64) -> bool {
-        near.iter().any(|&j| {
+    /// Whether a disc at `p` would overlap one of `near` where it stands now; `near[first]`
+    /// is asked first, and `first` is left at the one found.
+    fn overlaps_any(&self, near: &[u32], p: DVec2, radius: f64, first: &mut usize) -> bool {
+        let overlaps = |j: u32| {
             let other = &self.robots[j as usize];
             let rr = radius + self.types[other.type_index].radius_m;
             other.position.distance_squared(p) < rr * rr
-        })
+        };
+        if near.get(*first).is_some_and(|&j| overlaps(j)) {
+            return true;
+        }
+        match near.iter().position(|&j| overlaps(j)) {
+            Some(k) => {
+                *first = k;
+                true
+            }
+            None => false,
+        }
     }
 
     /// Address a message to the robots in range at send time (start-of-round positions).
