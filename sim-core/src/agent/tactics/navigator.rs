@@ -6,7 +6,7 @@ use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape};
+use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -160,26 +160,95 @@ impl Navigator {
     }
 }
 
-/// The unknown point of `area` nearest to `p`, nudged a little into the unknown cell.
+/// The unknown point of `area` nearest to `p`, nudged a little into the unknown cell: of
+/// the unknown leaves in `area`, the first (in the tree's walk order) whose point is
+/// nearest.
+///
+/// The walk prunes boxes farther than the best point found so far, but it goes in the
+/// tree's order, not outward from `p`: in a large piece most of the walk came before a
+/// near point was found (issue 11: two thirds of the paper-scale frontier searches). So a
+/// first point is looked for near `p` (in growing squares round the point of `area`
+/// nearest to `p`), and the whole walk starts from it, taking a later leaf at the same
+/// distance only where the first walk would have: before it reaches the leaf that point
+/// came from.
 fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
     let cell = known.grid().cell_m();
+    // Small areas are walked whole at once: a first look round `p` would cost about as much.
+    if (area.max - area.min).max_element() <= 32.0 * cell {
+        return nearest_unknown_within(known, area, area, p).map(|f| f.1);
+    }
+    let c = p.clamp(area.min, area.max);
+    let mut half = 4.0 * cell;
+    loop {
+        let near = Aabb {
+            min: (c - DVec2::splat(half)).max(area.min),
+            max: (c + DVec2::splat(half)).min(area.max),
+        };
+        let whole = near.min == area.min && near.max == area.max;
+        match nearest_unknown_within(known, area, &near, p) {
+            // The walk over all of `area` is the answer itself.
+            found if whole => return found.map(|f| f.1),
+            Some(seed) => return Some(nearest_unknown_from(known, area, p, seed)),
+            None => half *= 8.0,
+        }
+    }
+}
+
+/// The point (as [`nearest_unknown`] places it in `area`) of the unknown leaf meeting
+/// `within` (a part of `area`) that is nearest to `p`, the first in the walk's order of
+/// those as near, with its leaf and squared distance.
+fn nearest_unknown_within(known: &KnownMap, area: &Aabb, within: &Aabb, p: DVec2) -> Option<(Square, DVec2, f64)> {
     let best_d = Cell::new(f64::INFINITY);
-    let mut best: Option<DVec2> = None;
+    let mut best: Option<(Square, DVec2)> = None;
+    let pruned = NearerThan {
+        area: *within,
+        p,
+        best: &best_d,
+    };
+    let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
+        let q = unknown_point(known, area, &b, p);
+        let d = q.distance_squared(p);
+        if d < best_d.get() {
+            best_d.set(d);
+            best = Some((sq, q));
+        }
+        std::ops::ControlFlow::Continue(())
+    });
+    best.map(|(sq, q)| (sq, q, best_d.get()))
+}
+
+/// The point of leaf `b`'s part in `area` nearest to `p`, a little inside it (so that
+/// reaching it reveals it).
+fn unknown_point(known: &KnownMap, area: &Aabb, b: &Aabb, p: DVec2) -> DVec2 {
+    let lo = b.min.max(area.min);
+    let hi = b.max.min(area.max);
+    let inset = DVec2::splat((0.5 * known.grid().cell_m()).min(0.5 * (hi - lo).min_element()));
+    p.clamp(lo + inset, hi - inset)
+}
+
+/// The whole walk of [`nearest_unknown`] over `area`, pruned from the start by `seed` (a
+/// leaf's point and squared distance, as [`nearest_unknown_within`] gives).
+fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, DVec2, f64)) -> DVec2 {
+    let (seed_square, seed_point, seed_d) = seed;
+    let best_d = Cell::new(seed_d);
+    let (mut best, mut best_is_seed, mut passed_seed) = (seed_point, true, false);
     let pruned = NearerThan {
         area: *area,
         p,
         best: &best_d,
     };
-    let _ = known.tree().visit_leaves_in(&pruned, false, |_, b| {
-        let lo = b.min.max(area.min);
-        let hi = b.max.min(area.max);
-        // Aim a little inside the unknown box so reaching it reveals it.
-        let inset = DVec2::splat((0.5 * cell).min(0.5 * (hi - lo).min_element()));
-        let q = p.clamp(lo + inset, hi - inset);
+    let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
+        if sq == seed_square {
+            passed_seed = true;
+            return std::ops::ControlFlow::Continue(());
+        }
+        let q = unknown_point(known, area, &b, p);
         let d = q.distance_squared(p);
-        if d < best_d.get() {
+        // A tie goes to the leaf the walk reaches first: this one, if the walk has not
+        // reached the seed's leaf yet.
+        if d < best_d.get() || (d == best_d.get() && best_is_seed && !passed_seed) {
             best_d.set(d);
-            best = Some(q);
+            (best, best_is_seed) = (q, false);
         }
         std::ops::ControlFlow::Continue(())
     });
@@ -222,5 +291,134 @@ impl Shape for NearerThan<'_> {
 
     fn bounds(&self) -> Aabb {
         self.area
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec2;
+    use rand::{Rng, SeedableRng};
+
+    use super::{nearest_unknown, nearest_unknown_from, unknown_point};
+    use crate::spatial::{Aabb, Grid, KnownMap};
+
+    /// Every unknown leaf meeting `area`, no pruning: a point nearest (the first in this
+    /// walk's order, which is not the pruned walk's), and how many leaves' points are that
+    /// near.
+    fn brute_force(known: &KnownMap, area: &Aabb, p: DVec2) -> (Option<DVec2>, usize) {
+        let cell = known.grid().cell_m();
+        let mut points = Vec::new();
+        let _ = known.tree().visit_leaves_in(area, false, |_, b| {
+            let (lo, hi) = (b.min.max(area.min), b.max.min(area.max));
+            let inset = DVec2::splat((0.5 * cell).min(0.5 * (hi - lo).min_element()));
+            let q = p.clamp(lo + inset, hi - inset);
+            points.push((q, q.distance_squared(p)));
+            std::ops::ControlFlow::Continue(())
+        });
+        let min = points.iter().map(|e| e.1).fold(f64::INFINITY, f64::min);
+        let first = points.iter().find(|e| e.1 == min).map(|e| e.0);
+        (first, points.iter().filter(|e| e.1 == min).count())
+    }
+
+    /// The walk as it was before issue 11's first point: one pruned walk from nothing.
+    fn one_walk(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
+        let cell = known.grid().cell_m();
+        let best_d = std::cell::Cell::new(f64::INFINITY);
+        let mut best = None;
+        let pruned = super::NearerThan {
+            area: *area,
+            p,
+            best: &best_d,
+        };
+        let _ = known.tree().visit_leaves_in(&pruned, false, |_, b| {
+            let (lo, hi) = (b.min.max(area.min), b.max.min(area.max));
+            let inset = DVec2::splat((0.5 * cell).min(0.5 * (hi - lo).min_element()));
+            let q = p.clamp(lo + inset, hi - inset);
+            let d = q.distance_squared(p);
+            if d < best_d.get() {
+                best_d.set(d);
+                best = Some(q);
+            }
+            std::ops::ControlFlow::Continue(())
+        });
+        best
+    }
+
+    /// Issue 11: the nearest unknown point found from a first point near the robot is the
+    /// one a whole walk finds (and as near as any, by brute force), ties included (robots and areas on whole and half cells, so
+    /// that points at equal distances come up), on maps known in patches of every size.
+    #[test]
+    fn issue11_nearest_unknown_equals_a_whole_walk() {
+        let (mut ties, mut found, mut tie_seeds) = (0, 0, 0);
+        for seed in 0..40u64 {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+            let side = [64u32, 128, 256][seed as usize % 3];
+            let grid = Grid::new(DVec2::ZERO, 1.0, side, side).unwrap();
+            let s = f64::from(side);
+            let mut known = KnownMap::new(grid);
+            for _ in 0..rng.random_range(0..40) {
+                let c = DVec2::new(rng.random_range(0.0..s), rng.random_range(0.0..s));
+                if rng.random_bool(0.5) {
+                    known.mark_view(c, rng.random_range(1.0..20.0));
+                } else {
+                    let e = DVec2::new(rng.random_range(1.0..40.0), rng.random_range(1.0..40.0));
+                    known.mark(&Aabb {
+                        min: c,
+                        max: (c + e).min(DVec2::splat(s)),
+                    });
+                }
+            }
+            let half = |rng: &mut rand_chacha::ChaCha8Rng| f64::from(rng.random_range(0..2 * side)) * 0.5;
+            for _ in 0..200 {
+                let (a, b) = (
+                    DVec2::new(half(&mut rng), half(&mut rng)),
+                    DVec2::new(half(&mut rng), half(&mut rng)),
+                );
+                let area = Aabb {
+                    min: a.min(b),
+                    max: a.max(b).max(a.min(b) + 0.5),
+                };
+                let p = if rng.random_bool(0.5) {
+                    DVec2::new(half(&mut rng), half(&mut rng))
+                } else {
+                    DVec2::new(rng.random_range(-10.0..s + 10.0), rng.random_range(-10.0..s + 10.0))
+                };
+                let (any, nearest) = brute_force(&known, &area, p);
+                let want = one_walk(&known, &area, p);
+                assert_eq!(want.is_some(), any.is_some());
+                if let (Some(w), Some(a)) = (want, any) {
+                    assert_eq!(
+                        w.distance_squared(p),
+                        a.distance_squared(p),
+                        "seed {seed}: a nearest point"
+                    );
+                }
+                assert_eq!(nearest_unknown(&known, &area, p), want, "seed {seed}, {area:?}, {p}");
+                // Whatever leaf the first point comes from, the whole walk ends the same;
+                // leaves as near as the answer (ties) in particular.
+                let mut leaves = Vec::new();
+                let _ = known.tree().visit_leaves_in(&area, false, |sq, b| {
+                    leaves.push((sq, b));
+                    std::ops::ControlFlow::Continue(())
+                });
+                let nearest_d = want.map(|w| w.distance_squared(p));
+                for (sq, b) in leaves {
+                    let q = unknown_point(&known, &area, &b, p);
+                    if Some(q.distance_squared(p)) != nearest_d && !rng.random_bool(0.2) {
+                        continue;
+                    }
+                    let got = nearest_unknown_from(&known, &area, p, (sq, q, q.distance_squared(p)));
+                    assert_eq!(Some(got), want, "seed {seed}, {area:?}, {p}, first point from {sq:?}");
+                    tie_seeds +=
+                        usize::from(want.is_some_and(|w| w != q && w.distance_squared(p) == q.distance_squared(p)));
+                }
+                found += usize::from(want.is_some());
+                ties += usize::from(nearest > 1);
+            }
+        }
+        assert!(
+            found > 4000 && ties > 50 && tie_seeds > 50,
+            "{found} found, {ties} ties, {tie_seeds} tied first points"
+        );
     }
 }
