@@ -228,6 +228,7 @@ fn unknown_point(known: &KnownMap, area: &Aabb, b: &Aabb, p: DVec2) -> DVec2 {
 
 /// The whole walk of [`nearest_unknown`] over `area`, pruned from the start by `seed` (a
 /// leaf's point and squared distance, as [`nearest_unknown_within`] gives).
+#[allow(clippy::float_cmp)] // ties are exactly equal distances, as the whole walk sees them
 fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, DVec2, f64)) -> DVec2 {
     let (seed_square, seed_point, seed_d) = seed;
     let best_d = Cell::new(seed_d);
@@ -295,6 +296,7 @@ impl Shape for NearerThan<'_> {
 }
 
 #[cfg(test)]
+#[allow(clippy::float_cmp)] // nearest means exactly as near
 mod tests {
     use glam::DVec2;
     use rand::{Rng, SeedableRng};
