@@ -593,30 +593,80 @@ proptest! {
     }
 
     #[test]
-    fn robot_index_matches_brute_force(seed in any::<u64>(), n in 0usize..400, cell in 0.2f64..30.0, dense in any::<bool>()) {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        // From robots sharing a few cells (laid out densely when allowed) to robots spread
-        // over thousands of cells each (hashed).
-        let spread = rng.random_range(0.1..5_000.0);
-        let robots: Vec<(RobotId, DVec2)> = (0..n)
-            .map(|i| (RobotId::new(i as u32), DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread))))
-            .collect();
-        let mut index = if dense { RobotIndex::dense_when_compact() } else { RobotIndex::new() };
-        // Rebuilt twice, as every round does, to catch stale state.
-        index.rebuild(robots.iter().rev().copied(), cell * 2.0);
-        index.rebuild(robots.iter().copied(), cell);
-        prop_assert_eq!(index.len(), n);
-        for _ in 0..20 {
-            let p = DVec2::new(rng.random_range(-spread..spread), rng.random_range(-spread..spread));
-            let r = rng.random_range(0.0..spread);
-            let mut got = Vec::new();
-            index.for_each_within(p, r, |id, q| got.push((id, q.x.to_bits(), q.y.to_bits())));
-            got.sort();
-            let want: Vec<_> = robots.iter().filter(|(_, q)| q.distance_squared(p) <= r * r)
-                .map(|(id, q)| (*id, q.x.to_bits(), q.y.to_bits())).collect();
-            prop_assert_eq!(got, want);
-        }
+    fn robot_index_matches_brute_force(seed in any::<u64>(), n in 0usize..400, cell in 0.2f64..30.0, dense in any::<bool>(), lattice in any::<bool>()) {
+        robot_index_against_brute_force(seed, n, cell, dense, lattice)?;
     }
+}
+
+/// Robots in a random index, queried at random discs, against a scan of them all.
+fn robot_index_against_brute_force(
+    seed: u64,
+    n: usize,
+    cell: f64,
+    dense: bool,
+    lattice: bool,
+) -> Result<(), TestCaseError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // From robots sharing a few cells (laid out densely when allowed) to robots spread
+    // over thousands of cells each (hashed).
+    let spread = rng.random_range(0.1..5_000.0);
+    // On a lattice of half cells, robots, query centres and radii meet cell edges and
+    // disc rims exactly.
+    let snap = |v: f64| {
+        if lattice {
+            (v / (0.5 * cell)).round() * 0.5 * cell
+        } else {
+            v
+        }
+    };
+    let robots: Vec<(RobotId, DVec2)> = (0..n)
+        .map(|i| {
+            (
+                RobotId::new(i as u32),
+                DVec2::new(
+                    snap(rng.random_range(-spread..spread)),
+                    snap(rng.random_range(-spread..spread)),
+                ),
+            )
+        })
+        .collect();
+    let mut index = if dense {
+        RobotIndex::dense_when_compact()
+    } else {
+        RobotIndex::new()
+    };
+    // Rebuilt twice, as every round does, to catch stale state.
+    index.rebuild(robots.iter().rev().copied(), cell * 2.0);
+    index.rebuild(robots.iter().copied(), cell);
+    prop_assert_eq!(index.len(), n);
+    for _ in 0..20 {
+        let p = DVec2::new(
+            snap(rng.random_range(-spread..spread)),
+            snap(rng.random_range(-spread..spread)),
+        );
+        let r = if rng.random_bool(0.5) {
+            snap(rng.random_range(0.0..spread))
+        } else {
+            rng.random_range(0.0..4.0 * cell)
+        };
+        let mut got = Vec::new();
+        index.for_each_within(p, r, |id, q| got.push((id, q.x.to_bits(), q.y.to_bits())));
+        got.sort();
+        let want: Vec<_> = robots
+            .iter()
+            .filter(|(_, q)| q.distance_squared(p) <= r * r)
+            .map(|(id, q)| (*id, q.x.to_bits(), q.y.to_bits()))
+            .collect();
+        prop_assert_eq!(got, want);
+    }
+    Ok(())
+}
+
+/// Issue 11: a robot exactly on a query's rim (within it by the distance test's rounding)
+/// but an ulp beyond the disc's box as computed was missed (found by the lattice case).
+#[test]
+fn issue11_a_robot_on_the_rim_is_found() {
+    robot_index_against_brute_force(5_754_087_576_751_234_071, 101, 24.885_231_390_557_37, false, true).unwrap();
 }
 
 #[test]

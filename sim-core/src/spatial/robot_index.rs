@@ -191,8 +191,11 @@ impl RobotIndex {
         mut visit: impl FnMut(RobotId, DVec2) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
         let r2 = radius_m * radius_m;
-        let (x0, y0) = self.cell_of(p - DVec2::splat(radius_m));
-        let (x1, y1) = self.cell_of(p + DVec2::splat(radius_m));
+        // The cells of the disc's box, a little wide: a robot on the rim passes the distance
+        // test below by rounding, yet may lie an ulp beyond `p + r` as computed.
+        let slack = 1e-9 * (p.abs().max_element() + radius_m + self.cell_m);
+        let (x0, y0) = self.cell_of(p - DVec2::splat(radius_m + slack));
+        let (x1, y1) = self.cell_of(p + DVec2::splat(radius_m + slack));
         let cells = (i64::from(x1) - i64::from(x0) + 1) * (i64::from(y1) - i64::from(y0) + 1);
         if cells > self.entries.len() as i64 {
             // A disc wider than the swarm's spread: a scan is cheaper than the cells.
