@@ -16,6 +16,9 @@ type Update = (u32, Option<DVec2>);
 
 /// `claims` with `updates` applied (both sorted by robot id; of a robot's updates the
 /// last counts), into `out`, by one merge of the two lists.
+// Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
+// instructions (callgrind, bench-1000).
+#[inline(never)]
 fn merge_claims(claims: &[(u32, DVec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();
     let mut i = 0;
@@ -49,6 +52,7 @@ fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
 /// [`keep_newest`] of `claims`, written into `out` (its capacity fitted to what is kept):
 /// the merged claims are cut while they are copied back (issue 12: a copy, then a pass to
 /// count and a pass to cut the robot's own list, were a tenth of `bench-1000`).
+#[inline(never)]
 fn keep_newest_into(claims: &[(u32, DVec2, u32)], max: usize, round: u64, out: &mut Claims) {
     out.clear();
     match newest_cut(claims, max, round) {
