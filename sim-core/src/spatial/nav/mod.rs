@@ -178,7 +178,9 @@ impl Terrain<'_> {
             b,
             radius: self.radius_m,
         };
-        self.known.tree().all_in(&swept, true) && self.leg_clear(a, b)
+        // The obstacle test first: it is cheaper, and it fails often enough that corner
+        // cuts cost a third less (callgrind: bench-1000 and the kernel bench's scenario).
+        self.leg_clear(a, b) && self.known.tree().all_in(&swept, true)
     }
 }
 
