@@ -86,12 +86,17 @@ impl Simulation {
 
     /// Charge energy; a robot that runs dry is disabled for good.
     fn spend(&mut self, i: usize, amount: f64) {
-        let r = &mut self.robots[i];
-        if !charge(r, amount) {
-            r.energy = 0.0;
-            r.alive = false;
-            self.report.events.push(Event::RobotDisabled { robot: r.id });
+        if !charge(&mut self.robots[i], amount) {
+            self.disable_dry(i);
         }
+    }
+
+    /// Disable a robot that [`charge`] left dry, for good.
+    fn disable_dry(&mut self, i: usize) {
+        let r = &mut self.robots[i];
+        r.energy = 0.0;
+        r.alive = false;
+        self.report.events.push(Event::RobotDisabled { robot: r.id });
     }
 
     /// Check and carry out one action.
@@ -212,19 +217,11 @@ impl Simulation {
             }
         }
         self.near_scratch = near;
-        let moved = step.length();
-        if moved <= 1e-12 {
-            return Outcome::Refused;
+        let (outcome, alive) = walk(&mut self.robots[i], from, step, wanted, kind);
+        if !alive {
+            self.disable_dry(i);
         }
-        let r = &mut self.robots[i];
-        r.position = from + step;
-        r.stats.distance_m += moved;
-        self.spend(i, moved * kind.energy_per_m);
-        if (moved - wanted).abs() > 1e-9 {
-            Outcome::Trimmed
-        } else {
-            Outcome::Done
-        }
+        outcome
     }
 
     /// The start-of-round robots, for listing who could be in a move's way.
@@ -492,6 +489,26 @@ fn charge(r: &mut Robot, amount: f64) -> bool {
     r.energy > 1e-12
 }
 
+/// Take the step `step` from `from` of a move that asked for `wanted` metres, paying for it:
+/// its outcome (refused when too short to count, nothing paid then), and `false` if paying
+/// left the robot dry (disabling it is the caller's part). Both the id-order path and
+/// [`resolve_alone`] end moves here, so they agree to the last rounding.
+fn walk(r: &mut Robot, from: DVec2, step: DVec2, wanted: f64, kind: &RobotType) -> (Outcome, bool) {
+    let moved = step.length();
+    if moved <= 1e-12 {
+        return (Outcome::Refused, true);
+    }
+    r.position = from + step;
+    r.stats.distance_m += moved;
+    let alive = charge(r, moved * kind.energy_per_m);
+    let outcome = if (moved - wanted).abs() > 1e-9 {
+        Outcome::Trimmed
+    } else {
+        Outcome::Done
+    };
+    (outcome, alive)
+}
+
 /// The end of a robot's turn in step 3: recharge at home, and what viewers show of it.
 pub(super) fn end_of_turn(
     r: &mut Robot,
@@ -559,17 +576,10 @@ pub(super) fn resolve_alone(r: &mut Robot, agent: &mut Agent, kind: &RobotType, 
     let outcome = match (agent.action, step) {
         (Action::MoveTo { to }, None) if !(to - from).length().is_finite() => Outcome::Refused,
         (_, None) => Outcome::Done,
-        (_, Some(_)) if moved <= 1e-12 => Outcome::Refused,
         (_, Some((free, wanted))) => {
-            r.position = from + free;
-            r.stats.distance_m += moved;
-            let alive = charge(r, moved * kind.energy_per_m);
+            let (outcome, alive) = walk(r, from, free, wanted, kind);
             debug_assert!(alive, "checked above");
-            if (moved - wanted).abs() > 1e-9 {
-                Outcome::Trimmed
-            } else {
-                Outcome::Done
-            }
+            outcome
         }
     };
     agent.planned_move = None;
