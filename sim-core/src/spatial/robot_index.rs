@@ -49,6 +49,14 @@ pub struct RobotIndex {
     cursor: Vec<u32>,
 }
 
+/// The cell of `p` for cells of `cell_m` metres: where a rebuild files a robot and where a
+/// query looks for it.
+#[inline]
+fn cell_at(p: DVec2, cell_m: f64) -> (i32, i32) {
+    // `as` saturates, so far-away or non-finite positions land in edge cells, never UB.
+    (floor(p.x / cell_m) as i32, floor(p.y / cell_m) as i32)
+}
+
 impl Default for RobotIndex {
     fn default() -> Self {
         Self::new()
@@ -80,8 +88,7 @@ impl RobotIndex {
 
     #[inline]
     fn cell_of(&self, p: DVec2) -> (i32, i32) {
-        // `as` saturates, so far-away or non-finite positions land in edge cells, never UB.
-        (floor(p.x / self.cell_m) as i32, floor(p.y / self.cell_m) as i32)
+        cell_at(p, self.cell_m)
     }
 
     #[inline]
@@ -108,9 +115,8 @@ impl RobotIndex {
         self.cell_m = cell_m;
         self.scratch.clear();
         let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
-        let cell_of = |p| floor(p / cell_m) as i32;
         self.scratch.extend(robots.into_iter().map(|(id, position)| {
-            let cell = (cell_of(position.x), cell_of(position.y));
+            let cell = cell_at(position, cell_m);
             (lo, hi) = (
                 (lo.0.min(cell.0), lo.1.min(cell.1)),
                 (hi.0.max(cell.0), hi.1.max(cell.1)),
