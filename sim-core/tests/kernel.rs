@@ -196,60 +196,55 @@ fn excavators_and_transporters_deliver_every_treasure() {
     assert!(sim.treasures().iter().all(|t| t.delivered == t.initial));
 }
 
-#[test]
-fn results_do_not_depend_on_the_thread_count() {
+/// The trace of a run of `groups` on the rooms map with one treasure, on `threads` worker
+/// threads, the simulation set up by `adjust`.
+fn rooms_trace(
+    threads: usize,
+    seed: u64,
+    rounds: u64,
+    groups: Vec<(u32, RobotType, &str)>,
+    adjust: impl FnOnce(Simulation) -> Simulation + Send,
+) -> Trace {
     let treasures = vec![TreasureSpec {
         position: DVec2::new(30.5, 30.5),
         quantity: 3,
     }];
-    let trace = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| {
-            let s = scenario(
-                rooms_map(treasures.clone()),
-                42,
-                150,
-                vec![
-                    (6, RobotType::explorer(), "cooperative"),
-                    (3, RobotType::explorer(), "random_walk"),
-                    (2, RobotType::excavator(), "excavator"),
-                    (2, RobotType::transporter(), "transporter"),
-                ],
-            );
-            let mut sim = new_sim(s, &StrategyRegistry::with_builtins()).unwrap();
-            let mut t = Trace::default();
-            run_checked(&mut sim, &mut [&mut t]);
-            t
-        })
-    };
-    let one = trace(1);
-    let four = trace(4);
-    assert_eq!(one.0.len(), 150);
-    for (round, (a, b)) in one.0.iter().zip(&four.0).enumerate() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        let s = scenario(rooms_map(treasures), seed, rounds, groups);
+        let mut sim = adjust(new_sim(s, &StrategyRegistry::with_builtins()).unwrap());
+        let mut t = Trace::default();
+        run_checked(&mut sim, &mut [&mut t]);
+        t
+    })
+}
+
+/// Two traces of `rounds` rounds are the same, round by round.
+fn assert_same_rounds(a: &Trace, b: &Trace, rounds: usize) {
+    assert_eq!(a.0.len(), rounds);
+    assert_eq!(b.0.len(), rounds);
+    for (round, (a, b)) in a.0.iter().zip(&b.0).enumerate() {
         assert_eq!(a, b, "round {} differs", round + 1);
     }
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let groups = || {
+        vec![
+            (6, RobotType::explorer(), "cooperative"),
+            (3, RobotType::explorer(), "random_walk"),
+            (2, RobotType::excavator(), "excavator"),
+            (2, RobotType::transporter(), "transporter"),
+        ]
+    };
+    let one = rooms_trace(1, 42, 150, groups(), |sim| sim);
+    let four = rooms_trace(4, 42, 150, groups(), |sim| sim);
+    assert_same_rounds(&one, &four, 150);
     // A different seed gives a different run (the seed is really used).
-    let s = scenario(
-        rooms_map(treasures.clone()),
-        43,
-        150,
-        vec![(3, RobotType::explorer(), "random_walk")],
-    );
-    let s2 = scenario(
-        rooms_map(treasures),
-        42,
-        150,
-        vec![(3, RobotType::explorer(), "random_walk")],
-    );
-    let (mut a, mut b) = (Trace::default(), Trace::default());
-    run_checked(
-        &mut new_sim(s, &StrategyRegistry::with_builtins()).unwrap(),
-        &mut [&mut a],
-    );
-    run_checked(
-        &mut new_sim(s2, &StrategyRegistry::with_builtins()).unwrap(),
-        &mut [&mut b],
-    );
+    let walkers = || vec![(3, RobotType::explorer(), "random_walk")];
+    let a = rooms_trace(1, 43, 150, walkers(), |sim| sim);
+    let b = rooms_trace(1, 42, 150, walkers(), |sim| sim);
     assert_ne!(a.0, b.0);
 }
 
@@ -259,37 +254,17 @@ fn results_do_not_depend_on_the_thread_count() {
 /// events and robot bits), on 2 threads.
 #[test]
 fn issue11_turns_resolved_alone_give_the_id_order_run() {
-    let treasures = vec![TreasureSpec {
-        position: DVec2::new(30.5, 30.5),
-        quantity: 3,
-    }];
-    let trace = |alone: bool| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        pool.install(|| {
-            let s = scenario(
-                rooms_map(treasures.clone()),
-                7,
-                200,
-                vec![
-                    (30, RobotType::explorer(), "random_walk"),
-                    (6, RobotType::explorer(), "cooperative"),
-                    (2, RobotType::excavator(), "excavator"),
-                    (2, RobotType::transporter(), "transporter"),
-                ],
-            );
-            let mut sim = new_sim(s, &StrategyRegistry::with_builtins())
-                .unwrap()
-                .with_turns_resolved_alone(alone);
-            let mut t = Trace::default();
-            run_checked(&mut sim, &mut [&mut t]);
-            t
-        })
+    let groups = || {
+        vec![
+            (30, RobotType::explorer(), "random_walk"),
+            (6, RobotType::explorer(), "cooperative"),
+            (2, RobotType::excavator(), "excavator"),
+            (2, RobotType::transporter(), "transporter"),
+        ]
     };
-    let (alone, in_order) = (trace(true), trace(false));
-    assert_eq!(alone.0.len(), 200);
-    for (round, (a, b)) in alone.0.iter().zip(&in_order.0).enumerate() {
-        assert_eq!(a, b, "round {} differs", round + 1);
-    }
+    let alone = rooms_trace(2, 7, 200, groups(), |sim| sim.with_turns_resolved_alone(true));
+    let in_order = rooms_trace(2, 7, 200, groups(), |sim| sim.with_turns_resolved_alone(false));
+    assert_same_rounds(&alone, &in_order, 200);
 }
 
 /// A strategy that always asks for the same action, and records what came of it.
