@@ -276,6 +276,40 @@ proptest::proptest! {
 /// Issue 12, item 3: the frontier kept up to date by the known map's changed tiles equals
 /// the frontier worked out from scratch after every step of random runs of views (the
 /// kernel's marking), discs, boxes and merges with other robots' maps.
+/// One random step of a known map's growth over its whole grid: mostly the view of a robot
+/// walking from `at`, else a disc, a box, or a team mate's few views merged in.
+fn grow_known(known: &mut KnownMap, at: &mut DVec2, rng: &mut rand_chacha::ChaCha8Rng) {
+    use rand::Rng;
+    let grid = *known.grid();
+    let (w, h) = (
+        f64::from(grid.width_cells()) * grid.cell_m(),
+        f64::from(grid.height_cells()) * grid.cell_m(),
+    );
+    let point = |rng: &mut rand_chacha::ChaCha8Rng| DVec2::new(rng.random_range(0.0..w), rng.random_range(0.0..h));
+    match rng.random_range(0..10) {
+        // A robot walking and looking around, as the kernel marks its view.
+        0..=5 => {
+            *at = (*at + DVec2::from_angle(rng.random_range(0.0..6.3)) * 1.5).clamp(DVec2::ZERO, DVec2::new(w, h));
+            known.mark_view(*at, rng.random_range(2.0..9.0));
+        }
+        6 => {
+            known.mark_disc(point(rng), rng.random_range(1.0..6.0));
+        }
+        7 => {
+            let (a, b) = (point(rng), point(rng));
+            known.mark(&Aabb::from_corners(a.min(b), a.max(b)));
+        }
+        // A team mate's map: a few views of its own.
+        _ => {
+            let mut other = KnownMap::new(grid);
+            for _ in 0..rng.random_range(1..5) {
+                other.mark_view(point(rng), rng.random_range(2.0..12.0));
+            }
+            known.merge(&other);
+        }
+    }
+}
+
 #[test]
 fn issue12_incremental_frontier_equals_from_scratch() {
     use rand::{Rng, SeedableRng};
@@ -298,32 +332,7 @@ fn issue12_incremental_frontier_equals_from_scratch() {
         let mut frontier = Frontier::default();
         let mut at = DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)));
         for step in 0..120 {
-            let point = |rng: &mut rand_chacha::ChaCha8Rng| {
-                DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)))
-            };
-            match rng.random_range(0..10) {
-                // A robot walking and looking around, as the kernel marks its view.
-                0..=5 => {
-                    at = (at + DVec2::from_angle(rng.random_range(0.0..6.3)) * 1.5)
-                        .clamp(DVec2::ZERO, DVec2::new(f64::from(w), f64::from(h)));
-                    known.mark_view(at, rng.random_range(2.0..9.0));
-                }
-                6 => {
-                    known.mark_disc(point(&mut rng), rng.random_range(1.0..6.0));
-                }
-                7 => {
-                    let (a, b) = (point(&mut rng), point(&mut rng));
-                    known.mark(&Aabb::from_corners(a.min(b), a.max(b)));
-                }
-                // A team mate's map: a few views of its own.
-                _ => {
-                    let mut other = KnownMap::new(grid);
-                    for _ in 0..rng.random_range(1..5) {
-                        other.mark_view(point(&mut rng), rng.random_range(2.0..12.0));
-                    }
-                    known.merge(&other);
-                }
-            }
+            grow_known(&mut known, &mut at, &mut rng);
             // Not every step is read: searches come every few rounds.
             if rng.random_bool(0.6) {
                 frontier.sync(&g, &mut known);
@@ -356,25 +365,10 @@ fn issue12_piece_memo_answers_as_the_map_does() {
         let map = ObstacleMap::from_fn(grid, |_, _| rng.random_bool(density));
         let g = NavGraph::build(&map);
         let mut known = KnownMap::new(grid);
-        let point = |rng: &mut rand_chacha::ChaCha8Rng| {
-            DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)))
-        };
+        let mut at = DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)));
         let (mut asked, mut yes) = (0, 0);
         for step in 0..80 {
-            match rng.random_range(0..4) {
-                0 | 1 => {
-                    known.mark_view(point(&mut rng), rng.random_range(1.0..6.0));
-                }
-                2 => {
-                    let (a, b) = (point(&mut rng), point(&mut rng));
-                    known.mark(&Aabb::from_corners(a.min(b), a.max(b)));
-                }
-                _ => {
-                    let mut other = KnownMap::new(grid);
-                    other.mark_view(point(&mut rng), rng.random_range(2.0..10.0));
-                    known.merge(&other);
-                }
-            }
+            grow_known(&mut known, &mut at, &mut rng);
             for _ in 0..3 {
                 for _ in 0..200 {
                     let n = NavNodeId(rng.random_range(0..g.len() as u32));
