@@ -160,11 +160,15 @@ pub(super) fn perceive(
                     // Maps only grow: one no larger than the last merged from its sender is
                     // contained in ours already. Of the rest, a robot digests a bounded number
                     // a round (first come, first served): in a crowd hundreds arrive at once.
+                    // The bound is tested first: once it is reached, the rest of a crowd's
+                    // maps cost no lookup (each a likely cache miss on sender and table).
+                    if merged >= MAX_MAP_MERGES_PER_ROUND {
+                        continue;
+                    }
                     let cells = other.known_cells();
-                    let seen = agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
+                    let seen = || agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
                     if let Some(known) = data.known.as_mut()
-                        && !seen
-                        && merged < MAX_MAP_MERGES_PER_ROUND
+                        && !seen()
                     {
                         merged += 1;
                         turn.known_changed |= known.merge(other);
