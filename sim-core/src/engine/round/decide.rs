@@ -16,6 +16,14 @@ use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
 use crate::world::{Action, Recipient, Robot, RobotType};
 
+/// The most robots one parallel task takes. Rayon splits a slice in halves only while
+/// workers are idle, so two workers end up with a few large runs of robots; robots differ
+/// in cost (a crowd of explorers merging maps beside idle diggers), and one worker was left
+/// with the last run while the other waited: busy 0.72 s against 0.62 s over bench-1000's
+/// 200 rounds. Runs of 16 balance them: the parallel step took 10 % less there (median of
+/// five runs, 0.78 against 0.88 s; 4 to 32 did about as well).
+pub(super) const ROBOTS_PER_TASK: usize = 16;
+
 impl Simulation {
     /// Steps 1 and 2, in parallel over robots.
     pub(super) fn perceive_and_decide(&mut self, round: u64) {
@@ -43,6 +51,7 @@ impl Simulation {
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
             .zip(self.turns.par_iter_mut())
+            .with_max_len(ROBOTS_PER_TASK)
             .for_each(|((agent, robot), turn)| {
                 turn.start = robot.position;
                 turn.sensed_m = None;
@@ -115,6 +124,7 @@ impl Simulation {
                 .par_iter_mut()
                 .zip(self.turns.par_iter())
                 .zip(self.robots.par_iter())
+                .with_max_len(ROBOTS_PER_TASK)
                 .filter(|((_, turn), _)| turn.hearers_pending)
                 .for_each(|((agent, turn), robot)| {
                     let range_m = self.types[robot.type_index].comm_radius_m;
