@@ -118,18 +118,7 @@ impl Simulation {
                     || !agent.mind.output.events().is_empty();
             });
         if pending.into_inner() {
-            self.rebuild_robot_index_at_start();
-            let index = &self.robot_index;
-            self.agents
-                .par_iter_mut()
-                .zip(self.turns.par_iter())
-                .zip(self.robots.par_iter())
-                .with_max_len(ROBOTS_PER_TASK)
-                .filter(|((_, turn), _)| turn.hearers_pending)
-                .for_each(|((agent, turn), robot)| {
-                    let range_m = self.types[robot.type_index].comm_radius_m;
-                    hearers(index, robot.id, turn.start, range_m, &mut agent.hearers);
-                });
+            self.list_pending_hearers();
         }
         if self.decide_limit.is_some() {
             let slow = self
@@ -139,6 +128,25 @@ impl Simulation {
                 .filter_map(|(t, r)| t.slow.map(|took| (r.id, took)));
             self.report.slow_decisions.extend(slow);
         }
+    }
+}
+
+impl Simulation {
+    /// The hearers of the broadcasts step 2 left pending (see `Turn::hearers_pending`), on
+    /// the view-sized index, built now.
+    fn list_pending_hearers(&mut self) {
+        self.rebuild_robot_index_at_start();
+        let index = &self.robot_index;
+        self.agents
+            .par_iter_mut()
+            .zip(self.turns.par_iter())
+            .zip(self.robots.par_iter())
+            .with_max_len(ROBOTS_PER_TASK)
+            .filter(|((_, turn), _)| turn.hearers_pending)
+            .for_each(|((agent, turn), robot)| {
+                let range_m = self.types[robot.type_index].comm_radius_m;
+                hearers(index, robot.id, turn.start, range_m, &mut agent.hearers);
+            });
     }
 }
 

@@ -156,15 +156,14 @@ pub(super) fn perceive(
         let mut merged = 0;
         for m in &perception.inbox {
             match &*m.payload {
+                // A robot digests a bounded number of maps a round (first come, first
+                // served): in a crowd hundreds arrive at once. The bound is tested first:
+                // once it is reached, the rest cost no lookup (each a likely cache miss on
+                // sender and table).
+                Payload::KnownMap(_) if merged >= MAX_MAP_MERGES_PER_ROUND => {}
                 Payload::KnownMap(other) => {
                     // Maps only grow: one no larger than the last merged from its sender is
-                    // contained in ours already. Of the rest, a robot digests a bounded number
-                    // a round (first come, first served): in a crowd hundreds arrive at once.
-                    // The bound is tested first: once it is reached, the rest of a crowd's
-                    // maps cost no lookup (each a likely cache miss on sender and table).
-                    if merged >= MAX_MAP_MERGES_PER_ROUND {
-                        continue;
-                    }
+                    // contained in ours already.
                     let cells = other.known_cells();
                     let seen = || agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
                     if let Some(known) = data.known.as_mut()
