@@ -249,8 +249,21 @@ impl TreasureIndex {
                 }
             }
             Node::Internal(kids) => {
+                // Children beyond a split line farther than the radius fail the box test
+                // above; two comparisons skip them without a call (issue 11: the walk from
+                // the root of a 100 km map tested four boxes a level, a twentieth of a
+                // crowded moonshot round). Exact: each box test adds a square to the one
+                // compared here.
+                let mid = b.center();
+                let (dx, dy) = (mid.x - c.x, mid.y - c.y);
+                let (far_x, far_y) = (dx * dx > r2, dy * dy > r2);
+                // Bit 0 of a child is its x half, bit 1 its y half (see `child_box`).
+                let skip =
+                    |i: usize| (far_x && ((i & 1 == 0) == (c.x > mid.x))) || (far_y && ((i & 2 == 0) == (c.y > mid.y)));
                 for (i, &k) in kids.iter().enumerate() {
-                    self.visit_disc(k, child_box(&b, i), c, r2, visit);
+                    if !skip(i) {
+                        self.visit_disc(k, child_box(&b, i), c, r2, visit);
+                    }
                 }
             }
         }
