@@ -17,6 +17,18 @@ use crate::spatial::{
 };
 use crate::world::{Action, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
+/// A message sent in step 3 without radio budgets, for [`Simulation::inboxes`] after it:
+/// bagged as `mailbag[bag]` by robot index `from`, to `to` (a robot index) or, if `None`,
+/// to the sender's hearers. Step 3 only notes it; the receivers' inboxes are filled in
+/// parallel afterwards, receiver by receiver (issue 11: pushing to hundreds of inboxes per
+/// broadcast was most of bench-1000's sequential step 3).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Fanout {
+    pub(super) from: u32,
+    pub(super) bag: u32,
+    pub(super) to: Option<u32>,
+}
+
 /// A robot's brain: its strategy and mind, owned by the robot alone.
 pub(super) struct Agent {
     pub(super) strategy: Box<dyn Strategy>,
@@ -151,6 +163,12 @@ pub struct Simulation {
     pub(super) mailbag: Vec<Message>,
     /// Per robot, the messages of `mailbag` it will read (indices, in sending order).
     pub(super) inboxes: Vec<Vec<u32>>,
+    /// This round's unbudgeted sends, to put in the inboxes after step 3 (see
+    /// [`Fanout`]).
+    pub(super) fanout: Vec<Fanout>,
+    /// Which robots were alive when step 3 began (a send reaches a robot alive at send
+    /// time: so, for robots after the sender in id order).
+    pub(super) alive_at_resolve: Vec<bool>,
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
@@ -279,6 +297,8 @@ impl Simulation {
             body_index: RobotIndex::dense_when_compact(),
             mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
+            fanout: Vec::new(),
+            alive_at_resolve: Vec::new(),
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
             explored_views: vec![None; n],

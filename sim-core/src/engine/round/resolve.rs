@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::agent::Needs;
 use crate::agent::StrategyOutput;
-use crate::engine::simulation::{Agent, Outgoing, Simulation, Turn};
+use crate::engine::simulation::{Agent, Fanout, Outgoing, Simulation, Turn};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
 use crate::world::{
     Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
@@ -30,6 +30,8 @@ impl Simulation {
         // part).
         let types = Arc::clone(&self.types);
         let home = self.map.home;
+        self.alive_at_resolve.clear();
+        self.alive_at_resolve.extend(self.robots.iter().map(|r| r.alive));
         for i in 0..self.robots.len() {
             if !self.robots[i].alive || turns[i].alone {
                 continue;
@@ -71,7 +73,51 @@ impl Simulation {
                 (action, outcome),
             );
         }
+        self.fan_out();
         (messages, bytes)
+    }
+
+    /// Put this round's unbudgeted sends in the inboxes, in sending order, in parallel by
+    /// receiver. A receiver takes a message if it was alive when the message was sent: a
+    /// robot changes only in its own turn, so one before the sender in id order as it is
+    /// now, one after it as it was when step 3 began.
+    fn fan_out(&mut self) {
+        if self.fanout.is_empty() {
+            return;
+        }
+        let (fanout, alive_then, robots) = (&self.fanout, &self.alive_at_resolve, &self.robots);
+        let alive = |to: usize, from: usize| if to < from { robots[to].alive } else { alive_then[to] };
+        // Each broadcast's hearers (listed in step 2, in id order).
+        let hearers: Vec<&[RobotId]> = fanout
+            .iter()
+            .map(|f| match f.to {
+                None => &self.agents[f.from as usize].hearers[..],
+                Some(_) => &[],
+            })
+            .collect();
+        // Blocks of receivers: each reads every send, and its part of each hearer list.
+        let block = self.inboxes.len().div_ceil(4 * rayon::current_num_threads()).max(64);
+        self.inboxes.par_chunks_mut(block).enumerate().for_each(|(b, inboxes)| {
+            let (lo, hi) = (b * block, b * block + inboxes.len());
+            for (f, hearers) in fanout.iter().zip(&hearers) {
+                let from = f.from as usize;
+                if let Some(to) = f.to {
+                    // Checked when sent (in range, alive).
+                    let to = to as usize;
+                    if (lo..hi).contains(&to) {
+                        inboxes[to - lo].push(f.bag);
+                    }
+                } else {
+                    let first = hearers.partition_point(|h| h.index() < lo);
+                    for h in hearers[first..].iter().take_while(|h| h.index() < hi) {
+                        if alive(h.index(), from) {
+                            inboxes[h.index() - lo].push(f.bag);
+                        }
+                    }
+                }
+            }
+        });
+        self.fanout.clear();
     }
 
     /// Disable a robot whose strategy failed, for good, dropping what it queued this round.
@@ -281,16 +327,17 @@ impl Simulation {
                 if in_range { &direct } else { &[] }
             }
         };
-        // Stored once, in the bag the receivers share; each gets its index.
-        let k = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
-        let mut heard = false;
-        for &to in receivers {
-            if self.robots[to.index()].alive {
-                self.inboxes[to.index()].push(k);
-                heard = true;
-            }
-        }
-        if heard {
+        // Stored once, in the bag the receivers share; each gets its index after step 3.
+        if receivers.iter().any(|to| self.robots[to.index()].alive) {
+            let bag = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
+            self.fanout.push(Fanout {
+                from: u32::try_from(i).expect("robot indices are u32"),
+                bag,
+                to: match to {
+                    Recipient::Broadcast => None,
+                    Recipient::Direct(target) => Some(target.get()),
+                },
+            });
             self.mailbag.push(message);
         }
     }
