@@ -241,3 +241,62 @@ fn any_cell_in_rect_matches_brute_force() {
         }
     }
 }
+
+/// Issue 11: a view's rows are filled block by block (`fill_new_rows_reporting`). Rows
+/// that complete whole squares (merged into one leaf while the call goes on), clear cells
+/// (splitting leaves, reusing freed nodes) and revisit blocks of a square merged earlier in
+/// the same call leave exactly the cells a brute-force grid holds, report exactly those
+/// that switched, and keep the tree well formed.
+#[test]
+fn issue11_rows_filled_block_by_block_match_a_grid() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x9A7B);
+    let grid = Grid::new(DVec2::ZERO, 1.0, 96, 80).unwrap();
+    let side = grid.side_cells();
+    for case in 0..40 {
+        let mut tree = RegionQuadtree::uniform(grid, false);
+        let mut brute = vec![false; (side * side) as usize];
+        for call in 0..60 {
+            let value = rng.random_bool(0.75);
+            let mut rows = crate::spatial::geometry::CellRows::empty();
+            // Half the time at a block's edge, as a view over whole blocks.
+            let align = if rng.random_bool(0.5) { !7 } else { !0 };
+            rows.x0 = rng.random_range(0..side - 8) & align;
+            rows.y0 = rng.random_range(0..side - 8);
+            rows.len = rng.random_range(1..=64).min((side - rows.y0) as usize);
+            let width = (side - rows.x0).min(64);
+            let full = if width == 64 { u64::MAX } else { (1u64 << width) - 1 };
+            // Dense rows complete squares; a run of full rows completes them in one call.
+            let dense = rng.random_bool(0.5);
+            for row in &mut rows.rows[..rows.len] {
+                *row = if dense { full } else { rng.random::<u64>() & full };
+            }
+            let mut switched = BTreeSet::new();
+            let ok = tree.fill_new_rows_reporting(&rows, None, value, |set| {
+                set.for_each_cell(|x, y| assert!(switched.insert((x, y)), "case {case}.{call}: ({x}, {y}) twice"));
+            });
+            assert!(ok, "a packed tree fills rows");
+            tree.assert_well_formed();
+            let mut expected = BTreeSet::new();
+            for (j, &row) in rows.rows[..rows.len].iter().enumerate() {
+                let y = rows.y0 + j as u32;
+                for i in 0..64 {
+                    let x = rows.x0 + i;
+                    if row >> i & 1 == 1 && brute[(y * side + x) as usize] != value {
+                        brute[(y * side + x) as usize] = value;
+                        expected.insert((x, y));
+                    }
+                }
+            }
+            assert_eq!(switched, expected, "case {case}.{call}: switched cells");
+            for y in 0..side {
+                for x in 0..side {
+                    assert_eq!(
+                        tree.cell_value(x, y),
+                        brute[(y * side + x) as usize],
+                        "case {case}.{call}: ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+}
