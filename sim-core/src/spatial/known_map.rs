@@ -90,6 +90,10 @@ impl KnownMap {
         if let Some(log) = &mut self.log {
             log.begin();
         }
+        // The same view as last time (a robot that did not move): all it holds is known.
+        if self.last_view == Some(disc) {
+            return false;
+        }
         // A view up to 64 cells across: its cells worked out at once, then set by one walk
         // that goes only where they are (issue 11: the walk from the root along the view's
         // rim, with shape tests at every node, was half of a random walker's round). Bigger
