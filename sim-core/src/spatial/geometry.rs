@@ -55,8 +55,8 @@ impl Aabb {
 
     /// The squared distance from `p` to the farthest corner.
     pub fn farthest_corner_distance_squared(&self, p: DVec2) -> f64 {
-        let dx = (p.x - self.min.x).abs().max((p.x - self.max.x).abs());
-        let dy = (p.y - self.min.y).abs().max((p.y - self.max.y).abs());
+        let dx = above((p.x - self.min.x).abs(), (p.x - self.max.x).abs());
+        let dy = above((p.y - self.min.y).abs(), (p.y - self.max.y).abs());
         dx * dx + dy * dy
     }
 
@@ -165,9 +165,24 @@ fn axis_distances(edges: &[f64; 9], c: f64) -> ([f64; 8], [f64; 8]) {
 /// axis of [`Aabb::distance_squared_to`] and [`Aabb::farthest_corner_distance_squared`].
 #[inline]
 fn edge_distances(c: f64, lo: f64, hi: f64) -> (f64, f64) {
-    let d = c.max(lo).min(hi) - c;
-    let f = (c - lo).abs().max((c - hi).abs());
+    let d = below(above(c, lo), hi) - c;
+    let f = above((c - lo).abs(), (c - hi).abs());
     (d * d, f * f)
+}
+
+/// The larger of two numbers, by one comparison, as glam's vector `max` selects: `f64::max`
+/// for numbers (zeros aside, whose sign the squares taken here drop) without the NaN
+/// handling that made it five instructions (issue 11: a walker's view marking computes
+/// these for every row and column of its view).
+#[inline]
+fn above(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
+/// The smaller of two numbers (see [`above`]).
+#[inline]
+fn below(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
 }
 
 /// The cells `(i, j)` of a block for which `test(along_x[i], along_y[j])` holds, as a row-major
