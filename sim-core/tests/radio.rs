@@ -1,5 +1,6 @@
 //! Radio budgets (issue 11): a receiver takes messages addressed to it first, then
-//! broadcasts, until the next would overflow `radio_bytes_per_round`. Expected inboxes are
+//! broadcasts, until the next would overflow `radio_bytes_per_round`. And who receives at
+//! all: robots alive when a message is sent. Expected inboxes are
 //! worked out by hand from the payload sizes (a position is 33 bytes, a custom message its
 //! tag plus its data).
 
@@ -126,4 +127,44 @@ fn issue11_links_are_the_pending_deliveries() {
         assert_eq!(links.len(), want, "budget {budget}");
         assert!(links.iter().all(|&(s, r)| s != r), "nobody hears itself");
     }
+}
+
+/// Issue 11: messages without budgets are put in the inboxes after step 3, yet a receiver
+/// takes a message only if it was alive when the message was sent. Robot 5 runs dry in its
+/// own turn of round 1 (its upkeep is all its energy), before it sends: it hears robots 0
+/// to 4, whose turns came first, and not 6 to 11; nobody hears it.
+#[test]
+fn issue11_a_robot_that_runs_dry_hears_only_who_sent_before_its_turn() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 20, 20).unwrap();
+    let map = MapData {
+        obstacles: ObstacleMap::empty(grid),
+        home: HomeBase::Disc {
+            center: DVec2::splat(10.0),
+            radius_m: 3.0,
+        },
+        treasures: Vec::new(),
+    };
+    let mut registry = StrategyRegistry::empty();
+    registry.register("chatter", "test", |_| Ok(Box::new(Chatter)));
+    let normal = RobotType::explorer();
+    let frail = RobotType::explorer().with_energy_capacity(normal.energy_idle);
+    let scenario = ScenarioBuilder::new(map)
+        .with_types(vec![normal, frail])
+        .with_group(Group::new("chatter", 0, 5))
+        .with_group(Group::new("chatter", 1, 1))
+        .with_group(Group::new("chatter", 0, 6))
+        .build(&registry)
+        .unwrap();
+    let mut sim = Simulation::new(scenario).unwrap();
+    sim.step();
+    assert!(!sim.robots()[5].alive, "robot 5 ran dry");
+    let got = inboxes(&sim);
+    assert_eq!(got[5], (0..5).map(|s| (s, true)).collect::<Vec<_>>());
+    for (r, inbox) in got.iter().enumerate().filter(|&(r, _)| r != 5) {
+        assert!(inbox.iter().all(|&(s, _)| s != 5), "robot {r} heard robot 5: {inbox:?}");
+        // Everyone else hears the other ten broadcasts (robot 0 also ten direct messages).
+        let broadcasts = inbox.iter().filter(|&&(_, b)| b).count();
+        assert_eq!(broadcasts, 10, "robot {r}: {inbox:?}");
+    }
+    assert_eq!(got[0].len(), 20);
 }
