@@ -129,9 +129,7 @@ impl Simulation {
             self.report.slow_decisions.extend(slow);
         }
     }
-}
 
-impl Simulation {
     /// The hearers of the broadcasts step 2 left pending (see `Turn::hearers_pending`), on
     /// the view-sized index, built now.
     fn list_pending_hearers(&mut self) {
