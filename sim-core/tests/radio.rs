@@ -40,6 +40,12 @@ impl Strategy for Chatter {
 
 /// 12 chatters at the home of a free 20 m × 20 m map (all within each other's 20 m range).
 fn chatters(radio_bytes_per_round: u64) -> Simulation {
+    let kind = RobotType::explorer().with_radio_bytes_per_round(radio_bytes_per_round);
+    chatting(vec![kind], vec![Group::new("chatter", 0, 12)])
+}
+
+/// Groups of chatters of the given types at the home of a free 20 m × 20 m map.
+fn chatting(types: Vec<RobotType>, groups: Vec<Group>) -> Simulation {
     let grid = Grid::new(DVec2::ZERO, 1.0, 20, 20).unwrap();
     let map = MapData {
         obstacles: ObstacleMap::empty(grid),
@@ -51,10 +57,9 @@ fn chatters(radio_bytes_per_round: u64) -> Simulation {
     };
     let mut registry = StrategyRegistry::empty();
     registry.register("chatter", "test", |_| Ok(Box::new(Chatter)));
-    let kind = RobotType::explorer().with_radio_bytes_per_round(radio_bytes_per_round);
-    let scenario = ScenarioBuilder::new(map)
-        .with_types(vec![kind])
-        .with_group(Group::new("chatter", 0, 12))
+    let scenario = groups
+        .into_iter()
+        .fold(ScenarioBuilder::new(map).with_types(types), ScenarioBuilder::with_group)
         .build(&registry)
         .unwrap();
     Simulation::new(scenario).unwrap()
@@ -135,27 +140,14 @@ fn issue11_links_are_the_pending_deliveries() {
 /// to 4, whose turns came first, and not 6 to 11; nobody hears it.
 #[test]
 fn issue11_a_robot_that_runs_dry_hears_only_who_sent_before_its_turn() {
-    let grid = Grid::new(DVec2::ZERO, 1.0, 20, 20).unwrap();
-    let map = MapData {
-        obstacles: ObstacleMap::empty(grid),
-        home: HomeBase::Disc {
-            center: DVec2::splat(10.0),
-            radius_m: 3.0,
-        },
-        treasures: Vec::new(),
-    };
-    let mut registry = StrategyRegistry::empty();
-    registry.register("chatter", "test", |_| Ok(Box::new(Chatter)));
     let normal = RobotType::explorer();
     let frail = RobotType::explorer().with_energy_capacity(normal.energy_idle);
-    let scenario = ScenarioBuilder::new(map)
-        .with_types(vec![normal, frail])
-        .with_group(Group::new("chatter", 0, 5))
-        .with_group(Group::new("chatter", 1, 1))
-        .with_group(Group::new("chatter", 0, 6))
-        .build(&registry)
-        .unwrap();
-    let mut sim = Simulation::new(scenario).unwrap();
+    let groups = vec![
+        Group::new("chatter", 0, 5),
+        Group::new("chatter", 1, 1),
+        Group::new("chatter", 0, 6),
+    ];
+    let mut sim = chatting(vec![normal, frail], groups);
     sim.step();
     assert!(!sim.robots()[5].alive, "robot 5 ran dry");
     let got = inboxes(&sim);
