@@ -210,6 +210,58 @@ fn two_robots_asking_for_the_same_spot_lower_id_wins() {
     assert!((sim.robots()[0].position - m).length() < EPS);
 }
 
+/// Issue 11: step 2 lists who could be in a move's way by the id order (those before a
+/// robot within the radii plus the top speed of its move, those after it within the radii),
+/// and step 3 meets each where the order leaves it.
+#[test]
+fn issue11_a_move_meets_robots_before_it_where_they_moved_and_after_it_where_they_stand() {
+    // Starts on the placement lattice (spacing 2 · 0.125 + 0.05 = 0.3 m), so they are
+    // kept as given.
+    let at = |kx: u32, ky: u32| DVec2::new(f64::from(kx) * 0.3, f64::from(ky) * 0.3);
+    let starts = [at(3, 17), at(9, 17), at(14, 10), at(17, 10)];
+    // Id 0 moves 1 m east, (0.9, 5.1) → (1.9, 5.1): id 1 stands 0.8 m from that, done.
+    // Id 1 asks for 0.75 m west, (2.7, 5.1) → (1.95, 5.1): id 0 now stands 0.05 m from
+    // that (< 2 · 0.125), so halved once: (2.325, 5.1), 0.425 m away, trimmed. Id 0 started
+    // 1.05 m from id 1's move: only the reach that counts the top speed (0.25 + 1 m) has it.
+    // Id 2 moves 0.8 m east, (4.2, 3.0) → (5.0, 3.0): id 3, after it, still stands at
+    // (5.1, 3.0), 0.1 m away, so halved once: (4.6, 3.0), trimmed, although id 3 then moves
+    // 1 m north, done (id 2 ends 0.5 m from its move).
+    let moves = [
+        DVec2::new(1.0, 0.0),
+        DVec2::new(-0.75, 0.0),
+        DVec2::new(0.8, 0.0),
+        DVec2::new(0.0, 1.0),
+    ];
+    let mut sim = simulation(
+        map(vec![]),
+        vec![explorer()],
+        starts
+            .iter()
+            .zip(moves)
+            .map(|(&s, d)| (0, Start::At(s), script(vec![Action::MoveTo { to: s + d }])))
+            .collect(),
+    );
+    for (r, s) in sim.robots().iter().zip(starts) {
+        assert_eq!(r.position, s, "{} is placed where asked", r.id);
+    }
+    sim.step();
+    let want = [
+        (starts[0] + moves[0], Outcome::Done),
+        (starts[1] + moves[1] / 2.0, Outcome::Trimmed),
+        (starts[2] + moves[2] / 2.0, Outcome::Trimmed),
+        (starts[3] + moves[3], Outcome::Done),
+    ];
+    for (r, (position, outcome)) in sim.robots().iter().zip(want) {
+        assert!(
+            (r.position - position).length() < EPS,
+            "{}: {} vs {position}",
+            r.id,
+            r.position
+        );
+        assert_eq!(r.last_action.1, outcome, "{}", r.id);
+    }
+}
+
 #[test]
 fn excavate_without_the_ability_is_refused() {
     // Robots at ≈ (3.0, 5.1); a treasure of 7 units 0.3 m east, within reach (0.125 + 0.5).

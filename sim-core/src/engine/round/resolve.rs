@@ -580,11 +580,13 @@ pub(super) fn end_of_turn(
 /// otherwise.
 ///
 /// The outcome is the one the id order gives. Its own turn reads no other robot: nobody was
-/// within reach of its move (radii plus the top speed) where they stood. And no other
-/// robot's turn depends on whether this one has moved yet: a robot that lists it near its
-/// own move ends within the top speed of where it started, so farther than the two radii
-/// from both where this one started and where it ends (every robot starts farther than the
-/// reach from this one's move). The arithmetic is that of the id-order path.
+/// near its move (step 2's list, [`Bodies::near_move`]: robots before it farther than the
+/// radii plus the top speed, so ending farther than the radii; robots after it, which the
+/// order leaves where they started, farther than the radii). And no other robot's turn
+/// depends on whether this one has moved yet: that matters only to robots before it, which
+/// all started farther than the radii plus the top speed from this one's move, so move
+/// farther than the two radii from both where this one started and where it ends. The
+/// arithmetic is that of the id-order path.
 pub(super) fn resolve_alone(r: &mut Robot, agent: &mut Agent, kind: &RobotType, home: &HomeBase) -> bool {
     if agent.failure.is_some() || !agent.mind.output.outbox().is_empty() {
         return false;
@@ -672,18 +674,26 @@ impl<'a> Bodies<'a> {
     }
 
     /// The robots (other than `i`) that could touch a disc of `radius` ending anywhere on
-    /// the move `d` from `from`. Robots move at most `max_speed_m` a round, so one touching
-    /// an end point `p` now started within `radius + max_radius_m + max_speed_m` of `p`,
-    /// hence within that of the move's segment (issue 11: in a crowd, a disc of that plus
-    /// the move's length around `from` held twice the robots, each then tested at every
-    /// halving of a blocked move).
+    /// the move `d` from `from`, with step 3's id order: robot `i` moves after those before
+    /// it and before those after it. One before it has moved at most `max_speed_m`, so one
+    /// touching an end point `p` started within `radius + max_radius_m + max_speed_m` of
+    /// `p`, hence within that of the move's segment; one after it still stands where it
+    /// started, so within `radius + max_radius_m` (issue 11: in the moonshot's crowd the
+    /// top speed alone put 72 robots in each list, read one by one in the sequential step
+    /// 3; and in a crowd, a disc of that plus the move's length around `from` held twice
+    /// the robots, each then tested at every halving of a blocked move).
+    ///
+    /// Robots that [`resolve_alone`] moved ahead of the order are no exception: one after
+    /// `i` in a list could not have been alone, as `i` started within the reach of its move.
     pub(super) fn near_move(&self, i: usize, from: DVec2, d: DVec2, radius: f64, near: &mut Vec<u32>) {
         near.clear();
         let reach = radius + self.max_radius_m + self.max_speed_m;
         // Wider by far more than any rounding: listing one robot too many changes nothing.
-        let within = (reach * (1.0 + 1e-9)).powi(2);
+        let widen = |r: f64| (r * (1.0 + 1e-9)).powi(2);
+        let (moved, standing) = (widen(reach), widen(radius + self.max_radius_m));
         let (to, mid) = (from + d, from + 0.5 * d);
         self.index.for_each_within(mid, reach + 0.5 * d.length(), |id, at| {
+            let within = if id.index() < i { moved } else { standing };
             if id.index() != i && point_segment_distance_squared(at, from, to) <= within {
                 near.push(id.get());
             }
