@@ -170,6 +170,16 @@ fn edge_distances(c: f64, lo: f64, hi: f64) -> (f64, f64) {
     (d * d, f * f)
 }
 
+/// [`edge_distances`] of `c` and `lo..hi` from the lines' squared distances `(lo, (lo -
+/// c)²)` and `(hi, (hi - c)²)`, to the same bits: `c` clamped to the span is `lo` when `c`
+/// is not above it, `hi` when it is not below it, else `c` itself (distance 0); and the
+/// square of the larger distance is the larger square, squaring being monotone.
+#[inline]
+fn line_distances(c: f64, (lo, d_lo): (f64, f64), (hi, d_hi): (f64, f64)) -> (f64, f64) {
+    let near = if c > lo { if c < hi { 0.0 } else { d_hi } } else { d_lo };
+    (near, above(d_lo, d_hi))
+}
+
 /// The larger of two numbers, by one comparison, as glam's vector `max` selects: `f64::max`
 /// for numbers (zeros aside, whose sign the squares taken here drop) without the NaN
 /// handling that made it five instructions (issue 11: a walker's view marking computes
@@ -341,16 +351,23 @@ impl Disc {
             return false;
         }
         let r2 = self.radius * self.radius;
-        // Per column (and row): squared distances to the nearest point and to the farthest
-        // edge, as for `classify_cells`, and whether the clip holds it.
         let (width, len) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
+        // Per column (and row): squared distances to the nearest point and to the farthest
+        // edge, as `edge_distances` gives them for `classify_cells`, from the squared
+        // distances to the grid lines, each worked out once (a column shares its lines with
+        // its neighbours): the nearest point is on the line before the centre, the line
+        // after it, or level with it (0); the farthest edge is the farther line (issue 11:
+        // working out both lines of each column and row was a fifth of this function).
         let (mut near_x, mut far_x) = ([0.0; 64], [0.0; 64]);
         let mut cols_within = 0u64;
+        let (cx, mut a) = (self.center.x, grid.corner(x0, 0).x);
+        let mut da = (a - cx) * (a - cx);
         for i in 0..width {
-            let k = x0 + i as u32;
-            let (a, b) = (grid.corner(k, 0).x, grid.corner(k + 1, 0).x);
-            (near_x[i], far_x[i]) = edge_distances(self.center.x, a, b);
+            let b = grid.corner(x0 + i as u32 + 1, 0).x;
+            let db = (b - cx) * (b - cx);
+            (near_x[i], far_x[i]) = line_distances(cx, (a, da), (b, db));
             cols_within |= u64::from(clip.min.x <= a && b <= clip.max.x) << i;
+            (a, da) = (b, db);
         }
         // Along a row both distances fall to the column of the centre and rise after it,
         // so a row's contained cells are a run through that column, whose ends move a
@@ -360,13 +377,17 @@ impl Disc {
         let mid = (1..width).fold(0, |m, i| if far_x[i] < far_x[m] { i } else { m });
         let (mut lo, mut hi) = (mid, mid);
         (out.x0, out.y0, out.len) = (x0, y0, len);
+        let (cy, mut a) = (self.center.y, grid.corner(0, y0).y);
+        let mut da = (a - cy) * (a - cy);
         for j in 0..len {
-            let k = y0 + j as u32;
-            let (a, b) = (grid.corner(0, k).y, grid.corner(0, k + 1).y);
-            let (ny, fy) = edge_distances(self.center.y, a, b);
+            let b = grid.corner(0, y0 + j as u32 + 1).y;
+            let db = (b - cy) * (b - cy);
+            let (ny, fy) = line_distances(cy, (a, da), (b, db));
+            let row_within = clip.min.y <= a && b <= clip.max.y;
+            (a, da) = (b, db);
             let inside = |i: usize| far_x[i] + fy <= r2 && near_x[i] + ny < r2;
             out.rows[j] = 0;
-            if !(clip.min.y <= a && b <= clip.max.y && inside(mid)) {
+            if !(row_within && inside(mid)) {
                 continue;
             }
             if inside(lo) {
