@@ -377,9 +377,21 @@ proptest! {
             if step % 6 == 5 {
                 let mut other = KnownMap::new(w.grid);
                 other.mark_disc(w.random_point(&mut rng), 3.0 * w.grid.cell_m());
+                other.complete_hashes();
                 by_view.merge(&other);
                 by_walk.merge(&other);
                 explored.merge(&other);
+            }
+            if step % 4 == 1 {
+                // Content hashes kept from here on (issue 11): each mark and merge below
+                // must forget those it changes (`validate` checks them). A hashed copy of
+                // the same cells, merged in, adds nothing (equal subtrees are skipped).
+                by_view.complete_hashes();
+                explored.complete_hashes();
+                let mut copy = by_view.clone();
+                copy.complete_hashes();
+                prop_assert!(!by_walk.merge(&copy));
+                by_walk.validate().unwrap();
             }
             let before: Vec<bool> = w.cells().map(|(x, y)| by_view.tree().cell_value(x, y)).collect();
             let mut reported = BTreeSet::new();

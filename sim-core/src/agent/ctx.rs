@@ -243,7 +243,9 @@ impl<'a> Ctx<'a> {
     }
     /// Share the known map with everyone in range.
     pub fn broadcast_known_map(&mut self) {
-        if let Some(k) = &self.data.known {
+        if let Some(k) = &mut self.data.known {
+            // With its content hashes, so that receivers skip what they hold alike.
+            k.complete_hashes();
             let map = Arc::new(k.clone());
             self.broadcast(Payload::KnownMap(map));
         }

@@ -251,6 +251,13 @@ impl KnownMap {
         added > 0
     }
 
+    /// Work out the content hashes that let maps merging a copy of this one skip what they
+    /// hold alike (see [`RegionQuadtree::complete_hashes`]); copies made after this carry
+    /// them. Changes nothing else.
+    pub fn complete_hashes(&mut self) {
+        self.tree.complete_hashes();
+    }
+
     /// Keep a log of which tiles change from now on (see [`TileLog`]); nothing if it is kept
     /// already. Maps that nobody reads that way pay nothing for it.
     pub fn track_changes(&mut self) {

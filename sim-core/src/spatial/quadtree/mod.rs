@@ -26,6 +26,7 @@ pub(crate) mod block;
 mod build;
 mod codec;
 mod components;
+mod hash;
 mod query;
 mod state;
 #[cfg(test)]
@@ -90,6 +91,9 @@ pub struct RegionQuadtree {
     /// Whether mixed squares of [`BLOCK_LEVEL`] are blocks (false only in trees under
     /// 8 cells a side, and in the unpacked copies that [`Components`] walks).
     packed: bool,
+    /// Content hash of each group (`hash::NO_HASH` until worked out), once the tree keeps
+    /// them (empty before): unions skip subtrees equal to the other tree's (see `hash`).
+    hashes: Vec<u64>,
 }
 
 /// A square of the tree: lower-left cell and level (`2^level` cells a side).
@@ -331,6 +335,7 @@ impl RegionQuadtree {
             free_blocks: Vec::new(),
             block_internal: 0,
             packed: grid.depth() >= BLOCK_LEVEL,
+            hashes: Vec::new(),
         }
     }
 
@@ -394,6 +399,7 @@ impl RegionQuadtree {
             + self.free_groups.capacity() * std::mem::size_of::<u32>()
             + self.blocks.capacity() * std::mem::size_of::<u64>()
             + self.free_blocks.capacity() * std::mem::size_of::<u32>()
+            + self.hashes.capacity() * std::mem::size_of::<u64>()
     }
 
     /// Give memory that updates released back to the allocator by compacting the tree.
@@ -404,6 +410,8 @@ impl RegionQuadtree {
         let mut groups = Vec::with_capacity(self.groups.len() - self.free_groups.len());
         let mut blocks = Vec::with_capacity(self.blocks.len() - self.free_blocks.len());
         self.root = self.copy_into(self.root, &mut groups, &mut blocks);
+        // Groups are numbered anew: hashes are worked out again when asked.
+        self.hashes = Vec::new();
         self.groups = groups;
         self.blocks = blocks;
         self.free_groups = Vec::new();
@@ -431,9 +439,13 @@ impl RegionQuadtree {
         }
         if let Some(i) = self.free_groups.pop() {
             self.groups[i as usize] = kids;
+            self.forget_hash(i);
             i
         } else {
             assert!(self.groups.len() < MAX_GROUPS, "quadtree exceeds 2^31 groups");
+            if self.keeps_hashes() {
+                self.hashes.push(hash::NO_HASH);
+            }
             self.groups.push(kids);
             (self.groups.len() - 1) as NodeRef
         }

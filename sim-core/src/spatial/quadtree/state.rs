@@ -63,6 +63,10 @@ struct TreeStateRef<'a> {
     capacities: [usize; 4],
     block_internal: usize,
     packed: bool,
+    /// Content hashes kept (see `hash`; empty if none) and their vector's capacity: a
+    /// restored tree skips the same subtrees in unions and reports the same memory.
+    hashes: Words<'a, u64>,
+    hashes_capacity: usize,
 }
 
 /// [`TreeStateRef`] read back.
@@ -77,6 +81,11 @@ pub(super) struct TreeState {
     capacities: [usize; 4],
     block_internal: usize,
     packed: bool,
+    /// Absent from checkpoints written before trees kept hashes: none kept then.
+    #[serde(default)]
+    hashes: ByteBuf,
+    #[serde(default)]
+    hashes_capacity: usize,
 }
 
 impl Serialize for RegionQuadtree {
@@ -96,6 +105,8 @@ impl Serialize for RegionQuadtree {
             ],
             block_internal: self.block_internal,
             packed: self.packed,
+            hashes: Words(&self.hashes),
+            hashes_capacity: self.hashes.capacity(),
         }
         .serialize(s)
     }
@@ -127,6 +138,7 @@ impl TryFrom<TreeState> for RegionQuadtree {
         let free_groups = words(&s.free_groups, u32::from_le_bytes).ok_or_else(|| ragged("free groups"))?;
         let blocks = words(&s.blocks, u64::from_le_bytes).ok_or_else(|| ragged("blocks"))?;
         let free_blocks = words(&s.free_blocks, u32::from_le_bytes).ok_or_else(|| ragged("free blocks"))?;
+        let hashes = words(&s.hashes, u64::from_le_bytes).ok_or_else(|| ragged("content hashes"))?;
         let (n_groups, n_blocks) = (groups.len(), blocks.len());
         let [c_groups, c_free_groups, c_blocks, c_free_blocks] = s.capacities;
         Ok(Self {
@@ -138,6 +150,7 @@ impl TryFrom<TreeState> for RegionQuadtree {
             free_blocks: restored(free_blocks, c_free_blocks, n_blocks, "free blocks")?,
             block_internal: s.block_internal,
             packed: s.packed,
+            hashes: restored(hashes, s.hashes_capacity, n_groups, "content hashes")?,
         })
     }
 }

@@ -86,6 +86,21 @@ fn random_tree(rng: &mut ChaCha8Rng, grid: Grid) -> RegionQuadtree {
     })
 }
 
+/// A tree to merge into `tree`: keeping hashes, mostly a copy of it with one shape filled
+/// or cleared, hashed as a shared known map is (alike in most subtrees, so the union skips
+/// them); else a random tree.
+fn union_partner(rng: &mut ChaCha8Rng, tree: &RegionQuadtree, hashing: bool) -> RegionQuadtree {
+    if hashing && rng.random_bool(0.7) {
+        let mut copy = tree.clone();
+        let shape = random_shape(rng, tree.grid());
+        copy.fill(&&*shape, rng.random_bool(0.5), PartialCells::Include);
+        copy.complete_hashes();
+        copy
+    } else {
+        random_tree(rng, *tree.grid())
+    }
+}
+
 #[test]
 fn issue11_packed_trees_are_the_unpacked_tree() {
     let mut rng = ChaCha8Rng::seed_from_u64(0xB10C);
@@ -103,11 +118,19 @@ fn issue11_packed_trees_are_the_unpacked_tree() {
         assert_eq!(decoded.packed, packed.packed);
         assert_same(&decoded, &twin, &format!("case {case}: decoded"));
 
+        // Odd cases keep content hashes (issue 11: unions skip subtrees equal to the other
+        // tree's), worked out again now and then, so that fills and unions must forget
+        // those they change: every check below validates each hash kept.
+        let hashing = case % 2 == 1;
         for step in 0..12 {
             let what = format!("case {case} step {step}");
+            if hashing && (step == 0 || rng.random_bool(0.3)) {
+                packed.complete_hashes();
+                assert!(packed.keeps_hashes() || packed.groups.is_empty(), "{what}");
+            }
             let shape = random_shape(&mut rng, &grid);
             if rng.random_bool(0.25) {
-                let other = random_tree(&mut rng, grid);
+                let other = union_partner(&mut rng, &packed, hashing);
                 let added = packed.union_counting(&other);
                 assert_eq!(added, twin.union_counting(&other.unpacked()), "{what}: union count");
                 assert_same(&packed, &twin, &format!("{what}: union"));
@@ -246,7 +269,8 @@ fn any_cell_in_rect_matches_brute_force() {
 /// that complete whole squares (merged into one leaf while the call goes on), clear cells
 /// (splitting leaves, reusing freed nodes) and revisit blocks of a square merged earlier in
 /// the same call leave exactly the cells a brute-force grid holds, report exactly those
-/// that switched, and keep the tree well formed.
+/// that switched, and keep the tree well formed (odd cases keep content hashes, worked out
+/// again every few calls, which each fill must forget where it changes cells).
 #[test]
 fn issue11_rows_filled_block_by_block_match_a_grid() {
     let mut rng = ChaCha8Rng::seed_from_u64(0x9A7B);
@@ -256,6 +280,21 @@ fn issue11_rows_filled_block_by_block_match_a_grid() {
         let mut tree = RegionQuadtree::uniform(grid, false);
         let mut brute = vec![false; (side * side) as usize];
         for call in 0..60 {
+            if case % 2 == 1 && call % 3 == 0 {
+                tree.complete_hashes();
+                // And a whole aligned square set by its own descent, now and then.
+                let level = rng.random_range(3..=5u8);
+                let (x, y) = (
+                    rng.random_range(0..side) >> level << level,
+                    rng.random_range(0..side) >> level << level,
+                );
+                let value = rng.random_bool(0.5);
+                tree.fill_square_reporting(Square { x, y, level }, value, |_| {});
+                tree.assert_well_formed();
+                for (cy, cx) in (y..y + (1 << level)).flat_map(|cy| (x..x + (1 << level)).map(move |cx| (cy, cx))) {
+                    brute[(cy * side + cx) as usize] = value;
+                }
+            }
             let value = rng.random_bool(0.75);
             let mut rows = crate::spatial::geometry::CellRows::empty();
             // Half the time at a block's edge, as a view over whole blocks.

@@ -93,6 +93,10 @@ impl RegionQuadtree {
             return;
         }
         changed(CellSet::of_block(sq, filled ^ bits));
+        // Every group on the way down holds the changed cells.
+        for &(g, _) in &path[..depth] {
+            self.forget_hash(g);
+        }
         let mut new = self.store_bits(n, filled);
         // Split a leaf above the block: a group per level, the rest of each still that leaf.
         for l in BLOCK_LEVEL + 1..=level {
@@ -150,6 +154,7 @@ impl RegionQuadtree {
             let k = self.groups[n as usize][i];
             let k2 = self.fill_square_node(k, at.child(i), target, want, changed);
             self.groups[n as usize][i] = k2;
+            self.forget_hash(n);
             self.merge_if_uniform(n)
         }
     }
@@ -290,6 +295,7 @@ impl RegionQuadtree {
                         let k2 = self.fill_node(k, sq.child(i), shape, want, partial, changed);
                         self.groups[n as usize][i] = k2;
                     }
+                    self.forget_hash(n);
                     self.merge_if_uniform(n)
                 }
             }
@@ -459,6 +465,18 @@ impl RegionQuadtree {
             changed(sq);
             return self.copy_from(other, m, level);
         }
+        // Groups both: the same contents add nothing (the other tree's hashes are kept
+        // when it was shared for merging; see `hash`). Not above `HASHED_LEVELS`: maps
+        // that differ anywhere differ there, and each view marked would make this tree
+        // work out those groups' hashes again.
+        if level <= super::hash::HASHED_LEVELS
+            && !is_block(n)
+            && !is_block(m)
+            && let Some(theirs) = other.known_hash(m)
+            && self.hash_of(n) == theirs
+        {
+            return n;
+        }
         if self.packs(level) {
             // Both mixed: one OR settles the 64 cells.
             let (mine, theirs) = (self.bits_of(n, level), other.bits_of(m, level));
@@ -476,7 +494,7 @@ impl RegionQuadtree {
         if self.packs(level - 1) && other.packs(level - 1) {
             return self.union_blocks(n, sq, kids, other, theirs, added, changed);
         }
-        let mut any = false;
+        let (mut any, before) = (false, *added);
         for i in 0..4 {
             let (k, mk) = (kids[i], theirs[i]);
             if k == FULL || mk == super::EMPTY {
@@ -487,6 +505,10 @@ impl RegionQuadtree {
                 self.groups[n as usize][i] = k2;
                 any = true;
             }
+        }
+        // A union changes a subtree only by adding cells to it.
+        if *added != before {
+            self.forget_hash(n);
         }
         // Only a child that became a leaf can make the group uniform.
         if any { self.merge_if_uniform(n) } else { n }
@@ -528,6 +550,7 @@ impl RegionQuadtree {
             }
             *added += u64::from(union.count_ones() - mine.count_ones());
             changed(sq.child(i));
+            self.forget_hash(n);
             let k2 = self.store_bits(k, union);
             if k2 != k {
                 self.groups[n as usize][i] = k2;

@@ -8,7 +8,8 @@ impl RegionQuadtree {
     /// list (never both), no internal node sits below the finest level, no group has four
     /// equal leaves as children (uniform siblings are merged, so the tree is canonical: one
     /// region, one tree), and in a packed tree every mixed 8 × 8 square is a block of mixed
-    /// bits, with no group at or below that level.
+    /// bits, with no group at or below that level; and every content hash kept is that of
+    /// its group's contents.
     pub fn validate(&self) -> crate::Result<()> {
         self.problems().map_err(crate::Error::Malformed)
     }
@@ -95,6 +96,12 @@ impl RegionQuadtree {
                 nb - reached_blocks - self.free_blocks.len(),
                 self.free_blocks.len()
             ));
+        }
+        if self.keeps_hashes() {
+            if self.hashes.len() != n {
+                return Err(format!("{} content hashes kept for {n} groups", self.hashes.len()));
+            }
+            self.hash_problems(self.root)?;
         }
         if block_internal != self.block_internal {
             return Err(format!(
