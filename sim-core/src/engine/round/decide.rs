@@ -51,8 +51,9 @@ impl Simulation {
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
             .zip(self.turns.par_iter_mut())
+            .zip(self.bodies_now.par_iter_mut())
             .with_max_len(ROBOTS_PER_TASK)
-            .for_each(|((agent, robot), turn)| {
+            .for_each(|(((agent, robot), turn), body)| {
                 turn.start = robot.position;
                 turn.sensed_m = None;
                 turn.known_changed = false;
@@ -112,6 +113,7 @@ impl Simulation {
                 } else {
                     agent.action = Action::Idle;
                 }
+                *body = (robot.position, types[robot.type_index].radius_m);
                 turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
                 turn.news = turn.known_changed
                     || !agent.mind.perception.treasures.is_empty()

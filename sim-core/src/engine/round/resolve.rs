@@ -264,6 +264,7 @@ impl Simulation {
         }
         self.near_scratch = near;
         let (outcome, alive) = walk(&mut self.robots[i], from, step, wanted, kind);
+        self.bodies_now[i].0 = self.robots[i].position;
         if !alive {
             self.disable_dry(i);
         }
@@ -279,9 +280,9 @@ impl Simulation {
     /// is asked first, and `first` is left at the one found.
     fn overlaps_any(&self, near: &[u32], p: DVec2, radius: f64, first: &mut usize) -> bool {
         let overlaps = |j: u32| {
-            let other = &self.robots[j as usize];
-            let rr = radius + self.types[other.type_index].radius_m;
-            other.position.distance_squared(p) < rr * rr
+            let (at, r) = self.bodies_now[j as usize];
+            let rr = radius + r;
+            at.distance_squared(p) < rr * rr
         };
         if near.get(*first).is_some_and(|&j| overlaps(j)) {
             return true;
