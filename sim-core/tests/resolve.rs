@@ -8,7 +8,7 @@ use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation, Start};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap, TreasureId};
-use sim_core::world::{Action, HomeBase, MapData, Outcome, RobotType, TreasureSpec};
+use sim_core::world::{Action, HomeBase, MapData, Outcome, Payload, RobotType, TreasureSpec};
 
 const EPS: f64 = 1e-9;
 
@@ -435,4 +435,76 @@ fn energy_idle_every_round_and_distance_times_energy_per_m() {
     // Spent in all: 4·0.5 + 1.6·2.5 = 6.
     assert!((r.stats.energy_used - 6.0).abs() < EPS);
     assert!((r.stats.distance_m - 1.6).abs() < EPS);
+}
+
+/// Publishes a goal and a path made of the round number, moves a little, optionally talks
+/// (so that its turn waits for step 3's order) or panics in one round.
+struct Planner {
+    talk: bool,
+    panic_in_round: Option<u64>,
+}
+
+impl Strategy for Planner {
+    fn needs(&self) -> Needs {
+        Needs::NONE
+    }
+    fn decide(&mut self, ctx: &mut Ctx) -> Action {
+        let r = ctx.round as f64;
+        ctx.set_goal(Some(DVec2::new(r, 7.0)));
+        ctx.set_path(&[DVec2::new(r, 1.0), DVec2::new(r, 2.0)]);
+        if self.talk {
+            ctx.broadcast(Payload::Position {
+                position: ctx.position(),
+                goal: None,
+            });
+        }
+        assert!(self.panic_in_round != Some(ctx.round), "planned failure");
+        Action::MoveTo {
+            to: ctx.position() + DVec2::new(0.0, 0.1),
+        }
+    }
+}
+
+/// Issue 11: the goal and path a strategy publishes reach the robot (what viewers draw)
+/// whether its turn was resolved in step 2 (alone) or in step 3 (it talks), and a robot
+/// whose strategy fails keeps the last ones it published.
+#[test]
+fn issue11_published_goals_and_paths_reach_every_robot_that_decided() {
+    let mut registry = StrategyRegistry::with_builtins();
+    for (name, talk, panic_in_round) in [
+        ("quiet", false, None),
+        ("talker", true, None),
+        ("failing", false, Some(2)),
+    ] {
+        registry.register(name, "publishes its plan", move |_| {
+            Ok(Box::new(Planner { talk, panic_in_round }))
+        });
+    }
+    let mut builder = ScenarioBuilder::new(map(vec![]))
+        .with_types(vec![explorer()])
+        .with_rounds(5);
+    for (name, x) in [("quiet", 1.5), ("talker", 3.5), ("failing", 4.5)] {
+        builder = builder.with_group(Group::new(name, 0, 1).with_start(Start::At(DVec2::new(x, 5.0))));
+    }
+    let mut sim = Simulation::new(builder.build(&registry).unwrap()).unwrap();
+    let plan = |round: f64| {
+        (
+            Some(DVec2::new(round, 7.0)),
+            vec![DVec2::new(round, 1.0), DVec2::new(round, 2.0)],
+        )
+    };
+    sim.step();
+    for r in sim.robots() {
+        assert_eq!((r.goal, r.path.clone()), plan(1.0), "{} after round 1", r.id);
+    }
+    sim.step();
+    let robots = sim.robots();
+    assert_eq!((robots[0].goal, robots[0].path.clone()), plan(2.0), "the quiet robot");
+    assert_eq!((robots[1].goal, robots[1].path.clone()), plan(2.0), "the talker");
+    assert!(!robots[2].alive, "the failing robot is disabled");
+    assert_eq!(
+        (robots[2].goal, robots[2].path.clone()),
+        plan(1.0),
+        "the failing robot keeps round 1's"
+    );
 }

@@ -10,7 +10,7 @@ use glam::DVec2;
 use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
-use super::resolve::{Bodies, move_within_means, resolve_alone, trim_to_obstacles, upkeep};
+use super::resolve::{Bodies, move_within_means, publish_plan, resolve_alone, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
@@ -84,6 +84,7 @@ impl Simulation {
                     match decided {
                         Ok(action) => {
                             agent.action = action;
+                            publish_plan(robot, &agent.mind.output);
                             agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
                             agent.hearers.clear();
                             let broadcasts = agent

@@ -65,13 +65,7 @@ impl Simulation {
                 self.robots[i].stats.messages_sent += 1;
                 self.robots[i].stats.message_bytes += size;
             }
-            end_of_turn(
-                &mut self.robots[i],
-                &self.agents[i].mind.output,
-                kind,
-                &home,
-                (action, outcome),
-            );
+            end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
         self.fan_out();
         (messages, bytes)
@@ -557,18 +551,21 @@ fn walk(r: &mut Robot, from: DVec2, step: DVec2, wanted: f64, kind: &RobotType) 
     (outcome, alive)
 }
 
-/// The end of a robot's turn in step 3: recharge at home, and what viewers show of it.
-pub(super) fn end_of_turn(
-    r: &mut Robot,
-    output: &StrategyOutput,
-    kind: &RobotType,
-    home: &HomeBase,
-    last: (Action, Outcome),
-) {
+/// The end of a robot's turn in step 3: recharge at home, and the action viewers show. (Its
+/// goal and path were published in step 2: [`publish_plan`].)
+pub(super) fn end_of_turn(r: &mut Robot, kind: &RobotType, home: &HomeBase, last: (Action, Outcome)) {
     if r.alive && home.contains(r.position) {
         r.energy = (r.energy + kind.recharge_per_round).min(kind.energy_capacity);
     }
     r.last_action = last;
+}
+
+/// What viewers show of a robot's plan: the goal and path its strategy published this
+/// round. Set in step 2, in parallel, for every robot whose strategy decided (those are
+/// the robots whose turn ends in step 3 or [`resolve_alone`]), rather than in the
+/// sequential step 3 (issue 11: copying paths there was a tenth of the moonshot's step 3);
+/// nothing reads them before the round ends.
+pub(super) fn publish_plan(r: &mut Robot, output: &StrategyOutput) {
     r.goal = output.goal();
     r.path.clear();
     r.path.extend_from_slice(output.path());
@@ -633,7 +630,7 @@ pub(super) fn resolve_alone(r: &mut Robot, agent: &mut Agent, kind: &RobotType, 
         }
     };
     agent.planned_move = None;
-    end_of_turn(r, &agent.mind.output, kind, home, (agent.action, outcome));
+    end_of_turn(r, kind, home, (agent.action, outcome));
     true
 }
 
