@@ -80,7 +80,8 @@ pub fn blocked(ctx: &Ctx) -> bool {
 }
 
 impl TacticRegistry {
-    /// A registry with the built-in tactics (see the [module docs](self)).
+    /// A registry with the built-in tactics: `collision`, `energy`, `boundary`,
+    /// `shortest_path`, `frontier` and `team` (see the [`Tactic`] implementations).
     pub fn with_builtins() -> Self {
         let mut r = Self::empty();
         r.register(
