@@ -58,6 +58,15 @@ fn cell_at(p: DVec2, cell_m: f64) -> (i32, i32) {
     (floor(p.x / cell_m) as i32, floor(p.y / cell_m) as i32)
 }
 
+/// The corners `lo`, `hi` of a rectangle of cells grown to hold `cell`.
+#[inline]
+fn spanning(lo: (i32, i32), hi: (i32, i32), cell: (i32, i32)) -> ((i32, i32), (i32, i32)) {
+    (
+        (lo.0.min(cell.0), lo.1.min(cell.1)),
+        (hi.0.max(cell.0), hi.1.max(cell.1)),
+    )
+}
+
 impl Default for RobotIndex {
     fn default() -> Self {
         Self::new()
@@ -119,10 +128,7 @@ impl RobotIndex {
         let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
         self.scratch.extend(robots.into_iter().map(|(id, position)| {
             let cell = cell_at(position, cell_m);
-            (lo, hi) = (
-                (lo.0.min(cell.0), lo.1.min(cell.1)),
-                (hi.0.max(cell.0), hi.1.max(cell.1)),
-            );
+            (lo, hi) = spanning(lo, hi, cell);
             (0, Entry { position, id, cell })
         }));
         let n = self.scratch.len();
@@ -144,10 +150,7 @@ impl RobotIndex {
             (lo, hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
             for (_, e) in &mut self.scratch {
                 e.cell = cell_at(e.position, self.cell_m);
-                (lo, hi) = (
-                    (lo.0.min(e.cell.0), lo.1.min(e.cell.1)),
-                    (hi.0.max(e.cell.0), hi.1.max(e.cell.1)),
-                );
+                (lo, hi) = spanning(lo, hi, e.cell);
             }
             area = area_of(lo, hi);
         }
