@@ -232,6 +232,15 @@ impl KnownMap {
         !self.tree.any_cell_in_rect(lo, hi, false)
     }
 
+    /// Whether some cell of the cell rectangle `lo ..= hi` is known, and whether every cell
+    /// is: [`touches_cells`](Self::touches_cells) and [`covers_cells`](Self::covers_cells)
+    /// from one descent of the tree.
+    #[inline]
+    pub fn touches_and_covers_cells(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
+        let (some_unknown, some_known) = self.tree.values_in_rect(lo, hi);
+        (some_known, !some_unknown)
+    }
+
     /// Whether some cell overlapping the shape is known.
     pub fn touches_known<S: Shape>(&self, shape: &S) -> bool {
         self.tree.any_leaf_in(shape, true)

@@ -13,7 +13,12 @@ use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_bo
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
+use crate::spatial::quadtree::block::BLOCK_LEVEL;
 use crate::spatial::quadtree::{BitGrid, Region};
+
+/// Blocks of the tree (8 × 8 cells) a long leg's box may span for the swept-disc test to
+/// read their cells; past that, the tree walk decides.
+const MAX_LEG_BLOCKS: u64 = 64;
 
 /// The static obstacles of a map.
 #[derive(Clone, Debug)]
@@ -144,14 +149,41 @@ impl ObstacleMap {
         let r2 = capsule.radius * capsule.radius;
         let (clearly_hit, clearly_clear) = (r2 * (1.0 - 1e-7), r2 * (1.0 + 1e-7));
         let mut undecided = false;
-        let flow = self.visit_blocked_cells_near(&capsule.bounds(), |cell| {
+        let mut visit = |cell: Aabb| {
             let d = segment_box_distance_squared(capsule.a, capsule.b, &cell);
             if d < clearly_hit {
                 return ControlFlow::Break(());
             }
             undecided |= d <= clearly_clear;
             ControlFlow::Continue(())
-        })?;
+        };
+        let flow = self
+            .visit_blocked_cells_near(&capsule.bounds(), &mut visit)
+            .or_else(|| {
+                // A long leg (navigation's routes): the cells of the blocks it passes near, which
+                // hold every cell within the radius (issue 12: the tree walk for legs past 2 × 2
+                // blocks was a sixth of the frontier searches). A block farther than the radius
+                // by a part in a million holds no cell within a part in 10⁷ of it, whatever the
+                // rounding, so skipping it changes no answer.
+                let grid = self.grid();
+                let area = capsule.bounds();
+                let eps = DVec2::splat(area.rounding_margin());
+                let (lo, hi) = grid.cells_touching(&Aabb {
+                    min: area.min - eps,
+                    max: area.max + eps,
+                })?;
+                let blocks = u64::from((hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) + 1)
+                    * u64::from((hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) + 1);
+                if blocks > MAX_LEG_BLOCKS {
+                    return None;
+                }
+                let reach2 = r2 * (1.0 + 1e-6);
+                let near = |sq: Square| {
+                    segment_box_distance_squared(capsule.a, capsule.b, &grid.square(sq.x, sq.y, sq.level)) <= reach2
+                };
+                self.tree
+                    .visit_cells_in_blocks(lo, hi, true, near, |x, y| visit(grid.square(x, y, 0)))
+            })?;
         if flow.is_break() {
             Some(false)
         } else if undecided {

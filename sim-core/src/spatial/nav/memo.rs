@@ -3,12 +3,17 @@
 use super::{NavGraph, NavNodeId};
 use crate::spatial::KnownMap;
 
-/// Slots of the memo (a power of two): a robot's frontier searches settle a few dozen
-/// pieces and ask about their neighbours, mostly the same ones from one search to the next.
-const SLOTS: usize = 512;
+/// Slots of the memo (a power of two), an open-addressed table kept at most half full: a
+/// robot's frontier search asks about a few hundred pieces (those it settles and their
+/// neighbours), mostly the same ones from one search to the next.
+const SLOTS: usize = 1024;
+
+/// Pieces held before the table is emptied: a search then asks its pieces again.
+const MAX_HELD: usize = SLOTS / 2;
 
 /// Facts in a slot's low bits: a "yes" (bits 0–1) holds for good, a "no" (bits 2–3) only
-/// while the map is as it was (its epoch in bits 4–19); the piece in the bits above.
+/// while the map is as it was (its epoch in bits 4–19); the piece in the bits above (an
+/// empty slot is 0).
 const TOUCHED: u64 = 1;
 const COVERED: u64 = 2;
 const NO_SHIFT: u32 = 2;
@@ -22,14 +27,18 @@ const KEY_SHIFT: u32 = 20;
 ///
 /// A robot's known map only grows, so a "yes" stays right for good, and a "no" as long as
 /// the map's number of known cells is the same (any change adds cells). The answers are
-/// exactly those of [`NavGraph::touched_by`] and [`NavGraph::covered_by`]. The cache is
-/// direct-mapped (a piece whose slot another took is asked of the map again), 4 KB,
-/// allocated at its first use. Use it with one robot's map and one graph only (it forgets
-/// everything if the graph's size changes); it is not part of a strategy's saved state, as
-/// it can always be worked out again.
+/// exactly those of [`NavGraph::touched_by`] and [`NavGraph::covered_by`]; a question the
+/// memo cannot answer is asked of the map for both facts at once. The table is 8 KB,
+/// allocated at its first use, and emptied when half full (with 512 direct-mapped slots,
+/// pieces taking each other's slots were most of the questions asked again: issue 12).
+/// Use it with one robot's map and one graph only (it forgets everything if the graph's
+/// size changes); it is not part of a strategy's saved state, as it can always be worked
+/// out again.
 #[derive(Clone, Debug, Default)]
 pub struct PieceMemo {
     slots: Option<Box<[u64; SLOTS]>>,
+    /// Slots in use.
+    held: usize,
     /// The graph's piece count when the slots were filled.
     pieces: usize,
     /// The known map's cell count when the current epoch began.
@@ -41,25 +50,18 @@ pub struct PieceMemo {
 impl PieceMemo {
     /// Whether `known` knows some cell of `n` ([`NavGraph::touched_by`]).
     pub fn touched(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId) -> bool {
-        self.ask(nav, known, n, TOUCHED, || nav.touched_by(known, n))
+        self.ask(nav, known, n, TOUCHED)
     }
 
     /// Whether `known` knows every cell of `n` ([`NavGraph::covered_by`]).
     pub fn covered(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId) -> bool {
-        self.ask(nav, known, n, COVERED, || nav.covered_by(known, n))
+        self.ask(nav, known, n, COVERED)
     }
 
-    fn ask(
-        &mut self,
-        nav: &NavGraph,
-        known: &KnownMap,
-        n: NavNodeId,
-        fact: u64,
-        work_out: impl FnOnce() -> bool,
-    ) -> bool {
+    fn ask(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId, fact: u64) -> bool {
         if self.pieces != nav.len() || self.slots.is_none() {
             self.slots = Some(Box::new([0; SLOTS]));
-            (self.pieces, self.known_cells, self.epoch) = (nav.len(), known.known_cells(), 1);
+            (self.pieces, self.known_cells, self.epoch, self.held) = (nav.len(), known.known_cells(), 1, 0);
         }
         let slots = self.slots.as_mut().expect("allocated above");
         if known.known_cells() != self.known_cells {
@@ -68,15 +70,17 @@ impl PieceMemo {
             if self.epoch >> (KEY_SHIFT - EPOCH_SHIFT) != 0 {
                 // The epoch field wrapped: old "no"s could pass for current ones.
                 slots.fill(0);
-                self.epoch = 1;
+                (self.epoch, self.held) = (1, 0);
             }
         }
         let key = (u64::from(n.0) + 1) << KEY_SHIFT;
-        let slot = (u64::from(n.0).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 55) as usize % SLOTS;
-        let mut entry = slots[slot];
-        if entry >> KEY_SHIFT != key >> KEY_SHIFT {
-            entry = key;
+        let home = (u64::from(n.0).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 54) as usize % SLOTS;
+        // Linear probing from the piece's home slot to its entry or the first empty slot.
+        let mut slot = home;
+        while slots[slot] != 0 && slots[slot] >> KEY_SHIFT != key >> KEY_SHIFT {
+            slot = (slot + 1) % SLOTS;
         }
+        let entry = slots[slot];
         let current = (entry >> EPOCH_SHIFT) & ((1 << (KEY_SHIFT - EPOCH_SHIFT)) - 1) == self.epoch;
         if entry & fact != 0 {
             return true;
@@ -84,26 +88,22 @@ impl PieceMemo {
         if current && entry & (fact << NO_SHIFT) != 0 {
             return false;
         }
-        let answer = work_out();
-        // Keep the yeses; the noes only if they are of this epoch.
-        let mut facts = entry & (TOUCHED | COVERED);
-        let mut noes = if current {
-            entry & ((TOUCHED | COVERED) << NO_SHIFT)
+        let (touched, covered) = nav.touched_and_covered_by(known, n);
+        // Both facts are known now: yeses for good, noes for this epoch.
+        let facts = if covered {
+            TOUCHED | COVERED
         } else {
-            0
+            (u64::from(touched) * TOUCHED) | (COVERED << NO_SHIFT)
         };
-        if answer {
-            // A piece covered is touched too (pieces are never empty).
-            facts |= if fact == COVERED { TOUCHED | COVERED } else { fact };
-        } else {
-            // A piece not touched is not covered either.
-            noes |= if fact == TOUCHED {
-                (TOUCHED | COVERED) << NO_SHIFT
-            } else {
-                fact << NO_SHIFT
-            };
+        let facts = facts | (u64::from(!touched) * (TOUCHED << NO_SHIFT));
+        if entry == 0 {
+            if self.held == MAX_HELD {
+                slots.fill(0);
+                (self.held, slot) = (0, home);
+            }
+            self.held += 1;
         }
-        slots[slot] = key | (self.epoch << EPOCH_SHIFT) | noes | facts;
-        answer
+        slots[slot] = key | (self.epoch << EPOCH_SHIFT) | facts;
+        if fact == TOUCHED { touched } else { covered }
     }
 }

@@ -195,7 +195,7 @@ struct Scratch {
     stamp: u32,
     marks: Vec<(u32, f64, u32)>,
     entry: Vec<(DVec2, f64)>,
-    heap: BinaryHeap<Reverse<(OrdF64, u32, u32)>>,
+    heap: BinaryHeap<Reverse<u128>>,
 }
 
 thread_local! {
@@ -342,6 +342,13 @@ impl NavGraph {
         known.covers_cells(p.lo(), p.hi())
     }
 
+    /// Whether `known` knows some cell of node `n`, and whether it knows every cell
+    /// ([`touched_by`](Self::touched_by) and [`covered_by`](Self::covered_by) at once).
+    pub fn touched_and_covered_by(&self, known: &KnownMap, n: NavNodeId) -> (bool, bool) {
+        let p = self.piece(n);
+        known.touches_and_covers_cells(p.lo(), p.hi())
+    }
+
     /// A node's world box.
     pub fn bounds(&self, n: NavNodeId) -> Aabb {
         let p = self.piece(n);
@@ -378,8 +385,12 @@ impl NavGraph {
 
     /// Ends of the edge stretch two adjacent nodes share (lower left first).
     pub fn portal_ends(&self, a: NavNodeId, b: NavNodeId) -> (DVec2, DVec2) {
-        let (p, q) = (self.bounds(a), self.bounds(b));
-        (p.min.max(q.min), p.max.min(q.max))
+        // In cells, then to the world: the corners are the same, as a corner grows with its
+        // cell (issue 12: both boxes in metres were a twelfth of the frontier searches).
+        let (p, q) = (self.piece(a), self.piece(b));
+        let lo = self.grid.corner(p.x.max(q.x), p.y.max(q.y));
+        let hi = self.grid.corner((p.x + p.w).min(q.x + q.w), (p.y + p.h).min(q.y + q.h));
+        (lo, hi)
     }
 
     /// Where a route through `nodes` that keeps well inside them crosses their portals: for
@@ -535,7 +546,7 @@ impl NavGraph {
         is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
-        let (nodes, goal) = self.best_first(from, usable, is_goal, |_| 0.0, max_nodes)?;
+        let (nodes, goal) = self.best_first(from, usable, is_goal, None, max_nodes)?;
         Some(self.taut_route(from, nodes, goal, terrain))
     }
 
@@ -543,14 +554,22 @@ impl NavGraph {
     /// a portal: Dijkstra with a zero estimate, A* with the straight line to a known goal.
     /// An estimate that never exceeds the length still to go, and never drops faster than
     /// the distance walked, finds the same shortest routes while settling far fewer nodes.
+    ///
+    /// With a zero estimate (Dijkstra: `estimate` is `None`) a node's cost is final once
+    /// settled, as costs popped never decrease, so the moves back into settled nodes are
+    /// not worked out (issue 12: about half of a frontier search's moves). With an
+    /// estimate a later, cheaper way into a settled node reopens it, as entry points
+    /// depend on the way in.
     fn best_first(
         &self,
         from: DVec2,
         mut usable: impl FnMut(NavNodeId) -> bool,
         mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
-        estimate: impl Fn(DVec2) -> f64,
+        estimate: Option<&dyn Fn(DVec2) -> f64>,
         max_nodes: usize,
     ) -> Option<(Vec<NavNodeId>, DVec2)> {
+        let settled_final = estimate.is_none();
+        let estimate = |p: DVec2| estimate.map_or(0.0, |e| e(p));
         let start = self.node_at(from)?;
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
@@ -569,14 +588,16 @@ impl NavGraph {
                 *marks = vec![(0, 0.0, 0); self.pieces.len()];
                 *stamp = 0;
             }
-            *stamp = stamp.wrapping_add(1);
+            // Two stamps a search: `stamp` for a node reached, `stamp + 1` once settled.
+            *stamp = stamp.wrapping_add(2);
             if *stamp == 0 {
                 for m in marks.iter_mut() {
                     m.0 = 0;
                 }
-                *stamp = 1;
+                *stamp = 2;
             }
             let stamp = *stamp;
+            let settled_stamp = stamp + 1;
             // Where the search enters each node (portal or start), for edge costs, and the
             // distance walked to get there (buffers reused: a search is planned every few
             // rounds by every explorer, and allocating them was a few per cent of a round).
@@ -584,14 +605,16 @@ impl NavGraph {
             entry.push((from, 0.0));
             heap.clear();
             marks[start.0 as usize] = (stamp, 0.0, u32::MAX);
-            heap.push(Reverse((OrdF64(estimate(from)), start.0, 0u32)));
+            heap.push(Reverse(heap_key(estimate(from), start.0, 0)));
             let mut settled = 0usize;
-            while let Some(Reverse((_, n, e))) = heap.pop() {
+            while let Some(Reverse(key)) = heap.pop() {
+                let (n, e) = ((key >> 32) as u32, key as u32);
                 let node = NavNodeId(n);
                 let (at, d) = entry[e as usize];
                 if d > marks[n as usize].1 {
                     continue;
                 }
+                marks[n as usize].0 = settled_stamp;
                 settled += 1;
                 if let Some(goal) = is_goal(node) {
                     let mut nodes = vec![node];
@@ -607,15 +630,18 @@ impl NavGraph {
                     return None;
                 }
                 for m in self.neighbors(node) {
-                    let p = self.entry_point(node, m, at);
-                    let nd = d + at.distance(p);
                     let mark = marks[m.0 as usize];
                     // Only nodes found usable are ever stamped, so the test runs once a node.
-                    let better = if mark.0 == stamp { nd < mark.1 } else { usable(m) };
-                    if better {
+                    let reached = mark.0 | 1 == settled_stamp;
+                    if (settled_final && mark.0 == settled_stamp) || (!reached && !usable(m)) {
+                        continue;
+                    }
+                    let p = self.entry_point(node, m, at);
+                    let nd = d + at.distance(p);
+                    if !reached || nd < mark.1 {
                         marks[m.0 as usize] = (stamp, nd, n);
                         entry.push((p, nd));
-                        heap.push(Reverse((OrdF64(nd + estimate(p)), m.0, (entry.len() - 1) as u32)));
+                        heap.push(Reverse(heap_key(nd + estimate(p), m.0, (entry.len() - 1) as u32)));
                     }
                 }
             }
@@ -642,7 +668,7 @@ impl NavGraph {
             from,
             |n| self.touched_by(known, n),
             |n| (n == goal).then_some(to),
-            |p| p.distance(to),
+            Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
         Some(self.taut_route(from, nodes, to, terrain))
@@ -686,7 +712,7 @@ impl NavGraph {
                 exits[1..].sort_by(|a, b| a.distance_squared(to).total_cmp(&b.distance_squared(to)));
                 exits.into_iter().find(|&exit| terrain.hopeful(exit, to))
             },
-            |p| p.distance(to),
+            Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
         let mut route = self.taut_route(from, nodes, end, terrain);
@@ -718,19 +744,16 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
     out
 }
 
-/// f64 ordered by `total_cmp`, for the search heap (ties broken by node id: deterministic).
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct OrdF64(f64);
-impl Eq for OrdF64 {}
-impl PartialOrd for OrdF64 {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-impl Ord for OrdF64 {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
+/// A search heap entry as one number, ordered as the tuple (`cost` by `total_cmp`, `node`,
+/// `entry`): ties broken by node id, so searches are deterministic. One integer compare
+/// instead of a float's `total_cmp` and two more (issue 12: the heap was an eighth of the
+/// frontier searches' instructions).
+#[inline]
+fn heap_key(cost: f64, node: u32, entry: u32) -> u128 {
+    let bits = cost.to_bits();
+    // `total_cmp`'s order as unsigned integers: negatives reversed below the positives.
+    let ordered = if bits >> 63 == 1 { !bits } else { bits | 1 << 63 };
+    u128::from(ordered) << 64 | u128::from(node) << 32 | u128::from(entry)
 }
 
 #[cfg(test)]

@@ -446,3 +446,20 @@ fn issue12_optimistic_routes_hope_only_where_nothing_known_is_blocked() {
             .is_none()
     );
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..proptest::prelude::ProptestConfig::default() })]
+
+    /// Issue 12: the search heap's packed keys order entries as the tuples they pack do
+    /// (cost by `total_cmp`, then node, then entry), so searches pop the same nodes.
+    #[test]
+    fn issue12_heap_keys_order_as_their_tuples(
+        a in (proptest::num::f64::ANY, 0u32..4, 0u32..4),
+        b in (proptest::num::f64::ANY, 0u32..4, 0u32..4),
+        equal_cost in proptest::bool::ANY,
+    ) {
+        let b = if equal_cost { (a.0, b.1, b.2) } else { b };
+        let tuple = a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2));
+        proptest::prop_assert_eq!(heap_key(a.0, a.1, a.2).cmp(&heap_key(b.0, b.1, b.2)), tuple);
+    }
+}

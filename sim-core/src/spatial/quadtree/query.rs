@@ -226,26 +226,44 @@ impl RegionQuadtree {
     /// level was a fifth of the dense random walk).
     pub fn visit_cells_in_rect(
         &self,
+        lo: (u32, u32),
+        hi: (u32, u32),
+        value: bool,
+        visit: impl FnMut(u32, u32) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
+        if (hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) > 1 || (hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) > 1 {
+            return None;
+        }
+        self.visit_cells_in_blocks(lo, hi, value, |_| true, visit)
+    }
+
+    /// [`visit_cells_in_rect`](Self::visit_cells_in_rect) over any number of blocks, but
+    /// only in the blocks (squares of the tree's block level) that `near` accepts: for a
+    /// long shape, the blocks along it. `None` if the tree has no blocks.
+    pub fn visit_cells_in_blocks(
+        &self,
         (x0, y0): (u32, u32),
         (x1, y1): (u32, u32),
         value: bool,
+        mut near: impl FnMut(Square) -> bool,
         mut visit: impl FnMut(u32, u32) -> ControlFlow<()>,
     ) -> Option<ControlFlow<()>> {
         debug_assert!(x0 <= x1 && y0 <= y1 && x1 < self.grid.side_cells() && y1 < self.grid.side_cells());
-        if !self.packed
-            || (x1 >> BLOCK_LEVEL) - (x0 >> BLOCK_LEVEL) > 1
-            || (y1 >> BLOCK_LEVEL) - (y0 >> BLOCK_LEVEL) > 1
-        {
+        if !self.packed {
             return None;
         }
         for by in (y0 >> BLOCK_LEVEL)..=(y1 >> BLOCK_LEVEL) {
             for bx in (x0 >> BLOCK_LEVEL)..=(x1 >> BLOCK_LEVEL) {
                 let (ox, oy) = (bx << BLOCK_LEVEL, by << BLOCK_LEVEL);
-                let cells = match self.descend_to(Square {
+                let sq = Square {
                     x: ox,
                     y: oy,
                     level: BLOCK_LEVEL,
-                }) {
+                };
+                if !near(sq) {
+                    continue;
+                }
+                let cells = match self.descend_to(sq) {
                     Node::Leaf(v) => {
                         if v == value {
                             u64::MAX
@@ -285,6 +303,22 @@ impl RegionQuadtree {
     /// stops at the first node inside it that is mixed (it holds both values): the test
     /// for navigation pieces, which are rectangles of cells.
     pub fn any_cell_in_rect(&self, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
+        self.values_in_rect_until(lo, hi, value_bit(value)) & value_bit(value) != 0
+    }
+
+    /// Which values the cells of the rectangle `lo ..= hi` (as for
+    /// [`any_cell_in_rect`](Self::any_cell_in_rect)) hold: `(some cell holds false, some
+    /// cell holds true)`. Both answers of `any_cell_in_rect` from one descent (issue 12:
+    /// navigation asks a piece whether it is touched and whether it is covered, each a
+    /// descent of the known map).
+    pub fn values_in_rect(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
+        let held = self.values_in_rect_until(lo, hi, BOTH_VALUES);
+        (held & value_bit(false) != 0, held & value_bit(true) != 0)
+    }
+
+    /// The values (bits of [`value_bit`]) the rectangle's cells hold, the descent stopped
+    /// once all of `wanted` are found (the answer then holds at least those).
+    fn values_in_rect_until(&self, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
         debug_assert!(lo.0 <= hi.0 && lo.1 <= hi.1 && hi.0 < self.grid.side_cells() && hi.1 < self.grid.side_cells());
         // Straight down to the smallest square that holds the rectangle, by its cells' bits
         // (issue 12: walking down from the root testing four children's bounds at every
@@ -300,37 +334,40 @@ impl RegionQuadtree {
         };
         match self.descend_to(sq) {
             // A leaf at or above the square: the whole rectangle holds its value.
-            Node::Leaf(v) => v == value,
-            n => self.any_in_rect_below(n, sq, lo, hi, value),
+            Node::Leaf(v) => value_bit(v),
+            n => self.values_in_rect_below(n, sq, lo, hi, wanted),
         }
     }
 
-    /// `any_cell_in_rect` below node `n` of square `sq`, which the rectangle meets.
-    fn any_in_rect_below(&self, n: Node, sq: Square, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
+    /// `values_in_rect_until` below node `n` of square `sq`, which the rectangle meets.
+    fn values_in_rect_below(&self, n: Node, sq: Square, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
         let last = sq.side_cells() - 1;
         match n {
-            Node::Leaf(v) => v == value,
+            Node::Leaf(v) => value_bit(v),
             // An internal node is never uniform: inside the rectangle it holds both values.
-            _ if lo.0 <= sq.x && lo.1 <= sq.y && sq.x + last <= hi.0 && sq.y + last <= hi.1 => true,
+            _ if lo.0 <= sq.x && lo.1 <= sq.y && sq.x + last <= hi.0 && sq.y + last <= hi.1 => BOTH_VALUES,
             Node::Bits { bits, level } if level == BLOCK_LEVEL => {
                 // The rectangle's part of the block as a mask, row-major, then in Z order.
                 let (cx0, cx1) = (lo.0.max(sq.x) - sq.x, hi.0.min(sq.x + 7) - sq.x);
                 let (cy0, cy1) = (lo.1.max(sq.y) - sq.y, hi.1.min(sq.y + 7) - sq.y);
                 let row = (0xFFu64 >> (7 - (cx1 - cx0))) << cx0;
                 let rows = (u64::MAX >> (8 * (7 - (cy1 - cy0)))) << (8 * cy0);
-                let held = if value { bits } else { !bits };
-                held & block::z_order(rows & (row * 0x0101_0101_0101_0101)) != 0
+                let mask = block::z_order(rows & (row * 0x0101_0101_0101_0101));
+                (u8::from(!bits & mask != 0) * value_bit(false)) | (u8::from(bits & mask != 0) * value_bit(true))
             }
             _ => {
                 let half = sq.side_cells() / 2;
-                (0..4).any(|i| {
+                let mut held = 0;
+                for i in 0..4 {
                     let c = sq.child(i);
-                    c.x <= hi.0
-                        && c.y <= hi.1
-                        && c.x + half > lo.0
-                        && c.y + half > lo.1
-                        && self.any_in_rect_below(self.kid(n, i), c, lo, hi, value)
-                })
+                    if c.x <= hi.0 && c.y <= hi.1 && c.x + half > lo.0 && c.y + half > lo.1 {
+                        held |= self.values_in_rect_below(self.kid(n, i), c, lo, hi, wanted);
+                        if held & wanted == wanted {
+                            break;
+                        }
+                    }
+                }
+                held
             }
         }
     }
@@ -531,3 +568,12 @@ impl RegionQuadtree {
         }
     }
 }
+
+/// A value as a bit of the masks of [`RegionQuadtree::values_in_rect`]'s descent.
+#[inline]
+fn value_bit(v: bool) -> u8 {
+    1 << u8::from(v)
+}
+
+/// Both values' bits.
+const BOTH_VALUES: u8 = 3;

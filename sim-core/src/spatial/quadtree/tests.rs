@@ -213,8 +213,8 @@ fn issue11_packed_trees_are_the_unpacked_tree() {
     }
 }
 
-/// Issue 12: `any_cell_in_rect` against the cells one by one, on random trees (packed and
-/// not) and random rectangles.
+/// Issue 12: `any_cell_in_rect` and `values_in_rect` against the cells one by one, on
+/// random trees (packed and not) and random rectangles.
 #[test]
 fn any_cell_in_rect_matches_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
@@ -246,20 +246,28 @@ fn any_cell_in_rect_matches_brute_force() {
                     (lo.1 + rng.random_range(0..4)).min(side - 1),
                 );
             }
-            for value in [false, true] {
-                let brute = (lo.1..=hi.1).any(|y| {
+            let brute = |value: bool| {
+                (lo.1..=hi.1).any(|y| {
                     (lo.0..=hi.0).any(|x| {
                         let inside = x < 40 && y < 24;
                         (if inside { value_at(x, y) } else { false }) == value
                     })
-                });
-                for tree in [&packed, &unpacked] {
+                })
+            };
+            for tree in [&packed, &unpacked] {
+                for value in [false, true] {
                     assert_eq!(
                         tree.any_cell_in_rect(lo, hi, value),
-                        brute,
+                        brute(value),
                         "case {case}: {lo:?}..={hi:?} {value}"
                     );
                 }
+                // Issue 12: both answers from one descent.
+                assert_eq!(
+                    tree.values_in_rect(lo, hi),
+                    (brute(false), brute(true)),
+                    "case {case}: {lo:?}..={hi:?}"
+                );
             }
         }
     }
