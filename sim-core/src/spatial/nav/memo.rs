@@ -11,6 +11,13 @@ const SLOTS: usize = 1024;
 /// Pieces held before the table is emptied: a search then asks its pieces again.
 const MAX_HELD: usize = SLOTS / 2;
 
+/// Slots in a cache line: pieces numbered alike but for their last three bits (neighbours,
+/// as the graph numbers pieces in Z order) share one line of slots, one slot each.
+const LANES: usize = 8;
+
+/// Lines of slots.
+const LINES: usize = SLOTS / LANES;
+
 /// Facts in a slot's low bits: a "yes" (bits 0–1) holds for good, a "no" (bits 2–3) only
 /// while the map is as it was (its epoch in bits 4–19); the piece in the bits above (an
 /// empty slot is 0).
@@ -74,11 +81,20 @@ impl PieceMemo {
             }
         }
         let key = (u64::from(n.0) + 1) << KEY_SHIFT;
-        let home = (u64::from(n.0).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 54) as usize % SLOTS;
-        // Linear probing from the piece's home slot to its entry or the first empty slot.
-        let mut slot = home;
+        let lane = n.0 as usize % LANES;
+        let home = (u64::from(n.0 / LANES as u32).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 57) as usize % LINES;
+        // Linear probing, line by line in the piece's lane, from its home line to its entry
+        // or the first empty slot; a lane full all round (never in practice: the table is
+        // emptied half full) empties the table.
+        let mut line = home;
+        let mut slot = line * LANES + lane;
         while slots[slot] != 0 && slots[slot] >> KEY_SHIFT != key >> KEY_SHIFT {
-            slot = (slot + 1) % SLOTS;
+            line = (line + 1) % LINES;
+            if line == home {
+                slots.fill(0);
+                self.held = 0;
+            }
+            slot = line * LANES + lane;
         }
         let entry = slots[slot];
         let current = (entry >> EPOCH_SHIFT) & ((1 << (KEY_SHIFT - EPOCH_SHIFT)) - 1) == self.epoch;
@@ -99,7 +115,7 @@ impl PieceMemo {
         if entry == 0 {
             if self.held == MAX_HELD {
                 slots.fill(0);
-                (self.held, slot) = (0, home);
+                (self.held, slot) = (0, home * LANES + lane);
             }
             self.held += 1;
         }

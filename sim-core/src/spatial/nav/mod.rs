@@ -64,8 +64,16 @@ pub struct NavGraph {
     /// The free leaves, to find the piece holding a point: Morton keys of their lower-left
     /// cells, increasing (Z order), their levels and their pieces.
     keys: Vec<u64>,
+    /// Where the keys of each Z-order prefix (`key >> prefix_shift`) start in `keys`, and
+    /// where the last one ends: a point's leaf is looked for among a few dozen keys (issue
+    /// 12: a binary search of all of them missed the cache at most steps).
+    key_starts: Vec<u32>,
+    prefix_shift: u32,
     levels: Vec<u8>,
     piece_of: Vec<u32>,
+    /// Each node's number in the order pieces are merged (see [`pieces::merge`]): searches
+    /// break ties and list neighbours in that order, so routes do not depend on the ids.
+    rank: Vec<u32>,
     starts: Vec<u32>,
     adjacent: Vec<u32>,
 }
@@ -188,13 +196,13 @@ impl Terrain<'_> {
 const SHORTCUT_LOOKAHEAD: usize = 8;
 
 /// A search's scratch, kept per thread and reused: the current stamp; per node (stamp,
-/// distance, parent); where the search entered nodes (point, distance walked), indexed by
-/// the heap's entries; the heap of (estimate, node, entry).
+/// distance, parent); where the search entered nodes (point, distance walked, node),
+/// indexed by the heap's entries; the heap of (estimate, node's rank, entry).
 #[derive(Default)]
 struct Scratch {
     stamp: u32,
     marks: Vec<(u32, f64, u32)>,
-    entry: Vec<(DVec2, f64)>,
+    entry: Vec<(DVec2, f64, u32)>,
     heap: BinaryHeap<Reverse<u128>>,
 }
 
@@ -216,15 +224,29 @@ impl NavGraph {
         let keys: Vec<u64> = leaves.iter().map(|s| morton(s.x, s.y)).collect();
         debug_assert!(keys.windows(2).all(|w| w[0] < w[1]), "leaves come in Z order");
         let (pieces, piece_of) = pieces::merge(&leaves);
+        // Nodes numbered in Z order of their pieces' lower-left cells (distinct: pieces are
+        // disjoint), so that neighbours have nearby ids and a search's reads of nodes,
+        // marks and neighbour lists fall in few cache lines (issue 12: numbered as merged,
+        // by leaf size and column, a search missed the cache at almost every node).
+        let mut rank: Vec<u32> = (0..u32::try_from(pieces.len()).expect("pieces fit u32")).collect();
+        rank.sort_unstable_by_key(|&i| morton(pieces[i as usize].x, pieces[i as usize].y));
+        let mut id_of = vec![0u32; pieces.len()];
+        for (id, &r) in rank.iter().enumerate() {
+            id_of[r as usize] = u32::try_from(id).expect("pieces fit u32");
+        }
         let mut graph = Self {
             grid,
-            pieces,
+            pieces: rank.iter().map(|&r| pieces[r as usize]).collect(),
             levels: leaves.iter().map(|s| s.level).collect(),
+            key_starts: Vec::new(),
+            prefix_shift: 0,
             keys,
-            piece_of,
+            piece_of: piece_of.iter().map(|&p| id_of[p as usize]).collect(),
+            rank,
             starts: Vec::new(),
             adjacent: Vec::new(),
         };
+        graph.index_keys();
         // Pieces of leaves that share a stretch of edge (east and north of every leaf),
         // each pair stored both ways.
         let mut edges: Vec<(u32, u32)> = Vec::new();
@@ -251,7 +273,9 @@ impl NavGraph {
                 });
             }
         }
-        edges.sort_unstable();
+        // Each node's neighbours in the merge's order, as they were listed before the
+        // renumbering.
+        edges.sort_unstable_by_key(|&(a, b)| (a, graph.rank[b as usize]));
         edges.dedup();
         graph.starts = vec![0; graph.pieces.len() + 1];
         for &(a, _) in &edges {
@@ -262,6 +286,36 @@ impl NavGraph {
         }
         graph.adjacent = edges.into_iter().map(|e| e.1).collect();
         graph
+    }
+
+    /// Fill `key_starts`: prefixes of whole squares of cells (two bits a level), about 16
+    /// keys a prefix.
+    fn index_keys(&mut self) {
+        // Keys of a covering square of side 2^d use the low 2d bits. The finest prefixes
+        // that hold at least 16 keys each on average, at most 2^24 of them.
+        let depth_bits = 2 * u32::from(self.grid.depth());
+        let mut shift = depth_bits;
+        while shift >= 2 && depth_bits - shift + 2 <= 24 && (16usize << (depth_bits - shift + 2)) <= self.keys.len() {
+            shift -= 2;
+        }
+        let prefixes = 1usize << (depth_bits - shift);
+        let mut starts = vec![0u32; prefixes + 1];
+        for &k in &self.keys {
+            starts[(k >> shift) as usize + 1] += 1;
+        }
+        for i in 0..prefixes {
+            starts[i + 1] += starts[i];
+        }
+        (self.key_starts, self.prefix_shift) = (starts, shift);
+    }
+
+    /// How many keys are at most `key` (the first index past them): among the keys of its
+    /// prefix, as all before them are smaller and all after larger.
+    #[inline]
+    fn keys_up_to(&self, key: u64) -> usize {
+        let prefix = (key >> self.prefix_shift) as usize;
+        let (lo, hi) = (self.key_starts[prefix] as usize, self.key_starts[prefix + 1] as usize);
+        lo + self.keys[lo..hi].partition_point(|&k| k <= key)
     }
 
     /// The index of free leaf `sq`.
@@ -296,7 +350,7 @@ impl NavGraph {
     pub fn node_at(&self, p: DVec2) -> Option<NavNodeId> {
         let (x, y) = self.grid.cell_of(p)?;
         let key = morton(x, y);
-        let i = self.keys.partition_point(|&k| k <= key).checked_sub(1)?;
+        let i = self.keys_up_to(key).checked_sub(1)?;
         // The leaf at or before the cell in Z order holds it if its square reaches it.
         let (lx, ly) = unmorton(self.keys[i]);
         let s = 1u32 << self.levels[i];
@@ -530,8 +584,9 @@ impl NavGraph {
     pub fn memory_bytes(&self) -> usize {
         self.pieces.capacity() * std::mem::size_of::<Piece>()
             + self.keys.capacity() * 8
+            + self.key_starts.capacity() * 4
             + self.levels.capacity()
-            + (self.piece_of.capacity() + self.starts.capacity() + self.adjacent.capacity()) * 4
+            + (self.piece_of.capacity() + self.rank.capacity() + self.starts.capacity() + self.adjacent.capacity()) * 4
     }
 
     /// Dijkstra from the node holding `from` over nodes accepted by `usable`, until `is_goal`
@@ -602,15 +657,14 @@ impl NavGraph {
             // distance walked to get there (buffers reused: a search is planned every few
             // rounds by every explorer, and allocating them was a few per cent of a round).
             entry.clear();
-            entry.push((from, 0.0));
+            entry.push((from, 0.0, start.0));
             heap.clear();
             marks[start.0 as usize] = (stamp, 0.0, u32::MAX);
-            heap.push(Reverse(heap_key(estimate(from), start.0, 0)));
+            heap.push(Reverse(heap_key(estimate(from), self.rank[start.0 as usize], 0)));
             let mut settled = 0usize;
             while let Some(Reverse(key)) = heap.pop() {
-                let (n, e) = ((key >> 32) as u32, key as u32);
+                let (at, d, n) = entry[key as u32 as usize];
                 let node = NavNodeId(n);
-                let (at, d) = entry[e as usize];
                 if d > marks[n as usize].1 {
                     continue;
                 }
@@ -640,8 +694,9 @@ impl NavGraph {
                     let nd = d + at.distance(p);
                     if !reached || nd < mark.1 {
                         marks[m.0 as usize] = (stamp, nd, n);
-                        entry.push((p, nd));
-                        heap.push(Reverse(heap_key(nd + estimate(p), m.0, (entry.len() - 1) as u32)));
+                        entry.push((p, nd, m.0));
+                        let rank = self.rank[m.0 as usize];
+                        heap.push(Reverse(heap_key(nd + estimate(p), rank, (entry.len() - 1) as u32)));
                     }
                 }
             }
@@ -745,7 +800,7 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
 }
 
 /// A search heap entry as one number, ordered as the tuple (`cost` by `total_cmp`, `node`,
-/// `entry`): ties broken by node id, so searches are deterministic. One integer compare
+/// `entry`): ties broken by the node's rank, so searches are deterministic. One integer compare
 /// instead of a float's `total_cmp` and two more (issue 12: the heap was an eighth of the
 /// frontier searches' instructions).
 #[inline]

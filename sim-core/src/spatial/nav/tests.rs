@@ -40,6 +40,7 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
                 map.is_point_free(map.grid().cell_center(x, y)),
                 "({x}, {y})"
             );
+            assert_eq!(g.node_at(map.grid().cell_center(x, y)), here, "({x}, {y})");
             for (nx, ny) in [(x + 1, y), (x, y + 1)] {
                 if nx < w
                     && ny < h
@@ -50,6 +51,16 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
                 }
             }
         }
+    }
+    // Issue 12: nodes numbered in Z order of their pieces' lower-left cells, each one's
+    // neighbours listed in the order the pieces were merged in.
+    for i in 1..g.len() {
+        let (a, b) = (g.piece(NavNodeId(i as u32 - 1)), g.piece(NavNodeId(i as u32)));
+        assert!(morton(a.x, a.y) < morton(b.x, b.y), "node {i} out of Z order");
+    }
+    for i in 0..g.len() {
+        let ranks: Vec<u32> = g.neighbors(NavNodeId(i as u32)).map(|m| g.rank[m.0 as usize]).collect();
+        assert!(ranks.is_sorted(), "node {i}: neighbours {ranks:?}");
     }
     let mut found = std::collections::BTreeSet::new();
     for i in 0..g.len() {
