@@ -126,14 +126,14 @@ impl Navigator {
         let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
         let memo = RefCell::new(memo);
         let touches = |m: NavNodeId| memo.borrow_mut().touched(nav, known, m);
-        nav.search(
+        nav.search_knowing_reached(
             p,
             terrain,
             |m| {
                 let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
                 hit.unwrap_or_else(|| touches(m))
             },
-            |n| {
+            |n, reached| {
                 touched.borrow_mut().clear();
                 if frontier.is_some_and(|f| !f.contains(n)) {
                     return None;
@@ -142,18 +142,26 @@ impl Navigator {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
                 let mut cache = touched.borrow_mut();
-                let mut found = None;
                 for m in nav.neighbors(n) {
+                    // A node the search reached is touched (the search uses only those),
+                    // and never asked about again.
+                    if reached(m) {
+                        continue;
+                    }
                     let t = touches(m);
                     cache.push((m, t));
-                    if t || found.is_some() {
+                    if t {
                         continue;
                     }
                     let portal = nav.portal(n, m);
                     let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
-                    found = Some(portal + inward * step_in).filter(|t| clear(*t));
+                    let found = Some(portal + inward * step_in).filter(|t| clear(*t));
+                    if found.is_some() {
+                        // The search ends here: the other neighbours are not needed.
+                        return found;
+                    }
                 }
-                found
+                None
             },
             SEARCH_BUDGET,
         )

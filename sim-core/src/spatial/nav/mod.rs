@@ -598,7 +598,22 @@ impl NavGraph {
         from: DVec2,
         terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
-        is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
+        mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
+        max_nodes: usize,
+    ) -> Option<Route> {
+        self.search_knowing_reached(from, terrain, usable, |n, _| is_goal(n), max_nodes)
+    }
+
+    /// [`search`](Self::search) whose goal test also gets a test of whether this search has
+    /// reached a node (found it usable) yet: a goal test that asks about a node's
+    /// neighbours can skip what the search knows already (issue 12: the frontier search
+    /// asked whether the known map touches every neighbour of every node it settled).
+    pub fn search_knowing_reached(
+        &self,
+        from: DVec2,
+        terrain: Terrain,
+        usable: impl FnMut(NavNodeId) -> bool,
+        is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
         let (nodes, goal) = self.best_first(from, usable, is_goal, None, max_nodes)?;
@@ -619,7 +634,7 @@ impl NavGraph {
         &self,
         from: DVec2,
         mut usable: impl FnMut(NavNodeId) -> bool,
-        mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
+        mut is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
         estimate: Option<&dyn Fn(DVec2) -> f64>,
         max_nodes: usize,
     ) -> Option<(Vec<NavNodeId>, DVec2)> {
@@ -670,7 +685,8 @@ impl NavGraph {
                 }
                 marks[n as usize].0 = settled_stamp;
                 settled += 1;
-                if let Some(goal) = is_goal(node) {
+                let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
+                if let Some(goal) = is_goal(node, &reached) {
                     let mut nodes = vec![node];
                     let mut cur = n;
                     while marks[cur as usize].2 != u32::MAX {
@@ -722,7 +738,7 @@ impl NavGraph {
         let (nodes, to) = self.best_first(
             from,
             |n| self.touched_by(known, n),
-            |n| (n == goal).then_some(to),
+            |n, _| (n == goal).then_some(to),
             Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
@@ -750,7 +766,7 @@ impl NavGraph {
         let (nodes, end) = self.best_first(
             from,
             |n| self.touched_by(known, n),
-            |n| {
+            |n, _| {
                 if Some(n) == goal {
                     return Some(to);
                 }
