@@ -9,7 +9,7 @@ use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape}
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
-use crate::spatial::quadtree::{CellSet, PartialCells, Square};
+use crate::spatial::quadtree::{CellSet, Finger, PartialCells, Square};
 use crate::spatial::tile_log::TileLog;
 
 /// The explored part of the map, as seen by one robot (or a team).
@@ -237,7 +237,15 @@ impl KnownMap {
     /// from one descent of the tree.
     #[inline]
     pub fn touches_and_covers_cells(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
-        let (some_unknown, some_known) = self.tree.values_in_rect(lo, hi);
+        self.touches_and_covers_cells_from(&mut Finger::new(&self.tree), lo, hi)
+    }
+
+    /// [`touches_and_covers_cells`](Self::touches_and_covers_cells) descending from
+    /// `finger` (of this map's [`tree`](Self::tree); see
+    /// [`RegionQuadtree::values_in_rect_from`]).
+    #[inline]
+    pub fn touches_and_covers_cells_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
+        let (some_unknown, some_known) = self.tree.values_in_rect_from(finger, lo, hi);
         (some_known, !some_unknown)
     }
 

@@ -6,7 +6,7 @@ use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square};
+use crate::spatial::{Aabb, Finger, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -124,10 +124,15 @@ impl Navigator {
         // and the search asks again right after, when it expands the node: the answers are
         // kept in between (a "no" is not in the memo).
         let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
+        let start_hint = memo.route_end();
         let memo = RefCell::new(memo);
-        let touches = |m: NavNodeId| memo.borrow_mut().touched(nav, known, m);
-        nav.search_knowing_reached(
+        // The pieces asked about lie close together: descents of the known map start from
+        // where the last one passed.
+        let finger = RefCell::new(Finger::new(known.tree()));
+        let touches = |m: NavNodeId| memo.borrow_mut().touched_from(nav, known, &mut finger.borrow_mut(), m);
+        let route = nav.search_knowing_reached(
             p,
+            start_hint,
             terrain,
             |m| {
                 let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
@@ -138,7 +143,7 @@ impl Navigator {
                 if frontier.is_some_and(|f| !f.contains(n)) {
                     return None;
                 }
-                if !memo.borrow_mut().covered(nav, known, n) {
+                if !memo.borrow_mut().covered_from(nav, known, &mut finger.borrow_mut(), n) {
                     return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
                 }
                 let mut cache = touched.borrow_mut();
@@ -164,7 +169,11 @@ impl Navigator {
                 None
             },
             SEARCH_BUDGET,
-        )
+        );
+        if let Some(r) = &route {
+            memo.into_inner().set_route_end(r.nodes.last().copied());
+        }
+        route
     }
 }
 

@@ -2,6 +2,7 @@
 
 use super::{NavGraph, NavNodeId};
 use crate::spatial::KnownMap;
+use crate::spatial::quadtree::Finger;
 
 /// Slots of the memo (a power of two), an open-addressed table kept at most half full: a
 /// robot's frontier search asks about a few hundred pieces (those it settles and their
@@ -52,20 +53,44 @@ pub struct PieceMemo {
     known_cells: u64,
     /// Which "no"s are current (never 0 once slots exist).
     epoch: u64,
+    /// The last node of the robot's last route: where its next search likely starts.
+    route_end: Option<NavNodeId>,
 }
 
 impl PieceMemo {
+    /// The last node of the last route [`set_route_end`](Self::set_route_end) noted: a hint
+    /// for [`NavGraph::node_at_near`].
+    pub fn route_end(&self) -> Option<NavNodeId> {
+        self.route_end
+    }
+
+    /// Note the last node of the robot's new route.
+    pub fn set_route_end(&mut self, n: Option<NavNodeId>) {
+        self.route_end = n;
+    }
+
     /// Whether `known` knows some cell of `n` ([`NavGraph::touched_by`]).
     pub fn touched(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId) -> bool {
-        self.ask(nav, known, n, TOUCHED)
+        self.ask(nav, known, &mut Finger::new(known.tree()), n, TOUCHED)
     }
 
     /// Whether `known` knows every cell of `n` ([`NavGraph::covered_by`]).
     pub fn covered(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId) -> bool {
-        self.ask(nav, known, n, COVERED)
+        self.ask(nav, known, &mut Finger::new(known.tree()), n, COVERED)
     }
 
-    fn ask(&mut self, nav: &NavGraph, known: &KnownMap, n: NavNodeId, fact: u64) -> bool {
+    /// [`touched`](Self::touched), asking the map (if need be) from `finger`, a finger of
+    /// `known`'s tree: a search's questions are about pieces close together.
+    pub fn touched_from(&mut self, nav: &NavGraph, known: &KnownMap, finger: &mut Finger, n: NavNodeId) -> bool {
+        self.ask(nav, known, finger, n, TOUCHED)
+    }
+
+    /// [`covered`](Self::covered), asking the map (if need be) from `finger`.
+    pub fn covered_from(&mut self, nav: &NavGraph, known: &KnownMap, finger: &mut Finger, n: NavNodeId) -> bool {
+        self.ask(nav, known, finger, n, COVERED)
+    }
+
+    fn ask(&mut self, nav: &NavGraph, known: &KnownMap, finger: &mut Finger, n: NavNodeId, fact: u64) -> bool {
         if self.pieces != nav.len() || self.slots.is_none() {
             self.slots = Some(Box::new([0; SLOTS]));
             (self.pieces, self.known_cells, self.epoch, self.held) = (nav.len(), known.known_cells(), 1, 0);
@@ -104,7 +129,7 @@ impl PieceMemo {
         if current && entry & (fact << NO_SHIFT) != 0 {
             return false;
         }
-        let (touched, covered) = nav.touched_and_covered_by(known, n);
+        let (touched, covered) = nav.touched_and_covered_from(known, finger, n);
         // Both facts are known now: yeses for good, noes for this epoch.
         let facts = if covered {
             TOUCHED | COVERED

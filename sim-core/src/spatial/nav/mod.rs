@@ -17,7 +17,7 @@ use crate::spatial::geometry::Aabb;
 use crate::spatial::grid::Grid;
 use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::ObstacleMap;
-use crate::spatial::quadtree::Square;
+use crate::spatial::quadtree::{Finger, Square};
 
 mod frontier;
 mod funnel;
@@ -384,6 +384,22 @@ impl NavGraph {
         self.pieces[n.0 as usize]
     }
 
+    /// [`node_at`](Self::node_at), trying `hint` and its neighbours first: a robot's next
+    /// search mostly starts where its last route ended (issue 12: the look-up among the
+    /// leaves missed the cache a few times each).
+    pub fn node_at_near(&self, p: DVec2, hint: Option<NavNodeId>) -> Option<NavNodeId> {
+        let cell = self.grid.cell_of(p)?;
+        if let Some(h) = hint.filter(|h| (h.0 as usize) < self.pieces.len()) {
+            if self.piece(h).holds(cell) {
+                return Some(h);
+            }
+            if let Some(m) = self.neighbors(h).find(|&m| self.piece(m).holds(cell)) {
+                return Some(m);
+            }
+        }
+        self.node_at(p)
+    }
+
     /// Whether `known` knows some cell of node `n`.
     pub fn touched_by(&self, known: &KnownMap, n: NavNodeId) -> bool {
         let p = self.piece(n);
@@ -401,6 +417,13 @@ impl NavGraph {
     pub fn touched_and_covered_by(&self, known: &KnownMap, n: NavNodeId) -> (bool, bool) {
         let p = self.piece(n);
         known.touches_and_covers_cells(p.lo(), p.hi())
+    }
+
+    /// [`touched_and_covered_by`](Self::touched_and_covered_by) descending `known`'s tree
+    /// from `finger` (see [`KnownMap::touches_and_covers_cells_from`]).
+    pub fn touched_and_covered_from(&self, known: &KnownMap, finger: &mut Finger, n: NavNodeId) -> (bool, bool) {
+        let p = self.piece(n);
+        known.touches_and_covers_cells_from(finger, p.lo(), p.hi())
     }
 
     /// A node's world box.
@@ -504,9 +527,11 @@ impl NavGraph {
         let last = *nodes.last().expect("a route holds its start");
         // A goal across the last node's edge (a frontier just inside an unknown node) is
         // reached through that edge too.
-        if let Some(m) = self
-            .node_at(goal)
-            .filter(|&m| m != last && self.neighbors(last).any(|x| x == m))
+        // (The neighbour whose piece holds the goal's cell: pieces partition the free
+        // cells, so this is `node_at`'s answer when it is a neighbour, without its search.)
+        if let Some(cell) = self.grid.cell_of(goal)
+            && !self.piece(last).holds(cell)
+            && let Some(m) = self.neighbors(last).find(|&x| self.piece(x).holds(cell))
         {
             nodes.push(m);
         }
@@ -601,22 +626,25 @@ impl NavGraph {
         mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
-        self.search_knowing_reached(from, terrain, usable, |n, _| is_goal(n), max_nodes)
+        self.search_knowing_reached(from, None, terrain, usable, |n, _| is_goal(n), max_nodes)
     }
 
     /// [`search`](Self::search) whose goal test also gets a test of whether this search has
     /// reached a node (found it usable) yet: a goal test that asks about a node's
     /// neighbours can skip what the search knows already (issue 12: the frontier search
     /// asked whether the known map touches every neighbour of every node it settled).
+    /// The node holding `from` is looked for at `start_hint` and its neighbours first (see
+    /// [`node_at_near`](Self::node_at_near)).
     pub fn search_knowing_reached(
         &self,
         from: DVec2,
+        start_hint: Option<NavNodeId>,
         terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
         is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
-        let (nodes, goal) = self.best_first(from, usable, is_goal, None, max_nodes)?;
+        let (nodes, goal) = self.best_first(from, start_hint, usable, is_goal, None, max_nodes)?;
         Some(self.taut_route(from, nodes, goal, terrain))
     }
 
@@ -633,6 +661,7 @@ impl NavGraph {
     fn best_first(
         &self,
         from: DVec2,
+        start_hint: Option<NavNodeId>,
         mut usable: impl FnMut(NavNodeId) -> bool,
         mut is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
         estimate: Option<&dyn Fn(DVec2) -> f64>,
@@ -640,7 +669,7 @@ impl NavGraph {
     ) -> Option<(Vec<NavNodeId>, DVec2)> {
         let settled_final = estimate.is_none();
         let estimate = |p: DVec2| estimate.map_or(0.0, |e| e(p));
-        let start = self.node_at(from)?;
+        let start = self.node_at_near(from, start_hint)?;
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
             let Scratch {
@@ -737,6 +766,7 @@ impl NavGraph {
         // management measuring the way home were 22 % of a bench-1000 round with Dijkstra).
         let (nodes, to) = self.best_first(
             from,
+            None,
             |n| self.touched_by(known, n),
             |n, _| (n == goal).then_some(to),
             Some(&|p: DVec2| p.distance(to)),
@@ -765,6 +795,7 @@ impl NavGraph {
         let goal = self.node_at(to).filter(|&g| self.touched_by(known, g));
         let (nodes, end) = self.best_first(
             from,
+            None,
             |n| self.touched_by(known, n),
             |n, _| {
                 if Some(n) == goal {

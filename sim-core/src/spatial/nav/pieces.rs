@@ -21,6 +21,12 @@ pub struct Piece {
 }
 
 impl Piece {
+    /// Whether cell `(x, y)` is one of the piece's.
+    #[inline]
+    pub fn holds(&self, (x, y): (u32, u32)) -> bool {
+        x >= self.x && y >= self.y && x - self.x < self.w && y - self.y < self.h
+    }
+
     /// Lower-left cell.
     pub fn lo(&self) -> (u32, u32) {
         (self.x, self.y)

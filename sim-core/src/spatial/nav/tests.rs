@@ -41,6 +41,14 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
                 "({x}, {y})"
             );
             assert_eq!(g.node_at(map.grid().cell_center(x, y)), here, "({x}, {y})");
+            // Issue 12: with any hint, the same node.
+            for hint in [here, owner[(y * w + (x + 1) % w) as usize], Some(NavNodeId(0))] {
+                assert_eq!(
+                    g.node_at_near(map.grid().cell_center(x, y), hint),
+                    here,
+                    "({x}, {y}) near {hint:?}"
+                );
+            }
             for (nx, ny) in [(x + 1, y), (x, y + 1)] {
                 if nx < w
                     && ny < h

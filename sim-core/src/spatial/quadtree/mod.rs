@@ -36,6 +36,7 @@ mod validate;
 
 pub use build::{BitGrid, Region};
 pub use components::Components;
+pub use query::Finger;
 pub use update::PartialCells;
 
 use crate::spatial::geometry::{Aabb, BlockCells};

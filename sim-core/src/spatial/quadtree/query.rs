@@ -303,7 +303,7 @@ impl RegionQuadtree {
     /// stops at the first node inside it that is mixed (it holds both values): the test
     /// for navigation pieces, which are rectangles of cells.
     pub fn any_cell_in_rect(&self, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
-        self.values_in_rect_until(lo, hi, value_bit(value)) & value_bit(value) != 0
+        self.values_in_rect_until(None, lo, hi, value_bit(value)) & value_bit(value) != 0
     }
 
     /// Which values the cells of the rectangle `lo ..= hi` (as for
@@ -312,13 +312,22 @@ impl RegionQuadtree {
     /// navigation asks a piece whether it is touched and whether it is covered, each a
     /// descent of the known map).
     pub fn values_in_rect(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
-        let held = self.values_in_rect_until(lo, hi, BOTH_VALUES);
+        self.values_in_rect_from(&mut Finger::new(self), lo, hi)
+    }
+
+    /// [`values_in_rect`](Self::values_in_rect) descending from where `finger` points if
+    /// that holds the rectangle (it then points at the rectangle's ancestor at
+    /// [`FINGER_LEVEL`]): a run of queries about nearby rectangles skips the levels above.
+    /// `finger` must be of this tree.
+    pub fn values_in_rect_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
+        debug_assert!(std::ptr::eq(finger.tree, self), "a finger of another tree");
+        let held = self.values_in_rect_until(Some(finger), lo, hi, BOTH_VALUES);
         (held & value_bit(false) != 0, held & value_bit(true) != 0)
     }
 
     /// The values (bits of [`value_bit`]) the rectangle's cells hold, the descent stopped
     /// once all of `wanted` are found (the answer then holds at least those).
-    fn values_in_rect_until(&self, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
+    fn values_in_rect_until(&self, finger: Option<&mut Finger>, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
         debug_assert!(lo.0 <= hi.0 && lo.1 <= hi.1 && hi.0 < self.grid.side_cells() && hi.1 < self.grid.side_cells());
         // Straight down to the smallest square that holds the rectangle, by its cells' bits
         // (issue 12: walking down from the root testing four children's bounds at every
@@ -332,11 +341,48 @@ impl RegionQuadtree {
             y: lo.1 & keep,
             level: level as u8,
         };
-        match self.descend_to(sq) {
+        let n = match finger {
+            Some(f) => self.descend_by(f, sq),
+            None => self.descend_to(sq),
+        };
+        match n {
             // A leaf at or above the square: the whole rectangle holds its value.
             Node::Leaf(v) => value_bit(v),
             n => self.values_in_rect_below(n, sq, lo, hi, wanted),
         }
+    }
+
+    /// [`descend_to`](Self::descend_to) from `finger`'s node if its square holds `sq`,
+    /// else from the root; `finger` then points at `sq`'s ancestor at [`FINGER_LEVEL`] if
+    /// the descent passed one.
+    fn descend_by(&self, finger: &mut Finger, sq: Square) -> Node {
+        let shift = u32::from(finger.square.level);
+        let (mut n, mut level) = if finger.square.level >= sq.level
+            && sq.x >> shift == finger.square.x >> shift
+            && sq.y >> shift == finger.square.y >> shift
+        {
+            (finger.node, finger.square.level)
+        } else {
+            (self.node(self.root), self.grid.depth())
+        };
+        while level > sq.level {
+            if let Node::Leaf(_) = n {
+                break;
+            }
+            level -= 1;
+            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
+            n = self.kid(n, i as usize);
+            if level == FINGER_LEVEL {
+                let keep = u32::MAX << level;
+                finger.square = Square {
+                    x: sq.x & keep,
+                    y: sq.y & keep,
+                    level,
+                };
+                finger.node = n;
+            }
+        }
+        n
     }
 
     /// `values_in_rect_until` below node `n` of square `sq`, which the rectangle meets.
@@ -577,3 +623,38 @@ fn value_bit(v: bool) -> u8 {
 
 /// Both values' bits.
 const BOTH_VALUES: u8 = 3;
+
+/// The level of the squares a [`Finger`] points at: 64 cells a side, about the ground one
+/// frontier search covers.
+const FINGER_LEVEL: u8 = 6;
+
+/// Where descents of one tree toward nearby squares may start: a node an earlier descent
+/// passed, and its square (issue 12: a frontier search asks the known map about dozens of
+/// pieces close together, each a descent from the root). It borrows the tree, so the tree
+/// cannot change while it points into it.
+#[derive(Clone, Copy)]
+pub struct Finger<'a> {
+    tree: &'a RegionQuadtree,
+    square: Square,
+    node: Node,
+}
+
+impl<'a> Finger<'a> {
+    /// A finger at the root of `tree`.
+    pub fn new(tree: &'a RegionQuadtree) -> Self {
+        Self {
+            tree,
+            square: Square {
+                x: 0,
+                y: 0,
+                level: tree.grid.depth(),
+            },
+            node: tree.node(tree.root),
+        }
+    }
+
+    /// The square the finger points at.
+    pub fn square(&self) -> Square {
+        self.square
+    }
+}

@@ -233,6 +233,9 @@ fn any_cell_in_rect_matches_brute_force() {
         };
         let packed = RegionQuadtree::from_fn(grid, false, value_at);
         let unpacked = packed.unpacked();
+        // Fingers kept across the queries, so that descents start from where earlier ones
+        // passed (issue 12).
+        let mut fingers = [super::Finger::new(&packed), super::Finger::new(&unpacked)];
         let side = grid.side_cells();
         for k in 0..200 {
             let (x0, x1) = (rng.random_range(0..side), rng.random_range(0..side));
@@ -254,7 +257,12 @@ fn any_cell_in_rect_matches_brute_force() {
                     })
                 })
             };
-            for tree in [&packed, &unpacked] {
+            for (tree, finger) in [&packed, &unpacked].into_iter().zip(&mut fingers) {
+                assert_eq!(
+                    tree.values_in_rect_from(finger, lo, hi),
+                    (brute(false), brute(true)),
+                    "case {case}: {lo:?}..={hi:?} from a finger"
+                );
                 for value in [false, true] {
                     assert_eq!(
                         tree.any_cell_in_rect(lo, hi, value),
@@ -346,4 +354,39 @@ fn issue11_rows_filled_block_by_block_match_a_grid() {
             }
         }
     }
+}
+
+/// Issue 12: descents that start from a finger (moved by each query to the ancestor at its
+/// level) answer as descents from the root, on a tree deep enough for the finger to move:
+/// runs of queries close together, then far apart.
+#[test]
+fn issue12_values_in_rect_from_a_finger_match_the_root_descent() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1212);
+    let grid = Grid::new(DVec2::ZERO, 1.0, 300, 200).unwrap();
+    let cells: Vec<bool> = (0..300 * 200).map(|_| rng.random_bool(0.2)).collect();
+    let tree = RegionQuadtree::from_fn(grid, false, |x, y| cells[((y / 3) * 300 + x / 2) as usize]);
+    let mut finger = super::Finger::new(&tree);
+    let side = grid.side_cells();
+    let (mut near, mut moved) = ((0, 0), 0);
+    for k in 0..4000 {
+        if k % 40 == 0 {
+            near = (rng.random_range(0..side), rng.random_range(0..side));
+        }
+        let lo = (
+            (near.0 + rng.random_range(0..40)).min(side - 1),
+            (near.1 + rng.random_range(0..40)).min(side - 1),
+        );
+        let hi = (
+            (lo.0 + rng.random_range(0..6)).min(side - 1),
+            (lo.1 + rng.random_range(0..6)).min(side - 1),
+        );
+        let before = finger.square();
+        assert_eq!(
+            tree.values_in_rect_from(&mut finger, lo, hi),
+            tree.values_in_rect(lo, hi),
+            "{lo:?}..={hi:?}"
+        );
+        moved += usize::from(finger.square() != before);
+    }
+    assert!(moved > 50, "the finger moved {moved} times");
 }
