@@ -14,6 +14,7 @@
 //! ```
 
 pub mod fig4;
+pub mod kernel;
 pub mod paths;
 /// Charts (shared with `smartteams plot`).
 pub use viewer_bridge::plot;
@@ -29,6 +30,8 @@ use sim_core::engine::{Group, PhaseTimes, Scenario, ScenarioBuilder, Simulation}
 use sim_core::glam::DVec2;
 use sim_core::spatial::ObstacleMap;
 use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
+
+pub use kernel::Kernel;
 
 /// What can go wrong while setting a scenario up.
 #[derive(Debug, thiserror::Error)]
@@ -329,6 +332,16 @@ impl Measurement {
     pub fn robot_rounds_per_s(&self) -> f64 {
         self.rounds_per_s() * self.robots as f64
     }
+
+    /// Planning time ([`PhaseTimes::planning`], CPU time over all threads) per robot-round,
+    /// in µs: issue 12's "navigation and frontier choice per robot per round".
+    pub fn planning_us_per_robot_round(&self) -> f64 {
+        let robot_rounds = self.rounds as f64 * self.robots as f64;
+        if robot_rounds == 0.0 {
+            return 0.0;
+        }
+        self.phases.planning.as_secs_f64() * 1e6 / robot_rounds
+    }
 }
 
 impl Measurement {
@@ -377,12 +390,14 @@ pub fn peak_rss_bytes() -> u64 {
 }
 
 /// Build the simulation and play `rounds` rounds on `threads` worker threads (0: one per
-/// core), timing the set-up and the rounds apart.
+/// core), timing the set-up and the rounds apart, and the strategies' planning within the
+/// rounds ([`PhaseTimes::planning`]).
 pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measurement> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     pool.install(|| {
         let t0 = Instant::now();
-        let mut sim = Simulation::new(scenario)?;
+        // Planning is timed for `PhaseTimes::planning` (two clock reads a search).
+        let mut sim = Simulation::new(scenario)?.with_time_planning(true);
         let setup_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         for _ in 0..rounds {

@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use scale::fig4::Fig4;
-use scale::{RandomWalk, Swarm, measure};
+use scale::{Kernel, RandomWalk, Swarm, measure};
 
 /// Time Smart Teams at scale: each scenario generates its own map, then prints set-up time,
 /// rounds per second after set-up, and peak memory.
@@ -66,6 +66,18 @@ enum Scenario {
         csv_row: bool,
         /// Seed.
         #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// The kernel scenario (issue 12's navigation target): cooperative explorers on a
+    /// 2,048 m map of clustered rocks (about 2.1 M leaves). Prints the time strategies spent
+    /// planning routes and frontiers, per robot-round (issue 12: at most 2 µs with 1,000
+    /// robots over 1,500 rounds).
+    Kernel {
+        /// Explorers.
+        #[arg(long, default_value_t = 1_000)]
+        robots: u32,
+        /// Seed of the run.
+        #[arg(long, default_value_t = 7)]
         seed: u64,
     },
     /// Curves: `swarm` rounds per second and peak memory against robots (100 → 10,000) and
@@ -210,6 +222,7 @@ fn run(cli: &Cli) -> Result<()> {
             };
             ("swarm", swarm.scenario()?, csv_row)
         }
+        Scenario::Kernel { robots, seed } => ("kernel", Kernel { robots, seed }.scenario(&Kernel::map())?, false),
     };
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, cli.rounds, cli.threads)?;
@@ -218,6 +231,12 @@ fn run(cli: &Cli) -> Result<()> {
         println!("{}", m.csv_row().join(","));
         return Ok(());
     }
+    print_measurement(name, &m);
+    Ok(())
+}
+
+/// The measurement as sentences: the run, where its rounds' time went, and its planning.
+fn print_measurement(name: &str, m: &scale::Measurement) {
     println!(
         "{name}: {} robots, {} leaves, {} rounds | map+scenario {:.2} s, set-up {:.2} s | {:.1} rounds/s, {:.3e} robot-rounds/s | peak RSS {:.0} MB, known maps {:.1} MB | explored {:.4} | digest {:016x}",
         m.robots,
@@ -240,7 +259,11 @@ fn run(cli: &Cli) -> Result<()> {
         p.deliver.as_secs_f64(),
         p.other.as_secs_f64()
     );
-    Ok(())
+    println!(
+        "  planning (routes and frontiers, CPU time summed over threads): {:.3} s, {:.3} µs per robot-round",
+        p.planning.as_secs_f64(),
+        m.planning_us_per_robot_round()
+    );
 }
 
 fn any_angle(

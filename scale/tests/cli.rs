@@ -30,6 +30,22 @@ fn random_walk_prints_its_measurement() {
     );
 }
 
+/// Issue 12: the kernel scenario reports the explorers' planning time per robot-round (the
+/// navigation target's measure); 30 explorers for 30 rounds plan a few frontier routes.
+#[test]
+fn kernel_prints_its_planning_time_per_robot_round() {
+    let out = bench(&["kernel", "--robots", "30", "--rounds", "30", "--threads", "2"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("kernel: 30 robots, "), "{text}");
+    let per_robot_round: f64 = text
+        .split("s, ")
+        .find_map(|part| part.strip_suffix(" µs per robot-round\n"))
+        .and_then(|v| v.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no planning time in {text}"));
+    assert!(per_robot_round > 0.0 && per_robot_round < 10_000.0, "{text}");
+}
+
 #[test]
 fn swarm_csv_row_has_every_column_and_threads_do_not_change_it() {
     let row = |threads: &str| {

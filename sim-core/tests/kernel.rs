@@ -267,6 +267,40 @@ fn issue11_turns_resolved_alone_give_the_id_order_run() {
     assert_same_rounds(&alone, &in_order, 200);
 }
 
+/// Issue 12: planning is timed only when asked, into `PhaseTimes::planning`, and timing it
+/// changes nothing in the run. Explorers plan frontier routes and workers routes to
+/// treasures on the rooms map.
+#[test]
+fn issue12_planning_time_is_measured_when_asked_and_changes_nothing() {
+    let groups = || {
+        vec![
+            (6, RobotType::explorer(), "cooperative"),
+            (2, RobotType::excavator(), "excavator"),
+            (2, RobotType::transporter(), "transporter"),
+        ]
+    };
+    let timed = rooms_trace(2, 9, 120, groups(), |sim| sim.with_time_planning(true));
+    let untimed = rooms_trace(2, 9, 120, groups(), |sim| sim);
+    assert_same_rounds(&timed, &untimed, 120);
+    let planning = |on: bool| {
+        let s = scenario(rooms_map(Vec::new()), 9, 60, groups());
+        let mut sim = new_sim(s, &StrategyRegistry::with_builtins())
+            .unwrap()
+            .with_time_planning(on);
+        for _ in 0..60 {
+            sim.step();
+        }
+        sim.phase_times().planning
+    };
+    let (on, off) = (planning(true), planning(false));
+    assert!(
+        on > std::time::Duration::ZERO,
+        "explorers planned, yet no planning time"
+    );
+    assert!(on < std::time::Duration::from_mins(1));
+    assert_eq!(off, std::time::Duration::ZERO);
+}
+
 /// A strategy that always asks for the same action, and records what came of it.
 struct Cheat(fn(&Ctx) -> Action);
 

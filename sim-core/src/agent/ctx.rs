@@ -15,6 +15,8 @@ pub struct WorldView<'a> {
     nav: &'a LazyNavGraph,
     home: HomeBase,
     types: &'a [RobotType],
+    /// Whether [`Ctx::timed_planning`] reads the clock.
+    time_planning: bool,
 }
 
 impl<'a> WorldView<'a> {
@@ -27,6 +29,16 @@ impl<'a> WorldView<'a> {
             nav,
             home,
             types,
+            time_planning: false,
+        }
+    }
+
+    /// The same view, with [`Ctx::timed_planning`] timing the planning it wraps when `on`.
+    #[must_use]
+    pub fn with_time_planning(self, on: bool) -> Self {
+        Self {
+            time_planning: on,
+            ..self
         }
     }
 }
@@ -120,6 +132,8 @@ pub struct Ctx<'a> {
     /// Random numbers, seeded from (run seed, robot, round).
     pub rng: RobotRng,
     out: &'a mut StrategyOutput,
+    /// Wall time spent in [`timed_planning`](Self::timed_planning) this round, ns.
+    planning_ns: std::cell::Cell<u64>,
 }
 
 impl<'a> Ctx<'a> {
@@ -148,7 +162,30 @@ impl<'a> Ctx<'a> {
             world,
             rng,
             out: output,
+            planning_ns: std::cell::Cell::new(0),
         }
+    }
+
+    /// Run `plan` (a route or frontier search), adding its wall time to this round's
+    /// [`planning_ns`](Self::planning_ns) when the run times planning (the kernel's
+    /// `Simulation::with_time_planning`, a layer up);
+    /// otherwise just run it. The built-in tactics plan through this, so that issue 12's
+    /// "navigation per robot-round" can be measured (`smartteams-bench kernel`).
+    pub fn timed_planning<T>(&self, plan: impl FnOnce() -> T) -> T {
+        if !self.world.time_planning {
+            return plan();
+        }
+        let started = std::time::Instant::now();
+        let planned = plan();
+        let took = u64::try_from(started.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        self.planning_ns.set(self.planning_ns.get().saturating_add(took));
+        planned
+    }
+
+    /// Wall time spent planning this round through [`timed_planning`](Self::timed_planning),
+    /// in nanoseconds (0 when the run does not time planning).
+    pub fn planning_ns(&self) -> u64 {
+        self.planning_ns.get()
     }
 
     /// Robots in view (empty unless the strategy needs robots).

@@ -130,6 +130,8 @@ pub struct Simulation {
     pub(super) strategies_failed: u32,
     /// Decisions slower than this are reported (`None`: not timed).
     pub(super) decide_limit: Option<Duration>,
+    /// Whether strategies' planning is timed (see [`PhaseTimes::planning`]).
+    pub(super) time_planning: bool,
     /// Turns that depend on nobody are resolved in step 2 (see `resolve_alone`).
     pub(super) resolve_alone: bool,
     pub(super) rounds: u64,
@@ -210,6 +212,10 @@ pub struct PhaseTimes {
     /// Everything else: moving last round's messages into inboxes, crediting discoveries,
     /// rebuilding the robot indexes, metrics.
     pub other: Duration,
+    /// Of steps 1 and 2, the time strategies spent planning routes and frontiers through
+    /// [`Ctx::timed_planning`](crate::agent::Ctx::timed_planning), summed over threads (CPU
+    /// time, not wall time): zero unless [`Simulation::with_time_planning`] is on.
+    pub planning: Duration,
 }
 
 impl Simulation {
@@ -281,6 +287,7 @@ impl Simulation {
             seed,
             strategies_failed: 0,
             decide_limit: Some(DEFAULT_DECIDE_LIMIT),
+            time_planning: false,
             resolve_alone: true,
             phase_times: PhaseTimes::default(),
             rounds,
@@ -343,6 +350,14 @@ impl Simulation {
     /// ten milliseconds are approximate.
     pub fn with_decide_limit(mut self, limit: Option<Duration>) -> Self {
         self.decide_limit = limit;
+        self
+    }
+
+    /// Time the built-in tactics' route and frontier planning (into
+    /// [`PhaseTimes::planning`]): two clock reads per planning, which the kernel does not
+    /// pay unless asked. Default: off. Results do not depend on it.
+    pub fn with_time_planning(mut self, on: bool) -> Self {
+        self.time_planning = on;
         self
     }
 

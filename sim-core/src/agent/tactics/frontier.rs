@@ -45,9 +45,11 @@ impl FrontierSeeking {
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let memo = &mut self.memo;
-            if let Some(route) = Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m)
-                .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0))
-            {
+            let found = ctx.timed_planning(|| {
+                Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m)
+                    .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0))
+            });
+            if let Some(route) = found {
                 self.target = route.waypoints.last().copied();
                 self.nav.follow(route);
                 self.failed_at = None;

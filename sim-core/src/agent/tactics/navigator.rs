@@ -46,9 +46,10 @@ impl Navigator {
 
     /// Plan a shortest route to `to` within known terrain and follow it.
     pub fn go_to(&mut self, ctx: &Ctx, to: DVec2) -> bool {
-        let route = ctx
-            .terrain()
-            .and_then(|t| ctx.nav().route_within(t, ctx.position(), to, SEARCH_BUDGET));
+        let route = ctx.timed_planning(|| {
+            ctx.terrain()
+                .and_then(|t| ctx.nav().route_within(t, ctx.position(), to, SEARCH_BUDGET))
+        });
         match route {
             Some(r) => {
                 self.follow(r);
@@ -61,9 +62,10 @@ impl Navigator {
     /// Plan the shortest route to `to` taking unknown terrain as open (see
     /// [`NavGraph::route_optimistic`](crate::spatial::NavGraph::route_optimistic)) and follow it.
     pub fn go_to_optimistic(&mut self, ctx: &Ctx, to: DVec2) -> bool {
-        let route = ctx
-            .terrain()
-            .and_then(|t| ctx.nav().route_optimistic(t, ctx.position(), to, SEARCH_BUDGET));
+        let route = ctx.timed_planning(|| {
+            ctx.terrain()
+                .and_then(|t| ctx.nav().route_optimistic(t, ctx.position(), to, SEARCH_BUDGET))
+        });
         match route {
             Some(r) => {
                 self.follow(r);

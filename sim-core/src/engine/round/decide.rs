@@ -3,7 +3,7 @@
 
 use std::cell::RefCell;
 use std::panic::AssertUnwindSafe;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 use glam::DVec2;
@@ -27,7 +27,9 @@ pub(super) const ROBOTS_PER_TASK: usize = 16;
 impl Simulation {
     /// Steps 1 and 2, in parallel over robots.
     pub(super) fn perceive_and_decide(&mut self, round: u64) {
-        let world = WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types);
+        let world = WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types)
+            .with_time_planning(self.time_planning);
+        let planning_ns = AtomicU64::new(0);
         let snapshot = Snapshot {
             type_of: &self.type_of,
             treasures: &self.treasures,
@@ -78,6 +80,9 @@ impl Simulation {
                     // round) is ample for limits of tens of milliseconds.
                     let started = limit.map(|_| coarsetime::Instant::now());
                     let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
+                    if ctx.planning_ns() > 0 {
+                        planning_ns.fetch_add(ctx.planning_ns(), Ordering::Relaxed);
+                    }
                     turn.slow = started
                         .map(|t| Duration::from(t.elapsed()))
                         .filter(|&took| limit.is_some_and(|limit| took > limit));
@@ -123,6 +128,7 @@ impl Simulation {
         if pending.into_inner() {
             self.list_pending_hearers();
         }
+        self.phase_times.planning += Duration::from_nanos(planning_ns.into_inner());
         if self.decide_limit.is_some() {
             let slow = self
                 .turns

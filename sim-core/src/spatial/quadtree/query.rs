@@ -317,7 +317,7 @@ impl RegionQuadtree {
 
     /// [`values_in_rect`](Self::values_in_rect) descending from where `finger` points if
     /// that holds the rectangle (it then points at the rectangle's ancestor at
-    /// [`FINGER_LEVEL`]): a run of queries about nearby rectangles skips the levels above.
+    /// level 6): a run of queries about nearby rectangles skips the levels above.
     /// `finger` must be of this tree.
     pub fn values_in_rect_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
         debug_assert!(std::ptr::eq(finger.tree, self), "a finger of another tree");
