@@ -12,21 +12,26 @@ const SLOTS: usize = 1024;
 /// Pieces held before the table is emptied: a search then asks its pieces again.
 const MAX_HELD: usize = SLOTS / 2;
 
-/// Slots in a cache line: pieces numbered alike but for their last three bits (neighbours,
+/// Slots in a cache line: pieces numbered alike but for their last four bits (neighbours,
 /// as the graph numbers pieces in Z order) share one line of slots, one slot each.
-const LANES: usize = 8;
+const LANES: usize = 16;
 
 /// Lines of slots.
 const LINES: usize = SLOTS / LANES;
 
 /// Facts in a slot's low bits: a "yes" (bits 0–1) holds for good, a "no" (bits 2–3) only
-/// while the map is as it was (its epoch in bits 4–19); the piece in the bits above (an
-/// empty slot is 0).
-const TOUCHED: u64 = 1;
-const COVERED: u64 = 2;
+/// while the map is as it was (its epoch in bits 4–9, the table emptied when they wrap);
+/// the piece's line tag (its number without the lane bits, plus one) in the bits above (an
+/// empty slot is 0). Four bytes a slot, so that a line holds 16 (issue 12: the memo's
+/// lines were a tenth of a search's cache misses).
+const TOUCHED: u32 = 1;
+const COVERED: u32 = 2;
 const NO_SHIFT: u32 = 2;
 const EPOCH_SHIFT: u32 = 4;
-const KEY_SHIFT: u32 = 20;
+const KEY_SHIFT: u32 = 10;
+
+/// Graphs with this many pieces or more are asked directly (their line tags would not fit).
+const MAX_PIECES: usize = (LANES << (32 - KEY_SHIFT)) - LANES;
 
 /// A small cache of "the known map touches piece n" and "covers piece n" for one robot's
 /// own known map and navigation graph (issue 12: these tests, each a descent of the known
@@ -36,7 +41,7 @@ const KEY_SHIFT: u32 = 20;
 /// A robot's known map only grows, so a "yes" stays right for good, and a "no" as long as
 /// the map's number of known cells is the same (any change adds cells). The answers are
 /// exactly those of [`NavGraph::touched_by`] and [`NavGraph::covered_by`]; a question the
-/// memo cannot answer is asked of the map for both facts at once. The table is 8 KB,
+/// memo cannot answer is asked of the map for both facts at once. The table is 4 KB,
 /// allocated at its first use, and emptied when half full (with 512 direct-mapped slots,
 /// pieces taking each other's slots were most of the questions asked again: issue 12).
 /// Use it with one robot's map and one graph only (it forgets everything if the graph's
@@ -44,7 +49,7 @@ const KEY_SHIFT: u32 = 20;
 /// out again.
 #[derive(Clone, Debug, Default)]
 pub struct PieceMemo {
-    slots: Option<Box<[u64; SLOTS]>>,
+    slots: Option<Box<[u32; SLOTS]>>,
     /// Slots in use.
     held: usize,
     /// The graph's piece count when the slots were filled.
@@ -52,7 +57,7 @@ pub struct PieceMemo {
     /// The known map's cell count when the current epoch began.
     known_cells: u64,
     /// Which "no"s are current (never 0 once slots exist).
-    epoch: u64,
+    epoch: u32,
     /// The last node of the robot's last route: where its next search likely starts.
     route_end: Option<NavNodeId>,
 }
@@ -90,7 +95,11 @@ impl PieceMemo {
         self.ask(nav, known, finger, n, COVERED)
     }
 
-    fn ask(&mut self, nav: &NavGraph, known: &KnownMap, finger: &mut Finger, n: NavNodeId, fact: u64) -> bool {
+    fn ask(&mut self, nav: &NavGraph, known: &KnownMap, finger: &mut Finger, n: NavNodeId, fact: u32) -> bool {
+        if nav.len() >= MAX_PIECES {
+            let (touched, covered) = nav.touched_and_covered_from(known, finger, n);
+            return if fact == TOUCHED { touched } else { covered };
+        }
         if self.pieces != nav.len() || self.slots.is_none() {
             self.slots = Some(Box::new([0; SLOTS]));
             (self.pieces, self.known_cells, self.epoch, self.held) = (nav.len(), known.known_cells(), 1, 0);
@@ -105,9 +114,10 @@ impl PieceMemo {
                 (self.epoch, self.held) = (1, 0);
             }
         }
-        let key = (u64::from(n.0) + 1) << KEY_SHIFT;
+        let tag = n.0 / LANES as u32 + 1;
+        let key = tag << KEY_SHIFT;
         let lane = n.0 as usize % LANES;
-        let home = (u64::from(n.0 / LANES as u32).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 57) as usize % LINES;
+        let home = (u64::from(tag).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 58) as usize % LINES;
         // Linear probing, line by line in the piece's lane, from its home line to its entry
         // or the first empty slot; a lane full all round (never in practice: the table is
         // emptied half full) empties the table.
@@ -134,9 +144,9 @@ impl PieceMemo {
         let facts = if covered {
             TOUCHED | COVERED
         } else {
-            (u64::from(touched) * TOUCHED) | (COVERED << NO_SHIFT)
+            (u32::from(touched) * TOUCHED) | (COVERED << NO_SHIFT)
         };
-        let facts = facts | (u64::from(!touched) * (TOUCHED << NO_SHIFT));
+        let facts = facts | (u32::from(!touched) * (TOUCHED << NO_SHIFT));
         if entry == 0 {
             if self.held == MAX_HELD {
                 slots.fill(0);
