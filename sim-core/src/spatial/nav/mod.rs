@@ -195,14 +195,16 @@ impl Terrain<'_> {
 /// How many waypoints ahead a route looks for a shortcut.
 const SHORTCUT_LOOKAHEAD: usize = 8;
 
-/// A search's scratch, kept per thread and reused: the current stamp; per node (stamp,
-/// distance, parent); where the search entered nodes (point, distance walked, node),
-/// indexed by the heap's entries; the heap of (estimate, node's rank, entry).
+/// A search's scratch, kept per thread and reused: the current stamp; per node (stamp, its
+/// current entry); where the search entered nodes (point, distance walked, node, the node
+/// it came from), indexed by the heap's entries; the heap of (estimate, node's rank, entry).
+/// A node's mark is 8 bytes, its distance and parent in its entry (issue 12: a search's
+/// reads of its neighbours' marks missed the cache; half the bytes, half the lines).
 #[derive(Default)]
 struct Scratch {
     stamp: u32,
-    marks: Vec<(u32, f64, u32)>,
-    entry: Vec<(DVec2, f64, u32)>,
+    marks: Vec<(u32, u32)>,
+    entry: Vec<(DVec2, f64, u32, u32)>,
     heap: BinaryHeap<Reverse<u128>>,
 }
 
@@ -682,9 +684,9 @@ impl NavGraph {
                 // All zero bytes, so the allocator hands out pages the kernel maps only
                 // when a search first writes them: searches stay local, and a marked copy
                 // of a ten-million-node graph per thread cost the moonshot 200 MB and a
-                // tenth of its first rounds in page clearing (issue 11). A node's parent
+                // tenth of its first rounds in page clearing (issue 11). A node's entry
                 // is read only once it carries the search's stamp (never 0).
-                *marks = vec![(0, 0.0, 0); self.pieces.len()];
+                *marks = vec![(0, 0); self.pieces.len()];
                 *stamp = 0;
             }
             // Two stamps a search: `stamp` for a node reached, `stamp + 1` once settled.
@@ -701,15 +703,17 @@ impl NavGraph {
             // distance walked to get there (buffers reused: a search is planned every few
             // rounds by every explorer, and allocating them was a few per cent of a round).
             entry.clear();
-            entry.push((from, 0.0, start.0));
+            entry.push((from, 0.0, start.0, u32::MAX));
             heap.clear();
-            marks[start.0 as usize] = (stamp, 0.0, u32::MAX);
+            marks[start.0 as usize] = (stamp, 0);
             heap.push(Reverse(heap_key(estimate(from), self.rank[start.0 as usize], 0)));
             let mut settled = 0usize;
             while let Some(Reverse(key)) = heap.pop() {
-                let (at, d, n) = entry[key as u32 as usize];
+                let e = key as u32;
+                let (at, d, n, _) = entry[e as usize];
                 let node = NavNodeId(n);
-                if d > marks[n as usize].1 {
+                // An entry other than the node's current one was bettered since.
+                if marks[n as usize].1 != e {
                     continue;
                 }
                 marks[n as usize].0 = settled_stamp;
@@ -718,8 +722,12 @@ impl NavGraph {
                 if let Some(goal) = is_goal(node, &reached) {
                     let mut nodes = vec![node];
                     let mut cur = n;
-                    while marks[cur as usize].2 != u32::MAX {
-                        cur = marks[cur as usize].2;
+                    loop {
+                        let parent = entry[marks[cur as usize].1 as usize].3;
+                        if parent == u32::MAX {
+                            break;
+                        }
+                        cur = parent;
                         nodes.push(NavNodeId(cur));
                     }
                     nodes.reverse();
@@ -737,11 +745,12 @@ impl NavGraph {
                     }
                     let p = self.entry_point(node, m, at);
                     let nd = d + at.distance(p);
-                    if !reached || nd < mark.1 {
-                        marks[m.0 as usize] = (stamp, nd, n);
-                        entry.push((p, nd, m.0));
+                    if !reached || nd < entry[mark.1 as usize].1 {
+                        let e = u32::try_from(entry.len()).expect("fewer entries than u32");
+                        marks[m.0 as usize] = (stamp, e);
+                        entry.push((p, nd, m.0, n));
                         let rank = self.rank[m.0 as usize];
-                        heap.push(Reverse(heap_key(nd + estimate(p), rank, (entry.len() - 1) as u32)));
+                        heap.push(Reverse(heap_key(nd + estimate(p), rank, e)));
                     }
                 }
             }
