@@ -125,7 +125,7 @@ impl Navigator {
         // The goal test of a node asks its neighbours whether the known map touches them,
         // and the search asks again right after, when it expands the node: the answers are
         // kept in between (a "no" is not in the memo).
-        let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::new());
+        let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::with_capacity(32));
         let start_hint = memo.route_end();
         let memo = RefCell::new(memo);
         // The pieces asked about lie close together: descents of the known map start from

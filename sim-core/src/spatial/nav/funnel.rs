@@ -40,7 +40,8 @@ pub(super) fn pull(from: DVec2, portals: &[Portal], to: DVec2) -> Vec<(DVec2, us
         i if i <= n => portals[i - 1],
         _ => Portal::point(to),
     };
-    let mut bends: Vec<(DVec2, usize)> = Vec::new();
+    // At most a bend a portal, and the goal.
+    let mut bends: Vec<(DVec2, usize)> = Vec::with_capacity(portals.len() + 1);
     let (mut apex, mut left, mut right) = (from, from, from);
     let (mut left_i, mut right_i) = (0usize, 0usize);
     let mut i = 1;

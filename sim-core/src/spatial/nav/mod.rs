@@ -720,16 +720,11 @@ impl NavGraph {
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
                 if let Some(goal) = is_goal(node, &reached) {
-                    let mut nodes = vec![node];
-                    let mut cur = n;
-                    loop {
-                        let parent = entry[marks[cur as usize].1 as usize].3;
-                        if parent == u32::MAX {
-                            break;
-                        }
-                        cur = parent;
-                        nodes.push(NavNodeId(cur));
-                    }
+                    let parent = |cur: u32| Some(entry[marks[cur as usize].1 as usize].3).filter(|&p| p != u32::MAX);
+                    // The chain counted first: one allocation of the route's size.
+                    let len = std::iter::successors(Some(n), |&cur| parent(cur)).count();
+                    let mut nodes = Vec::with_capacity(len + 1);
+                    nodes.extend(std::iter::successors(Some(n), |&cur| parent(cur)).map(NavNodeId));
                     nodes.reverse();
                     return Some((nodes, goal));
                 }
