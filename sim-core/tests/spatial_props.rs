@@ -884,4 +884,53 @@ proptest! {
         prop_assert_eq!(got, want);
         prop_assert_eq!(shape.intersects_cells(&cells), Some(want.intersects));
     }
+
+    /// Issue 12: a block's cells whose part in a box lies near a point, at once, are those
+    /// the box and distance tests find cell by cell, to the last bit (the nearest unknown
+    /// point's walk reads a block's cells this way). Boxes on cell edges and points on
+    /// cell corners come up, and limits exactly at a cell's distance.
+    #[test]
+    fn cells_with_part_near_match_the_tests_cell_by_cell(
+        seed in any::<u64>(),
+        cell_m in 0.05f64..5.0,
+    ) {
+        use sim_core::spatial::BlockCells;
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let origin = DVec2::new(rng.random_range(-1000.0..1000.0), rng.random_range(-1000.0..1000.0));
+        let corner = |i: u32| origin + DVec2::splat(f64::from(i) * cell_m);
+        let cells = BlockCells {
+            xs: std::array::from_fn(|i| corner(i as u32).x),
+            ys: std::array::from_fn(|i| corner(i as u32).y),
+        };
+        let side = 8.0 * cell_m;
+        let mut point = |snap: bool| {
+            let p = origin + DVec2::new(rng.random_range(-0.5..1.5), rng.random_range(-0.5..1.5)) * side;
+            if snap { origin + ((p - origin) / cell_m).round() * cell_m } else { p }
+        };
+        let (a, b, p) = (point(seed % 2 == 0), point(seed % 3 == 0), point(seed % 5 == 0));
+        let area = Aabb { min: a.min(b), max: a.max(b) };
+        let cell = |i: usize, j: usize| Aabb {
+            min: DVec2::new(cells.xs[i], cells.ys[j]),
+            max: DVec2::new(cells.xs[i + 1], cells.ys[j + 1]),
+        };
+        let part_d = |c: &Aabb| Aabb { min: c.min.max(area.min), max: c.max.min(area.max) }.distance_squared_to(p);
+        // A limit exactly at some cell's distance half the time (a cell the box meets: only
+        // those have a part).
+        let (i, j) = (rng.random_range(0..8), rng.random_range(0..8));
+        let limit = if rng.random_bool(0.5) && area.overlaps_open(&cell(i, j)) {
+            part_d(&cell(i, j))
+        } else {
+            rng.random_range(0.0..4.0) * side * side
+        };
+        let mut want = 0u64;
+        for j in 0..8 {
+            for i in 0..8 {
+                let c = cell(i, j);
+                if area.overlaps_open(&c) && part_d(&c) <= limit {
+                    want |= 1 << (8 * j + i);
+                }
+            }
+        }
+        prop_assert_eq!(area.cells_with_part_near(&cells, p, limit), want);
+    }
 }

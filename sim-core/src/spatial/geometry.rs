@@ -42,6 +42,27 @@ impl Aabb {
         (self.min + self.max) * 0.5
     }
 
+    /// Of the 64 cells of a block, those that share area with this box (as
+    /// [`overlaps_open`](Self::overlaps_open)) and whose part in it lies within squared
+    /// distance `max_d2` of `p`, the part's [`distance_squared_to`](Self::distance_squared_to)
+    /// worked out with the same operations, so to the last bit; bit `8 j + i` is cell
+    /// `(i, j)`. Per column and row once, then combined (issue 12: a frontier search's
+    /// nearest unknown point tested each block's cells one square at a time).
+    pub fn cells_with_part_near(&self, cells: &BlockCells, p: DVec2, max_d2: f64) -> u64 {
+        let cols = axis_mask(&cells.xs, |lo, hi| self.min.x < hi && lo < self.max.x);
+        let rows = axis_mask(&cells.ys, |lo, hi| self.min.y < hi && lo < self.max.y);
+        // Along an axis: the cell's part in the box, `p` clamped into it, the gap squared.
+        let gaps = |edges: &[f64; 9], c: f64, min: f64, max: f64| -> [f64; 8] {
+            std::array::from_fn(|i| {
+                let d = c.max(edges[i].max(min)).min(edges[i + 1].min(max)) - c;
+                d * d
+            })
+        };
+        let dx = gaps(&cells.xs, p.x, self.min.x, self.max.x);
+        let dy = gaps(&cells.ys, p.y, self.min.y, self.max.y);
+        outer_mask(cols, rows) & cell_mask(&dx, &dy, |x, y| x + y <= max_d2)
+    }
+
     /// Squared distance from `p` to the closed box (0 inside).
     pub fn distance_squared_to(&self, p: DVec2) -> f64 {
         let q = p.clamp(self.min, self.max);
@@ -115,6 +136,15 @@ pub trait Shape {
     #[inline]
     fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
         self.classify_cells(cells).map(|m| m.intersects)
+    }
+    /// Whether a walk that learnt a block's cells from
+    /// [`intersects_cells`](Self::intersects_cells) may visit the block's leaves in Z order
+    /// (default), or must keep its own order (leaf children last to first, then the mixed
+    /// ones first to last, as without the cells' answers): for a visitor that depends on
+    /// the order, as a nearest-point search breaking ties by it does.
+    #[inline]
+    fn cells_in_z_order(&self) -> bool {
+        true
     }
 }
 
@@ -232,6 +262,9 @@ impl<S: Shape + ?Sized> Shape for &S {
     }
     fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
         (**self).intersects_cells(cells)
+    }
+    fn cells_in_z_order(&self) -> bool {
+        (**self).cells_in_z_order()
     }
     fn bounds(&self) -> Aabb {
         (**self).bounds()

@@ -6,7 +6,9 @@ use glam::DVec2;
 
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
-use crate::spatial::{Aabb, Finger, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square};
+use crate::spatial::{
+    Aabb, BlockCells, Finger, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
+};
 use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
@@ -307,6 +309,19 @@ impl Shape for NearerThan<'_> {
 
     fn intersects(&self, b: &Aabb) -> bool {
         self.area.intersects(b) && !self.too_far(b)
+    }
+
+    /// `intersects` for a block's cells at once. A leaf meets the shape exactly when one
+    /// of its cells does; the walk then takes a block's leaves against the best distance
+    /// as it was at the block, not as it falls leaf by leaf, and the leaves it keeps in
+    /// besides cannot win: their points are farther than the best distance.
+    fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
+        Some(self.area.cells_with_part_near(cells, self.p, self.best.get()))
+    }
+
+    /// The first leaf found at the nearest distance wins: the walk's own order.
+    fn cells_in_z_order(&self) -> bool {
+        false
     }
 
     fn bounds(&self) -> Aabb {

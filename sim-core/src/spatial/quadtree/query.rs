@@ -115,7 +115,11 @@ impl RegionQuadtree {
                 shape.intersects_cells(&self.block_cells(sq)).map(block::z_order)
             };
             if let Some(hits) = hits {
-                return self.visit_block(if value { bits } else { !bits }, sq, hits, visit);
+                let wanted = if value { bits } else { !bits };
+                if inside || shape.cells_in_z_order() {
+                    return self.visit_block(wanted, sq, hits, visit);
+                }
+                return self.visit_cells_in_walk_order(wanted, sq, hits, visit);
             }
         }
         let kids = block::kids(bits, sq.level);
@@ -124,6 +128,36 @@ impl RegionQuadtree {
         for i in 0..4 {
             if let (Some(inside), Node::Bits { bits, .. }) = (descend[i], kids[i]) {
                 self.visit_bits(shape, bits, sq.child(i), value, inside, visit)?;
+            }
+        }
+        ControlFlow::Continue(())
+    }
+
+    /// The leaves of the mixed square at `sq` (≤ [`BLOCK_LEVEL`]) whose cells are all in
+    /// `wanted` and that share a cell with `hits` (both the square's cells in their low
+    /// bits, Z order), in the order [`visit_bits`](Self::visit_bits) walks them without the
+    /// cells' answers: at each square its leaf children last to first, then into its mixed
+    /// ones first to last. A leaf shares a cell with the hits exactly when its box meets
+    /// the shape, so these are the leaves that walk visits, tested once per block.
+    fn visit_cells_in_walk_order(
+        &self,
+        wanted: u64,
+        sq: Square,
+        hits: u64,
+        visit: &mut impl FnMut(Square, Aabb) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
+        let part = |w: u64, i: usize| block::child_bits(w, sq.level, i);
+        let full = block::low_bits(sq.level - 1);
+        for i in (0..4).rev() {
+            if part(wanted, i) == full && part(hits, i) != 0 {
+                let c = sq.child(i);
+                visit(c, self.grid.square(c.x, c.y, c.level))?;
+            }
+        }
+        for i in 0..4 {
+            let w = part(wanted, i);
+            if w != 0 && w != full && part(hits, i) != 0 {
+                self.visit_cells_in_walk_order(w, sq.child(i), part(hits, i), visit)?;
             }
         }
         ControlFlow::Continue(())

@@ -390,3 +390,81 @@ fn issue12_values_in_rect_from_a_finger_match_the_root_descent() {
     }
     assert!(moved > 50, "the finger moved {moved} times");
 }
+
+/// `shape`'s classification, never "contains", as a nearest-point search's shape: every
+/// square is then tested on the way down.
+fn never_contains(shape: &dyn Shape, b: &Aabb) -> crate::spatial::geometry::Overlap {
+    match shape.classify(b) {
+        crate::spatial::geometry::Overlap::Disjoint => crate::spatial::geometry::Overlap::Disjoint,
+        _ => crate::spatial::geometry::Overlap::Partial,
+    }
+}
+
+/// A shape walked square by square (no cell masks).
+struct SquareBySquare<'a>(&'a dyn Shape);
+
+impl Shape for SquareBySquare<'_> {
+    fn classify(&self, b: &Aabb) -> crate::spatial::geometry::Overlap {
+        never_contains(self.0, b)
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+}
+
+/// The same shape answering a block's cells at once (from `intersects`, cell by cell), its
+/// blocks to be walked in the walk's own order.
+struct CellsInWalkOrder<'a>(&'a dyn Shape);
+
+impl Shape for CellsInWalkOrder<'_> {
+    fn classify(&self, b: &Aabb) -> crate::spatial::geometry::Overlap {
+        never_contains(self.0, b)
+    }
+    fn intersects_cells(&self, cells: &crate::spatial::geometry::BlockCells) -> Option<u64> {
+        let mut hits = 0;
+        for j in 0..8 {
+            for i in 0..8 {
+                let b = Aabb {
+                    min: DVec2::new(cells.xs[i], cells.ys[j]),
+                    max: DVec2::new(cells.xs[i + 1], cells.ys[j + 1]),
+                };
+                hits |= u64::from(self.0.intersects(&b)) << (8 * j + i);
+            }
+        }
+        Some(hits)
+    }
+    fn cells_in_z_order(&self) -> bool {
+        false
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+}
+
+/// Issue 12: a shape that answers a block's cells at once but keeps the walk's order is
+/// visited leaf for leaf in the order of the square-by-square walk (a nearest-point search
+/// breaks ties by that order), on random trees and shapes of every kind.
+#[test]
+fn issue12_cells_in_walk_order_visit_the_leaves_of_the_square_by_square_walk() {
+    let mut rng = ChaCha8Rng::seed_from_u64(1207);
+    let mut blocks_seen = 0;
+    for case in 0..300 {
+        let grid = Grid::new(DVec2::new(-3.0, 5.0), rng.random_range(0.3..2.0), 70, 45).unwrap();
+        let tree = random_tree(&mut rng, grid);
+        let shape = random_shape(&mut rng, &grid);
+        for value in [false, true] {
+            let walk = |s: &dyn Shape| {
+                let mut seen = Vec::new();
+                let _ = tree.visit_leaves_in(&s, value, |sq, b| {
+                    seen.push((sq, b));
+                    ControlFlow::Continue(())
+                });
+                seen
+            };
+            let (plain, by_cells) = (walk(&SquareBySquare(&*shape)), walk(&CellsInWalkOrder(&*shape)));
+            assert_eq!(plain, by_cells, "case {case}, value {value}");
+            blocks_seen += plain.iter().filter(|(sq, _)| sq.level < 3).count();
+        }
+    }
+    assert!(blocks_seen > 1000, "only {blocks_seen} leaves inside blocks");
+}
