@@ -13,17 +13,9 @@ use scale::Kernel;
 use sim_core::engine::Simulation;
 use sim_core::world::MapData;
 
-/// Peak resident set size of this process, from /proc (Linux), in MiB.
+/// Peak resident set size of this process, in MiB.
 fn peak_rss_mib() -> f64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|kb| kb.parse::<f64>().ok())
-        })
-        .map_or(f64::NAN, |kb| kb / 1024.0)
+    scale::peak_rss_bytes() as f64 / f64::from(1 << 20)
 }
 
 fn simulation(map: &Arc<MapData>, robots: u32) -> Simulation {

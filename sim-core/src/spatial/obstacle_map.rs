@@ -166,12 +166,7 @@ impl ObstacleMap {
                 // by a part in a million holds no cell within a part in 10⁷ of it, whatever the
                 // rounding, so skipping it changes no answer.
                 let grid = self.grid();
-                let area = capsule.bounds();
-                let eps = DVec2::splat(area.rounding_margin());
-                let (lo, hi) = grid.cells_touching(&Aabb {
-                    min: area.min - eps,
-                    max: area.max + eps,
-                })?;
+                let (lo, hi) = self.cells_near(&capsule.bounds())?;
                 let blocks = u64::from((hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) + 1)
                     * u64::from((hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) + 1);
                 if blocks > MAX_LEG_BLOCKS {
@@ -193,6 +188,15 @@ impl ObstacleMap {
         }
     }
 
+    /// The cells `area` touches, widened by its rounding margin (`None` outside the map).
+    fn cells_near(&self, area: &Aabb) -> Option<((u32, u32), (u32, u32))> {
+        let eps = DVec2::splat(area.rounding_margin());
+        self.grid().cells_touching(&Aabb {
+            min: area.min - eps,
+            max: area.max + eps,
+        })
+    }
+
     /// Visit the world box of every blocked cell that `area` (inside the map), widened by
     /// its rounding margin, touches, if they lie within 2 × 2 blocks of the tree (`None`
     /// otherwise, visiting nothing; see [`RegionQuadtree::visit_cells_in_rect`]).
@@ -202,11 +206,7 @@ impl ObstacleMap {
         mut visit: impl FnMut(Aabb) -> ControlFlow<()>,
     ) -> Option<ControlFlow<()>> {
         let grid = self.grid();
-        let eps = DVec2::splat(area.rounding_margin());
-        let (lo, hi) = grid.cells_touching(&Aabb {
-            min: area.min - eps,
-            max: area.max + eps,
-        })?;
+        let (lo, hi) = self.cells_near(area)?;
         self.tree
             .visit_cells_in_rect(lo, hi, true, |x, y| visit(grid.square(x, y, 0)))
     }

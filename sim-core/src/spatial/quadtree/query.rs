@@ -391,7 +391,7 @@ impl RegionQuadtree {
     /// the descent passed one.
     fn descend_by(&self, finger: &mut Finger, sq: Square) -> Node {
         let shift = u32::from(finger.square.level);
-        let (mut n, mut level) = if finger.square.level >= sq.level
+        let (n, level) = if finger.square.level >= sq.level
             && sq.x >> shift == finger.square.x >> shift
             && sq.y >> shift == finger.square.y >> shift
         {
@@ -399,13 +399,7 @@ impl RegionQuadtree {
         } else {
             (self.node(self.root), self.grid.depth())
         };
-        while level > sq.level {
-            if let Node::Leaf(_) = n {
-                break;
-            }
-            level -= 1;
-            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
-            n = self.kid(n, i as usize);
+        self.descend_from(n, level, sq, |level, n| {
             if level == FINGER_LEVEL {
                 let keep = u32::MAX << level;
                 finger.square = Square {
@@ -415,6 +409,21 @@ impl RegionQuadtree {
                 };
                 finger.node = n;
             }
+        })
+    }
+
+    /// From node `n` at `level` down toward `sq` (inside `n`'s square) to `sq`'s node or
+    /// the leaf above it, showing `passed` each node met below `n` with its level.
+    #[inline]
+    fn descend_from(&self, mut n: Node, mut level: u8, sq: Square, mut passed: impl FnMut(u8, Node)) -> Node {
+        while level > sq.level {
+            if let Node::Leaf(_) = n {
+                break;
+            }
+            level -= 1;
+            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
+            n = self.kid(n, i as usize);
+            passed(level, n);
         }
         n
     }
@@ -560,17 +569,7 @@ impl RegionQuadtree {
     /// The node of square `sq`, or the leaf above it that covers it.
     #[inline]
     fn descend_to(&self, sq: Square) -> Node {
-        let mut n = self.node(self.root);
-        let mut level = self.grid.depth();
-        while level > sq.level {
-            if let Node::Leaf(_) = n {
-                break;
-            }
-            level -= 1;
-            let i = ((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1);
-            n = self.kid(n, i as usize);
-        }
-        n
+        self.descend_from(self.node(self.root), self.grid.depth(), sq, |_, _| {})
     }
 
     /// Number of cells of `sq` holding `value`.
