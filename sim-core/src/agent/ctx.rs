@@ -132,8 +132,10 @@ pub struct Ctx<'a> {
     /// Random numbers, seeded from (run seed, robot, round).
     pub rng: RobotRng,
     out: &'a mut StrategyOutput,
-    /// Wall time spent in [`timed_planning`](Self::timed_planning) this round, ns.
-    planning_ns: std::cell::Cell<u64>,
+    /// Wall time spent in [`timed_planning`](Self::timed_planning) this round, ns (atomic,
+    /// not a `Cell`, so that a context stays `Sync` for strategies that share it across
+    /// threads).
+    planning_ns: std::sync::atomic::AtomicU64,
 }
 
 impl<'a> Ctx<'a> {
@@ -162,7 +164,7 @@ impl<'a> Ctx<'a> {
             world,
             rng,
             out: output,
-            planning_ns: std::cell::Cell::new(0),
+            planning_ns: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
@@ -178,14 +180,14 @@ impl<'a> Ctx<'a> {
         let started = std::time::Instant::now();
         let planned = plan();
         let took = u64::try_from(started.elapsed().as_nanos()).unwrap_or(u64::MAX);
-        self.planning_ns.set(self.planning_ns.get().saturating_add(took));
+        self.planning_ns.fetch_add(took, std::sync::atomic::Ordering::Relaxed);
         planned
     }
 
     /// Wall time spent planning this round through [`timed_planning`](Self::timed_planning),
     /// in nanoseconds (0 when the run does not time planning).
     pub fn planning_ns(&self) -> u64 {
-        self.planning_ns.get()
+        self.planning_ns.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Robots in view (empty unless the strategy needs robots).
@@ -305,3 +307,9 @@ impl<'a> Ctx<'a> {
         self.out.path.extend_from_slice(path);
     }
 }
+
+/// A context can be shared across threads (a strategy may plan in parallel with it).
+const _: () = {
+    const fn sync<T: Sync>() {}
+    sync::<Ctx<'static>>();
+};
