@@ -49,8 +49,6 @@ impl Aabb {
     /// `(i, j)`. Per column and row once, then combined (issue 12: a frontier search's
     /// nearest unknown point tested each block's cells one square at a time).
     pub fn cells_with_part_near(&self, cells: &BlockCells, p: DVec2, max_d2: f64) -> u64 {
-        let cols = axis_mask(&cells.xs, |lo, hi| self.min.x < hi && lo < self.max.x);
-        let rows = axis_mask(&cells.ys, |lo, hi| self.min.y < hi && lo < self.max.y);
         // Along an axis: the cell's part in the box, `p` clamped into it, the gap squared.
         let gaps = |edges: &[f64; 9], c: f64, min: f64, max: f64| -> [f64; 8] {
             std::array::from_fn(|i| {
@@ -60,7 +58,15 @@ impl Aabb {
         };
         let dx = gaps(&cells.xs, p.x, self.min.x, self.max.x);
         let dy = gaps(&cells.ys, p.y, self.min.y, self.max.y);
-        outer_mask(cols, rows) & cell_mask(&dx, &dy, |x, y| x + y <= max_d2)
+        self.overlap_cells(cells) & cell_mask(&dx, &dy, |x, y| x + y <= max_d2)
+    }
+
+    /// The cells of a block sharing area with this box ([`overlaps_open`](Self::overlaps_open)),
+    /// by column and row: a cell passes when its column and its row do.
+    fn overlap_cells(&self, cells: &BlockCells) -> u64 {
+        let cols = axis_mask(&cells.xs, |lo, hi| self.min.x < hi && lo < self.max.x);
+        let rows = axis_mask(&cells.ys, |lo, hi| self.min.y < hi && lo < self.max.y);
+        outer_mask(cols, rows)
     }
 
     /// Squared distance from `p` to the closed box (0 inside).
@@ -510,11 +516,9 @@ impl Shape for Aabb {
 
     fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
         // Both tests split by axis: a cell passes when its column and its row do.
-        let cols_in = axis_mask(&cells.xs, |lo, hi| self.min.x < hi && lo < self.max.x);
-        let rows_in = axis_mask(&cells.ys, |lo, hi| self.min.y < hi && lo < self.max.y);
         let cols_within = axis_mask(&cells.xs, |lo, hi| self.min.x <= lo && hi <= self.max.x);
         let rows_within = axis_mask(&cells.ys, |lo, hi| self.min.y <= lo && hi <= self.max.y);
-        let intersects = outer_mask(cols_in, rows_in);
+        let intersects = self.overlap_cells(cells);
         Some(CellMasks {
             contains: outer_mask(cols_within, rows_within) & intersects,
             intersects,

@@ -234,15 +234,8 @@ impl KnownMap {
 
     /// Whether some cell of the cell rectangle `lo ..= hi` is known, and whether every cell
     /// is: [`touches_cells`](Self::touches_cells) and [`covers_cells`](Self::covers_cells)
-    /// from one descent of the tree.
-    #[inline]
-    pub fn touches_and_covers_cells(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
-        self.touches_and_covers_cells_from(&mut Finger::new(&self.tree), lo, hi)
-    }
-
-    /// [`touches_and_covers_cells`](Self::touches_and_covers_cells) descending from
-    /// `finger` (of this map's [`tree`](Self::tree); see
-    /// [`RegionQuadtree::values_in_rect_from`]).
+    /// from one descent of the tree, starting from `finger` (of this map's
+    /// [`tree`](Self::tree); see [`RegionQuadtree::values_in_rect_from`]).
     #[inline]
     pub fn touches_and_covers_cells_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
         let (some_unknown, some_known) = self.tree.values_in_rect_from(finger, lo, hi);

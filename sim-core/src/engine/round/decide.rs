@@ -80,8 +80,9 @@ impl Simulation {
                     // round) is ample for limits of tens of milliseconds.
                     let started = limit.map(|_| coarsetime::Instant::now());
                     let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
-                    if ctx.planning_ns() > 0 {
-                        planning_ns.fetch_add(ctx.planning_ns(), Ordering::Relaxed);
+                    let planned_ns = ctx.planning_ns();
+                    if planned_ns > 0 {
+                        planning_ns.fetch_add(planned_ns, Ordering::Relaxed);
                     }
                     turn.slow = started
                         .map(|t| Duration::from(t.elapsed()))

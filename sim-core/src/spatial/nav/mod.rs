@@ -391,15 +391,19 @@ impl NavGraph {
     /// leaves missed the cache a few times each).
     pub fn node_at_near(&self, p: DVec2, hint: Option<NavNodeId>) -> Option<NavNodeId> {
         let cell = self.grid.cell_of(p)?;
-        if let Some(h) = hint.filter(|h| (h.0 as usize) < self.pieces.len()) {
-            if self.piece(h).holds(cell) {
-                return Some(h);
-            }
-            if let Some(m) = self.neighbors(h).find(|&m| self.piece(m).holds(cell)) {
-                return Some(m);
-            }
+        hint.filter(|h| (h.0 as usize) < self.pieces.len())
+            .and_then(|h| self.holder_near(h, cell))
+            .or_else(|| self.node_at(p))
+    }
+
+    /// Node `n` or the neighbour of it whose piece holds `cell`, if one does: `node_at`'s
+    /// answer for the cell when it is one of those (pieces partition the free cells),
+    /// without its look-up among the leaves.
+    fn holder_near(&self, n: NavNodeId, cell: (u32, u32)) -> Option<NavNodeId> {
+        if self.piece(n).holds(cell) {
+            return Some(n);
         }
-        self.node_at(p)
+        self.neighbors(n).find(|&m| self.piece(m).holds(cell))
     }
 
     /// Whether `known` knows some cell of node `n`.
@@ -415,14 +419,9 @@ impl NavGraph {
     }
 
     /// Whether `known` knows some cell of node `n`, and whether it knows every cell
-    /// ([`touched_by`](Self::touched_by) and [`covered_by`](Self::covered_by) at once).
-    pub fn touched_and_covered_by(&self, known: &KnownMap, n: NavNodeId) -> (bool, bool) {
-        let p = self.piece(n);
-        known.touches_and_covers_cells(p.lo(), p.hi())
-    }
-
-    /// [`touched_and_covered_by`](Self::touched_and_covered_by) descending `known`'s tree
-    /// from `finger` (see [`KnownMap::touches_and_covers_cells_from`]).
+    /// ([`touched_by`](Self::touched_by) and [`covered_by`](Self::covered_by) at once),
+    /// descending `known`'s tree from `finger` (see
+    /// [`KnownMap::touches_and_covers_cells_from`]).
     pub fn touched_and_covered_from(&self, known: &KnownMap, finger: &mut Finger, n: NavNodeId) -> (bool, bool) {
         let p = self.piece(n);
         known.touches_and_covers_cells_from(finger, p.lo(), p.hi())
@@ -529,11 +528,11 @@ impl NavGraph {
         let last = *nodes.last().expect("a route holds its start");
         // A goal across the last node's edge (a frontier just inside an unknown node) is
         // reached through that edge too.
-        // (The neighbour whose piece holds the goal's cell: pieces partition the free
-        // cells, so this is `node_at`'s answer when it is a neighbour, without its search.)
-        if let Some(cell) = self.grid.cell_of(goal)
-            && !self.piece(last).holds(cell)
-            && let Some(m) = self.neighbors(last).find(|&x| self.piece(x).holds(cell))
+        if let Some(m) = self
+            .grid
+            .cell_of(goal)
+            .and_then(|cell| self.holder_near(last, cell))
+            .filter(|&m| m != last)
         {
             nodes.push(m);
         }

@@ -337,7 +337,7 @@ impl RegionQuadtree {
     /// stops at the first node inside it that is mixed (it holds both values): the test
     /// for navigation pieces, which are rectangles of cells.
     pub fn any_cell_in_rect(&self, lo: (u32, u32), hi: (u32, u32), value: bool) -> bool {
-        self.values_in_rect_until(None, lo, hi, value_bit(value)) & value_bit(value) != 0
+        self.values_in_rect_until(&mut Finger::new(self), lo, hi, value_bit(value)) & value_bit(value) != 0
     }
 
     /// Which values the cells of the rectangle `lo ..= hi` (as for
@@ -355,13 +355,13 @@ impl RegionQuadtree {
     /// `finger` must be of this tree.
     pub fn values_in_rect_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
         debug_assert!(std::ptr::eq(finger.tree, self), "a finger of another tree");
-        let held = self.values_in_rect_until(Some(finger), lo, hi, BOTH_VALUES);
+        let held = self.values_in_rect_until(finger, lo, hi, BOTH_VALUES);
         (held & value_bit(false) != 0, held & value_bit(true) != 0)
     }
 
     /// The values (bits of [`value_bit`]) the rectangle's cells hold, the descent stopped
     /// once all of `wanted` are found (the answer then holds at least those).
-    fn values_in_rect_until(&self, finger: Option<&mut Finger>, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
+    fn values_in_rect_until(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
         debug_assert!(lo.0 <= hi.0 && lo.1 <= hi.1 && hi.0 < self.grid.side_cells() && hi.1 < self.grid.side_cells());
         // Straight down to the smallest square that holds the rectangle, by its cells' bits
         // (issue 12: walking down from the root testing four children's bounds at every
@@ -375,11 +375,7 @@ impl RegionQuadtree {
             y: lo.1 & keep,
             level: level as u8,
         };
-        let n = match finger {
-            Some(f) => self.descend_by(f, sq),
-            None => self.descend_to(sq),
-        };
-        match n {
+        match self.descend_by(finger, sq) {
             // A leaf at or above the square: the whole rectangle holds its value.
             Node::Leaf(v) => value_bit(v),
             n => self.values_in_rect_below(n, sq, lo, hi, wanted),
