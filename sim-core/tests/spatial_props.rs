@@ -822,6 +822,15 @@ proptest! {
     }
 }
 
+/// The cells of an 8 × 8 block of `cell_m` cells from `origin`.
+fn block_cells(origin: DVec2, cell_m: f64) -> sim_core::spatial::BlockCells {
+    let corner = |i: u32| origin + DVec2::splat(f64::from(i) * cell_m);
+    sim_core::spatial::BlockCells {
+        xs: std::array::from_fn(|i| corner(i as u32).x),
+        ys: std::array::from_fn(|i| corner(i as u32).y),
+    }
+}
+
 proptest! {
     #![proptest_config(config(512))]
 
@@ -833,14 +842,10 @@ proptest! {
         cell_m in 0.05f64..5.0,
         kind in 0usize..9,
     ) {
-        use sim_core::spatial::{BlockCells, CellMasks, Clipped, DiscBeyond};
+        use sim_core::spatial::{CellMasks, Clipped, DiscBeyond};
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let origin = DVec2::new(rng.random_range(-100.0..100.0), rng.random_range(-100.0..100.0));
-        let corner = |i: u32| origin + DVec2::splat(f64::from(i) * cell_m);
-        let cells = BlockCells {
-            xs: std::array::from_fn(|i| corner(i as u32).x),
-            ys: std::array::from_fn(|i| corner(i as u32).y),
-        };
+        let cells = block_cells(origin, cell_m);
         let side = 8.0 * cell_m;
         let mut point = || origin + DVec2::new(rng.random_range(-0.5..1.5), rng.random_range(-0.5..1.5)) * side;
         let (p, q) = (point(), point());
@@ -894,14 +899,9 @@ proptest! {
         seed in any::<u64>(),
         cell_m in 0.05f64..5.0,
     ) {
-        use sim_core::spatial::BlockCells;
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let origin = DVec2::new(rng.random_range(-1000.0..1000.0), rng.random_range(-1000.0..1000.0));
-        let corner = |i: u32| origin + DVec2::splat(f64::from(i) * cell_m);
-        let cells = BlockCells {
-            xs: std::array::from_fn(|i| corner(i as u32).x),
-            ys: std::array::from_fn(|i| corner(i as u32).y),
-        };
+        let cells = block_cells(origin, cell_m);
         let side = 8.0 * cell_m;
         let mut point = |snap: bool| {
             let p = origin + DVec2::new(rng.random_range(-0.5..1.5), rng.random_range(-0.5..1.5)) * side;
