@@ -161,6 +161,17 @@ impl Grid {
         Some(((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y))))
     }
 
+    /// [`cells_touching`](Self::cells_touching) for the box widened by its rounding
+    /// margin: every cell a test with the box's own arithmetic might find it meets.
+    #[inline]
+    pub(crate) fn cells_near(&self, area: &Aabb) -> Option<((u32, u32), (u32, u32))> {
+        let eps = DVec2::splat(area.rounding_margin());
+        self.cells_touching(&Aabb {
+            min: area.min - eps,
+            max: area.max + eps,
+        })
+    }
+
     /// Whether cell `(x, y)` lies inside the map (not in the padding).
     pub fn in_map(&self, x: u32, y: u32) -> bool {
         x < self.width_cells && y < self.height_cells

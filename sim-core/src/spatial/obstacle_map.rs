@@ -13,12 +13,11 @@ use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_bo
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
-use crate::spatial::quadtree::block::BLOCK_LEVEL;
 use crate::spatial::quadtree::{BitGrid, Region};
 
-/// Blocks of the tree (8 × 8 cells) a long leg's box may span for the swept-disc test to
-/// read their cells; past that, the tree walk decides.
-const MAX_LEG_BLOCKS: u64 = 64;
+/// Blocks of the tree (8 × 8 cells) within reach of a long leg that the swept-disc test
+/// reads the cells of; past that, the tree walk decides.
+pub(crate) const MAX_LEG_BLOCKS: u32 = 64;
 
 /// The static obstacles of a map.
 #[derive(Clone, Debug)]
@@ -136,65 +135,13 @@ impl ObstacleMap {
         }
     }
 
-    /// The swept-disc test from the blocked cells around a short move, when they are few
-    /// and none lies too close to the radius to call (`None` otherwise: the tree walk
-    /// decides). A capsule meets a blocked leaf exactly when it meets one of its cells, and
-    /// a distance more than a part in 10⁷ off the radius decides the same whatever the
-    /// rounding of either box's arithmetic, so the answer is the walk's. The capsule must
-    /// lie inside the map.
+    /// The swept-disc test from the blocked cells near the move
+    /// ([`RegionQuadtree::capsule_meets_cells`]; `None`: the tree walk decides). The
+    /// capsule must lie inside the map.
     fn capsule_free_by_cells(&self, capsule: &Capsule) -> Option<bool> {
-        if capsule.radius <= 0.0 {
-            return None;
-        }
-        let r2 = capsule.radius * capsule.radius;
-        let (clearly_hit, clearly_clear) = (r2 * (1.0 - 1e-7), r2 * (1.0 + 1e-7));
-        let mut undecided = false;
-        let mut visit = |cell: Aabb| {
-            let d = segment_box_distance_squared(capsule.a, capsule.b, &cell);
-            if d < clearly_hit {
-                return ControlFlow::Break(());
-            }
-            undecided |= d <= clearly_clear;
-            ControlFlow::Continue(())
-        };
-        let flow = self
-            .visit_blocked_cells_near(&capsule.bounds(), &mut visit)
-            .or_else(|| {
-                // A long leg (navigation's routes): the cells of the blocks it passes near, which
-                // hold every cell within the radius (issue 12: the tree walk for legs past 2 × 2
-                // blocks was a sixth of the frontier searches). A block farther than the radius
-                // by a part in a million holds no cell within a part in 10⁷ of it, whatever the
-                // rounding, so skipping it changes no answer.
-                let grid = self.grid();
-                let (lo, hi) = self.cells_near(&capsule.bounds())?;
-                let blocks = u64::from((hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) + 1)
-                    * u64::from((hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) + 1);
-                if blocks > MAX_LEG_BLOCKS {
-                    return None;
-                }
-                let reach2 = r2 * (1.0 + 1e-6);
-                let near = |sq: Square| {
-                    segment_box_distance_squared(capsule.a, capsule.b, &grid.square(sq.x, sq.y, sq.level)) <= reach2
-                };
-                self.tree
-                    .visit_cells_in_blocks(lo, hi, true, near, |x, y| visit(grid.square(x, y, 0)))
-            })?;
-        if flow.is_break() {
-            Some(false)
-        } else if undecided {
-            None
-        } else {
-            Some(true)
-        }
-    }
-
-    /// The cells `area` touches, widened by its rounding margin (`None` outside the map).
-    fn cells_near(&self, area: &Aabb) -> Option<((u32, u32), (u32, u32))> {
-        let eps = DVec2::splat(area.rounding_margin());
-        self.grid().cells_touching(&Aabb {
-            min: area.min - eps,
-            max: area.max + eps,
-        })
+        self.tree
+            .capsule_meets_cells(capsule, true, MAX_LEG_BLOCKS)
+            .map(|hit| !hit)
     }
 
     /// Visit the world box of every blocked cell that `area` (inside the map), widened by
@@ -206,7 +153,7 @@ impl ObstacleMap {
         mut visit: impl FnMut(Aabb) -> ControlFlow<()>,
     ) -> Option<ControlFlow<()>> {
         let grid = self.grid();
-        let (lo, hi) = self.cells_near(area)?;
+        let (lo, hi) = grid.cells_near(area)?;
         self.tree
             .visit_cells_in_rect(lo, hi, true, |x, y| visit(grid.square(x, y, 0)))
     }

@@ -6,7 +6,11 @@ use glam::DVec2;
 
 use super::block::{self, BLOCK_LEVEL, Node};
 use super::{CellSet, NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
-use crate::spatial::geometry::{Aabb, Overlap, Shape, clip_line};
+use crate::spatial::geometry::{Aabb, Capsule, Overlap, Shape, clip_line, segment_box_distance_squared};
+
+/// Cells too near a capsule's edge to tell by distance that
+/// [`RegionQuadtree::capsule_meets_cells`] decides by the walk's tests; past that, the walk.
+const MAX_TIES: usize = 8;
 
 impl RegionQuadtree {
     /// Visit every leaf of the given value whose square overlaps `shape` (in world
@@ -330,6 +334,155 @@ impl RegionQuadtree {
             }
         }
         Some(ControlFlow::Continue(()))
+    }
+
+    /// Whether a capsule of positive radius meets a cell holding `value`, told from the
+    /// cells near it instead of by a walk, or `None` when that cannot tell: a radius of 0, a
+    /// tree without blocks, more than `max_blocks` blocks near a long capsule to read, or
+    /// more than eight cells within a part in 10⁷ of the radius. A capsule meets a
+    /// leaf exactly when it meets one of the leaf's cells, and a distance more than a part
+    /// in 10⁷ off the radius decides the same whatever the rounding of either box's
+    /// arithmetic, so an answer is that of [`any_leaf_in`](Self::any_leaf_in). A cell
+    /// nearer the radius than that (a route's leg pulled round a corner to its clearance,
+    /// a robot stopped where it touched a wall) is decided by the walk's own tests on the
+    /// way down to it ([`walk_meets_cell`](Self::walk_meets_cell)).
+    ///
+    /// A capsule within 2 × 2 blocks reads their cells; a longer one, row of blocks by row
+    /// of blocks, only those within its reach (issue 12: the tree walks for routes' long
+    /// legs, and for the known map under corner cuts, were a tenth of the frontier
+    /// searches).
+    pub fn capsule_meets_cells(&self, capsule: &Capsule, value: bool, max_blocks: u32) -> Option<bool> {
+        if capsule.radius <= 0.0 {
+            return None;
+        }
+        let (a, b) = (capsule.a, capsule.b);
+        let r2 = capsule.radius * capsule.radius;
+        let (clearly_hit, clearly_clear) = (r2 * (1.0 - 1e-7), r2 * (1.0 + 1e-7));
+        let grid = self.grid;
+        let (mut ties, mut tied) = ([(0, 0); MAX_TIES], 0);
+        let mut visit = |x: u32, y: u32| {
+            let d = segment_box_distance_squared(a, b, &grid.square(x, y, 0));
+            if d < clearly_hit {
+                return ControlFlow::Break(());
+            }
+            if d <= clearly_clear {
+                if tied < MAX_TIES {
+                    ties[tied] = (x, y);
+                }
+                tied += 1;
+            }
+            ControlFlow::Continue(())
+        };
+        let bounds = capsule.bounds();
+        let (lo, hi) = grid.cells_near(&bounds)?;
+        let flow = if (hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) <= 1
+            && (hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) <= 1
+        {
+            self.visit_cells_in_blocks(lo, hi, value, |_| true, &mut visit)?
+        } else {
+            // A block farther than the radius by a part in a million holds no cell within a
+            // part in 10⁷ of it, whatever the rounding, so skipping it changes no answer; a
+            // row's blocks beyond the segment's reach there by a cell more are farther still.
+            let reach2 = r2 * (1.0 + 1e-6);
+            let near = |sq: Square| segment_box_distance_squared(a, b, &grid.square(sq.x, sq.y, sq.level)) <= reach2;
+            let reach = capsule.radius * (1.0 + 1e-6) + grid.cell_m() + bounds.rounding_margin();
+            let mut budget = max_blocks;
+            let mut flow = ControlFlow::Continue(());
+            for by in (lo.1 >> BLOCK_LEVEL)..=(hi.1 >> BLOCK_LEVEL) {
+                let (y0, y1) = ((by << BLOCK_LEVEL).max(lo.1), ((by << BLOCK_LEVEL) + 7).min(hi.1));
+                // The segment's part level with the row's cells, give or take the reach.
+                let (ylo, yhi) = (grid.corner(0, y0).y - reach, grid.corner(0, y1 + 1).y + reach);
+                let (t0, t1) = if (b.y - a.y).abs() <= 1e-3 * (b.x - a.x).abs() {
+                    // Nearly level (the division would magnify rounding): the whole axis, if
+                    // it comes within reach of the row.
+                    if a.y.max(b.y) < ylo || a.y.min(b.y) > yhi {
+                        continue;
+                    }
+                    (0.0, 1.0)
+                } else {
+                    let (ta, tb) = ((ylo - a.y) / (b.y - a.y), (yhi - a.y) / (b.y - a.y));
+                    (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
+                };
+                if t0 > t1 {
+                    continue;
+                }
+                let (xa, xb) = (a.x + (b.x - a.x) * t0, a.x + (b.x - a.x) * t1);
+                let span = Aabb {
+                    min: DVec2::new(xa.min(xb) - reach, grid.corner(0, y0).y),
+                    max: DVec2::new(xa.max(xb) + reach, grid.corner(0, y1 + 1).y),
+                };
+                let Some(((x0, _), (x1, _))) = grid.cells_touching(&span) else {
+                    continue;
+                };
+                let (x0, x1) = (x0.max(lo.0), x1.min(hi.0));
+                if x0 > x1 {
+                    continue;
+                }
+                let blocks = (x1 >> BLOCK_LEVEL) - (x0 >> BLOCK_LEVEL) + 1;
+                if blocks > budget {
+                    // Too long to read (no hit so far): the walk decides.
+                    return None;
+                }
+                budget -= blocks;
+                flow = self.visit_cells_in_blocks((x0, y0), (x1, y1), value, near, &mut visit)?;
+                if flow.is_break() {
+                    break;
+                }
+            }
+            flow
+        };
+        if flow.is_break() {
+            Some(true)
+        } else if tied > MAX_TIES {
+            None
+        } else {
+            Some(
+                ties[..tied]
+                    .iter()
+                    .any(|&cell| self.walk_meets_cell(capsule, value, cell)),
+            )
+        }
+    }
+
+    /// Whether the walk of [`any_leaf_in`](Self::any_leaf_in)`(shape, value)` reports a
+    /// leaf for cell `(x, y)`: the cell holds `value`, every square on the way down from
+    /// the walk's start meets the shape (or one lies inside it, and then everything below
+    /// it counts), and so does the cell's leaf (in a block, the cell itself). The walk's own
+    /// tests on one path: the answer for a cell too near the shape's edge to tell by a
+    /// distance with room for rounding.
+    fn walk_meets_cell<S: Shape>(&self, shape: &S, value: bool, (x, y): (u32, u32)) -> bool {
+        let (mut n, mut sq) = self.start_node(&shape.bounds());
+        if x >> sq.level != sq.x >> sq.level || y >> sq.level != sq.y >> sq.level {
+            return false;
+        }
+        let Some(mut inside) = self.classify_node(shape, self.node(n), value, sq) else {
+            return false;
+        };
+        loop {
+            if is_leaf(n) {
+                // `classify_node` found it of the value and meeting the shape.
+                return true;
+            }
+            if is_block(n) {
+                let held = self.bits_of(n, BLOCK_LEVEL) >> block::cell_index(x, y) & 1 != 0;
+                return held == value && (inside || shape.intersects(&self.grid.square(x, y, 0)));
+            }
+            let below = sq.level - 1;
+            let i = ((x >> below) & 1) | (((y >> below) & 1) << 1);
+            let (kid, ksq) = (self.children(n)[i as usize], sq.child(i as usize));
+            let b = self.grid.square(ksq.x, ksq.y, ksq.level);
+            if is_leaf(kid) {
+                return (kid == super::FULL) == value && (inside || shape.intersects(&b));
+            }
+            if !inside {
+                match shape.classify(&b) {
+                    Overlap::Disjoint => return false,
+                    Overlap::Partial => {}
+                    Overlap::Contains => inside = true,
+                }
+            }
+            (n, sq) = (kid, ksq);
+        }
     }
 
     /// Whether some cell of the cell rectangle `lo ..= hi` (inclusive corners, inside the
