@@ -219,12 +219,16 @@ fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
 /// `within` (a part of `area`) that is nearest to `p`, the first in the walk's order of
 /// those as near, with its leaf and squared distance.
 fn nearest_unknown_within(known: &KnownMap, area: &Aabb, within: &Aabb, p: DVec2) -> Option<(Square, DVec2, f64)> {
+    if let Ok(found) = nearest_unknown_unique(known, area, within, p, None) {
+        return found;
+    }
     let best_d = Cell::new(f64::INFINITY);
     let mut best: Option<(Square, DVec2)> = None;
     let pruned = NearerThan {
         area: *within,
         p,
         best: &best_d,
+        z_order: false,
     };
     let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
         let q = unknown_point(known, area, &b, p);
@@ -251,6 +255,9 @@ fn unknown_point(known: &KnownMap, area: &Aabb, b: &Aabb, p: DVec2) -> DVec2 {
 /// leaf's point and squared distance, as [`nearest_unknown_within`] gives).
 #[allow(clippy::float_cmp)] // ties are exactly equal distances, as the whole walk sees them
 fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, DVec2, f64)) -> DVec2 {
+    if let Ok(found) = nearest_unknown_unique(known, area, area, p, Some(seed)) {
+        return found.map_or(seed.1, |f| f.1);
+    }
     let (seed_square, seed_point, seed_d) = seed;
     let best_d = Cell::new(seed_d);
     let (mut best, mut best_is_seed, mut passed_seed) = (seed_point, true, false);
@@ -258,6 +265,7 @@ fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, 
         area: *area,
         p,
         best: &best_d,
+        z_order: false,
     };
     let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
         if sq == seed_square {
@@ -277,6 +285,54 @@ fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, 
     best
 }
 
+/// Two leaves' points or more at the nearest distance: which one wins depends on the
+/// walk's order.
+struct Tie;
+
+/// The nearest unknown point as [`nearest_unknown_within`] (with `seed`:
+/// [`nearest_unknown_from`]) finds it, if one leaf's point alone is that near; `Err(Tie)`
+/// if several are, as only those walks' own order picks among them. Blocks' leaves come in
+/// Z order, which is cheaper than the walk's order (issue 12: that order was a quarter of
+/// finding a frontier's point); the leaves visited are the same, as the pruning never
+/// cuts a leaf as near as the best, so the nearest distance and the leaves at it are too.
+#[allow(clippy::float_cmp)] // ties are exactly equal distances, as the walks see them
+fn nearest_unknown_unique(
+    known: &KnownMap,
+    area: &Aabb,
+    within: &Aabb,
+    p: DVec2,
+    seed: Option<(Square, DVec2, f64)>,
+) -> Result<Option<(Square, DVec2, f64)>, Tie> {
+    let best_d = Cell::new(seed.map_or(f64::INFINITY, |s| s.2));
+    let mut best = seed.map(|s| (s.0, s.1));
+    let mut at_best = usize::from(seed.is_some());
+    let pruned = NearerThan {
+        area: *within,
+        p,
+        best: &best_d,
+        z_order: true,
+    };
+    let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
+        if seed.is_some_and(|s| s.0 == sq) {
+            return std::ops::ControlFlow::Continue(());
+        }
+        let q = unknown_point(known, area, &b, p);
+        let d = q.distance_squared(p);
+        if d < best_d.get() {
+            best_d.set(d);
+            best = Some((sq, q));
+            at_best = 1;
+        } else if d == best_d.get() {
+            at_best += 1;
+        }
+        std::ops::ControlFlow::Continue(())
+    });
+    if at_best > 1 {
+        return Err(Tie);
+    }
+    Ok(best.map(|(sq, q)| (sq, q, best_d.get())))
+}
+
 /// `area`, minus the boxes whose part in `area` lies farther from `p` than the best
 /// distance found so far: their leaves cannot win (issue 11: the search scanned every
 /// unknown leaf of a large free node). Only strictly farther boxes are cut, so ties resolve
@@ -285,6 +341,8 @@ struct NearerThan<'a> {
     area: Aabb,
     p: DVec2,
     best: &'a Cell<f64>,
+    /// Whether blocks' leaves may come in Z order (else in the walk's own order).
+    z_order: bool,
 }
 
 impl NearerThan<'_> {
@@ -319,9 +377,10 @@ impl Shape for NearerThan<'_> {
         Some(self.area.cells_with_part_near(cells, self.p, self.best.get()))
     }
 
-    /// The first leaf found at the nearest distance wins: the walk's own order.
+    /// The first leaf found at the nearest distance wins: the walk's own order, unless
+    /// only the nearest distance is wanted.
     fn cells_in_z_order(&self) -> bool {
-        false
+        self.z_order
     }
 
     fn bounds(&self) -> Aabb {
@@ -365,6 +424,7 @@ mod tests {
             area: *area,
             p,
             best: &best_d,
+            z_order: false,
         };
         let _ = known.tree().visit_leaves_in(&pruned, false, |_, b| {
             let (lo, hi) = (b.min.max(area.min), b.max.min(area.max));
