@@ -241,7 +241,7 @@ proptest! {
     /// enough it answers every capsule but those passing within a part in 10⁷ of the radius
     /// of a cell of the value.
     #[test]
-    fn capsule_meets_cells_is_the_walks(w in world_strategy(), seed in any::<u64>()) {
+    fn issue12_capsule_meets_cells_is_the_walks(w in world_strategy(), seed in any::<u64>()) {
         let map = w.map();
         let tree = map.tree();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
