@@ -219,27 +219,12 @@ fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
 /// `within` (a part of `area`) that is nearest to `p`, the first in the walk's order of
 /// those as near, with its leaf and squared distance.
 fn nearest_unknown_within(known: &KnownMap, area: &Aabb, within: &Aabb, p: DVec2) -> Option<(Square, DVec2, f64)> {
-    if let Ok(found) = nearest_unknown_unique(known, area, within, p, None) {
+    let (found, at_best) = nearest_unknown_pass(known, area, within, p, None, true);
+    if at_best <= 1 {
         return found;
     }
-    let best_d = Cell::new(f64::INFINITY);
-    let mut best: Option<(Square, DVec2)> = None;
-    let pruned = NearerThan {
-        area: *within,
-        p,
-        best: &best_d,
-        z_order: false,
-    };
-    let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
-        let q = unknown_point(known, area, &b, p);
-        let d = q.distance_squared(p);
-        if d < best_d.get() {
-            best_d.set(d);
-            best = Some((sq, q));
-        }
-        std::ops::ControlFlow::Continue(())
-    });
-    best.map(|(sq, q)| (sq, q, best_d.get()))
+    // Points tied at the nearest distance: the walk's own order picks among them.
+    nearest_unknown_pass(known, area, within, p, None, false).0
 }
 
 /// The point of leaf `b`'s part in `area` nearest to `p`, a little inside it (so that
@@ -255,7 +240,8 @@ fn unknown_point(known: &KnownMap, area: &Aabb, b: &Aabb, p: DVec2) -> DVec2 {
 /// leaf's point and squared distance, as [`nearest_unknown_within`] gives).
 #[allow(clippy::float_cmp)] // ties are exactly equal distances, as the whole walk sees them
 fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, DVec2, f64)) -> DVec2 {
-    if let Ok(found) = nearest_unknown_unique(known, area, area, p, Some(seed)) {
+    let (found, at_best) = nearest_unknown_pass(known, area, area, p, Some(seed), true);
+    if at_best <= 1 {
         return found.map_or(seed.1, |f| f.1);
     }
     let (seed_square, seed_point, seed_d) = seed;
@@ -285,24 +271,23 @@ fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, 
     best
 }
 
-/// Two leaves' points or more at the nearest distance: which one wins depends on the
-/// walk's order.
-struct Tie;
-
-/// The nearest unknown point as [`nearest_unknown_within`] (with `seed`:
-/// [`nearest_unknown_from`]) finds it, if one leaf's point alone is that near; `Err(Tie)`
-/// if several are, as only those walks' own order picks among them. Blocks' leaves come in
-/// Z order, which is cheaper than the walk's order (issue 12: that order was a quarter of
-/// finding a frontier's point); the leaves visited are the same, as the pruning never
-/// cuts a leaf as near as the best, so the nearest distance and the leaves at it are too.
+/// One pruned walk for the nearest unknown point of `area` meeting `within` (from `seed`,
+/// a leaf's point and squared distance, if given; its leaf is not visited again): the
+/// first point found at the nearest distance, with its leaf and squared distance, and how
+/// many leaves' points (the seed's included) are that near. With `z_order` blocks' leaves
+/// come in Z order, cheaper than the walk's own (issue 12: that order was a quarter of
+/// finding a frontier's point): the leaves visited are the same, as the pruning never
+/// cuts a leaf as near as the best, so the nearest distance and the count are too, and
+/// when one point alone is that near it is the walk's answer whatever the order.
 #[allow(clippy::float_cmp)] // ties are exactly equal distances, as the walks see them
-fn nearest_unknown_unique(
+fn nearest_unknown_pass(
     known: &KnownMap,
     area: &Aabb,
     within: &Aabb,
     p: DVec2,
     seed: Option<(Square, DVec2, f64)>,
-) -> Result<Option<(Square, DVec2, f64)>, Tie> {
+    z_order: bool,
+) -> (Option<(Square, DVec2, f64)>, usize) {
     let best_d = Cell::new(seed.map_or(f64::INFINITY, |s| s.2));
     let mut best = seed.map(|s| (s.0, s.1));
     let mut at_best = usize::from(seed.is_some());
@@ -310,7 +295,7 @@ fn nearest_unknown_unique(
         area: *within,
         p,
         best: &best_d,
-        z_order: true,
+        z_order,
     };
     let _ = known.tree().visit_leaves_in(&pruned, false, |sq, b| {
         if seed.is_some_and(|s| s.0 == sq) {
@@ -327,10 +312,7 @@ fn nearest_unknown_unique(
         }
         std::ops::ControlFlow::Continue(())
     });
-    if at_best > 1 {
-        return Err(Tie);
-    }
-    Ok(best.map(|(sq, q)| (sq, q, best_d.get())))
+    (best.map(|(sq, q)| (sq, q, best_d.get())), at_best)
 }
 
 /// `area`, minus the boxes whose part in `area` lies farther from `p` than the best
