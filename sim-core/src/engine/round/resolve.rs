@@ -348,16 +348,21 @@ impl Simulation {
             return;
         }
         let n = self.robots.len();
-        // Each sender's messages are contiguous (resolve runs in sender order).
-        let mut first = vec![u32::MAX; n];
-        let mut last = vec![0u32; n];
+        // Each sender's broadcasts, as (index in `outgoing`, bytes): contiguous, as resolve
+        // runs in sender order; `span[s]` is sender s's part.
+        let mut span = vec![(0u32, 0u32); n];
+        let mut broadcasts: Vec<(u32, u64)> = Vec::new();
         let mut direct: Vec<(u32, u32)> = Vec::new();
         for (k, o) in outgoing.iter().enumerate() {
             let k = k as u32;
             match o.message.to {
                 Recipient::Broadcast => {
-                    first[o.from] = first[o.from].min(k);
-                    last[o.from] = k + 1;
+                    let end = u32::try_from(broadcasts.len() + 1).expect("fewer than 2^32 messages a round");
+                    if span[o.from].0 == span[o.from].1 {
+                        span[o.from].0 = end - 1;
+                    }
+                    span[o.from].1 = end;
+                    broadcasts.push((k, o.bytes));
                 }
                 Recipient::Direct(target) => direct.push((target.get(), k)),
             }
@@ -367,10 +372,22 @@ impl Simulation {
         let mut senders = RobotIndex::new();
         senders.rebuild(
             (0..n)
-                .filter(|&i| first[i] != u32::MAX)
+                .filter(|&i| span[i].0 != span[i].1)
                 .map(|i| (self.robots[i].id, self.turns[i].start)),
             max_range.clamp(1.0, 64.0),
         );
+        // Beside the index's entries, in its order, each sender's range and broadcasts: a
+        // receiver reads them in step with the entries (issue 11: read from `outgoing` by
+        // sender, in the index's order they were a cache miss each, a tenth of the
+        // moonshot's crowded rounds).
+        let by_entry: Vec<(f64, u32, u32)> = senders
+            .entries()
+            .iter()
+            .map(|e| {
+                let (b0, b1) = span[e.id.index()];
+                (outgoing[broadcasts[b0 as usize].0 as usize].range_m, b0, b1)
+            })
+            .collect();
         // Receivers are independent (each reads the shared sends and writes its own inbox),
         // so they run in parallel. Each worker also gathers which messages anyone accepted,
         // so the bag can be made without another pass over every pick (issue 11: that pass,
@@ -378,8 +395,8 @@ impl Simulation {
         // a crowd).
         let sends = Sends {
             outgoing: &outgoing,
-            first: &first,
-            last: &last,
+            broadcasts: &broadcasts,
+            by_entry: &by_entry,
             direct: &direct,
             senders: &senders,
             max_range,
@@ -441,10 +458,11 @@ impl Simulation {
 /// A round's sends under radio budgets, as the receivers read them.
 struct Sends<'a> {
     outgoing: &'a [Outgoing],
-    /// Each sender's broadcasts are `outgoing[first[s]..last[s]]` (resolve runs in sender
-    /// order).
-    first: &'a [u32],
-    last: &'a [u32],
+    /// The broadcasts as (index in `outgoing`, bytes), each sender's contiguous.
+    broadcasts: &'a [(u32, u64)],
+    /// For each of `senders`' entries, in its order: the sender's range and its part of
+    /// `broadcasts`.
+    by_entry: &'a [(f64, u32, u32)],
     /// Direct messages as (receiver id, index in `outgoing`), sorted.
     direct: &'a [(u32, u32)],
     /// The senders where they sent from, in cells of the widest range.
@@ -495,22 +513,28 @@ impl Sends<'_> {
                 accept(k);
             }
         }
-        let _ = self.senders.try_for_each_within(here, self.max_range, |sender, at| {
-            let s = sender.index();
-            if s == r {
-                return ControlFlow::Continue(());
-            }
-            for k in self.first[s]..self.last[s] {
-                let o = &self.outgoing[k as usize];
-                if matches!(o.message.to, Recipient::Broadcast) && at.distance(here) <= o.range_m {
-                    if !fits(o.bytes) {
-                        return ControlFlow::Break(());
+        // The walk of `senders.try_for_each_within`, with each entry's sends beside it.
+        let r2 = self.max_range * self.max_range;
+        let _ = self
+            .senders
+            .try_for_each_run_near(here, self.max_range, |start, run, cell| {
+                for (e, &(range_m, b0, b1)) in run.iter().zip(&self.by_entry[start..]) {
+                    if cell.is_some_and(|c| e.cell != c)
+                        || e.position.distance_squared(here) > r2
+                        || e.id.index() == r
+                        || e.position.distance(here) > range_m
+                    {
+                        continue;
                     }
-                    accept(k);
+                    for &(k, bytes) in &self.broadcasts[b0 as usize..b1 as usize] {
+                        if !fits(bytes) {
+                            return ControlFlow::Break(());
+                        }
+                        accept(k);
+                    }
                 }
-            }
-            ControlFlow::Continue(())
-        });
+                ControlFlow::Continue(())
+            });
         for w in lo..hi {
             let mut bits = std::mem::take(&mut accepted[w]);
             used[w] |= bits;
@@ -690,11 +714,30 @@ impl<'a> Bodies<'a> {
         let widen = |r: f64| (r * (1.0 + 1e-9)).powi(2);
         let (moved, standing) = (widen(reach), widen(radius + self.max_radius_m));
         let (to, mid) = (from + d, from + 0.5 * d);
-        self.index.for_each_within(mid, reach + 0.5 * d.length(), |id, at| {
-            let within = if id.index() < i { moved } else { standing };
-            if id.index() != i && point_segment_distance_squared(at, from, to) <= within {
-                near.push(id.get());
+        let r = reach + 0.5 * d.length();
+        let r2 = r * r;
+        let i = u32::try_from(i).expect("robot indices are u32");
+        // The robots for_each_within would visit, tested without a branch per robot: in a
+        // crowd each test goes either way (issue 11: mispredicted, they made this query an
+        // eighth of the moonshot's round). Each robot is written, and kept by counting it.
+        self.index.for_each_run_near(mid, r, |_, run, cell| {
+            let start = near.len();
+            near.resize(start + run.len(), 0);
+            let out = &mut near[start..];
+            let mut kept = 0;
+            for e in run {
+                let id = e.id.get();
+                let within = if id < i { moved } else { standing };
+                // Bitwise on purpose: every test is made, none is a branch.
+                #[allow(clippy::needless_bitwise_bool)]
+                let keep = cell.is_none_or(|c| e.cell == c)
+                    & (e.position.distance_squared(mid) <= r2)
+                    & (id != i)
+                    & (point_segment_distance_squared(e.position, from, to) <= within);
+                out[kept] = id;
+                kept += usize::from(keep);
             }
+            near.truncate(start + kept);
         });
     }
 }
