@@ -29,6 +29,9 @@ pub(super) struct Fanout {
     pub(super) to: Option<u32>,
 }
 
+/// Known cells of the last map merged from each sender.
+pub(super) type MergedFrom = HashMap<RobotId, u64, foldhash::fast::FixedState>;
+
 /// A robot's brain: its strategy and mind, owned by the robot alone.
 pub(super) struct Agent {
     pub(super) strategy: Box<dyn Strategy>,
@@ -37,7 +40,7 @@ pub(super) struct Agent {
     pub(super) action: Action,
     /// Known cells of the last map merged from each sender: a map that has not grown since
     /// is already contained in ours (maps only grow), so merging it again is skipped.
-    pub(super) merged_from: HashMap<RobotId, u64, foldhash::fast::FixedState>,
+    pub(super) merged_from: MergedFrom,
     /// This round's move with obstacles already accounted for, worked out in parallel in
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,
