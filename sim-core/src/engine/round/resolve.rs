@@ -48,12 +48,12 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            let outbox = if self.agents[i].mind.output.outbox().is_empty() {
+            let mut outbox = if self.agents[i].mind.output.outbox().is_empty() {
                 Vec::new()
             } else {
                 self.agents[i].mind.output.take_outbox()
             };
-            for (to, payload) in outbox {
+            for (to, payload) in outbox.drain(..) {
                 if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
                     break;
                 }
@@ -65,6 +65,7 @@ impl Simulation {
                 self.robots[i].stats.messages_sent += 1;
                 self.robots[i].stats.message_bytes += size;
             }
+            self.agents[i].mind.output.give_back_outbox(outbox);
             end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
         self.fan_out();
