@@ -16,6 +16,9 @@ use crate::world::{
     Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
 };
 
+/// How many turns ahead step 3 reads a robot's contact list (4 and 8 did alike).
+const TURNS_READ_AHEAD: usize = 4;
+
 impl Simulation {
     /// Step 3: the physical unit, robot by robot in id order. Returns messages and bytes sent.
     ///
@@ -33,6 +36,14 @@ impl Simulation {
         self.alive_at_resolve.clear();
         self.alive_at_resolve.extend(self.robots.iter().map(|r| r.alive));
         for i in 0..self.robots.len() {
+            // Read the contact list of a robot a few turns ahead, so that its cache miss
+            // overlaps this turn's work rather than stalling that turn (issue 11: each list,
+            // written in step 2, was a miss; in the moonshot's crowd a third of this
+            // step's own perf samples sat on it). Without `unsafe`, a plain load is the
+            // prefetch.
+            if let Some(ahead) = self.agents.get(i + TURNS_READ_AHEAD) {
+                std::hint::black_box(ahead.planned_near.first().copied());
+            }
             if !self.robots[i].alive || turns[i].alone {
                 continue;
             }
