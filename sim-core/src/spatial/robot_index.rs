@@ -31,6 +31,17 @@ pub(crate) struct Entry {
     pub(crate) cell: (i32, i32),
 }
 
+impl Entry {
+    /// Whether this entry of a run given with `cell` (see
+    /// [`RobotIndex::for_each_run_near`]) is a robot within the closed disc of squared
+    /// radius `r2` around `p`, as [`RobotIndex::for_each_within`] decides.
+    #[inline]
+    pub(crate) fn is_within(&self, cell: Option<(i32, i32)>, p: DVec2, r2: f64) -> bool {
+        // Other cells may share a hashed bucket; each robot belongs to its own cell's run.
+        cell.is_none_or(|c| self.cell == c) && self.position.distance_squared(p) <= r2
+    }
+}
+
 /// How cells map to buckets.
 #[derive(Clone, Copy, Debug)]
 enum Layout {
@@ -228,8 +239,7 @@ impl RobotIndex {
         let r2 = radius_m * radius_m;
         self.try_for_each_run_near(p, radius_m, |_, run, cell| {
             for e in run {
-                // Other cells may share a hashed bucket; each is visited from its own cell.
-                if cell.is_none_or(|c| e.cell == c) && e.position.distance_squared(p) <= r2 {
+                if e.is_within(cell, p, r2) {
                     visit(e.id, e.position)?;
                 }
             }

@@ -59,11 +59,7 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            let mut outbox = if self.agents[i].mind.output.outbox().is_empty() {
-                Vec::new()
-            } else {
-                self.agents[i].mind.output.take_outbox()
-            };
+            let mut outbox = self.agents[i].mind.output.take_outbox();
             for (to, payload) in outbox.drain(..) {
                 if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
                     break;
@@ -531,11 +527,7 @@ impl Sends<'_> {
             .senders
             .try_for_each_run_near(here, self.max_range, |start, run, cell| {
                 for (e, &(range_m, b0, b1)) in run.iter().zip(&self.by_entry[start..]) {
-                    if cell.is_some_and(|c| e.cell != c)
-                        || e.position.distance_squared(here) > r2
-                        || e.id.index() == r
-                        || e.position.distance(here) > range_m
-                    {
+                    if !e.is_within(cell, here, r2) || e.id.index() == r || e.position.distance(here) > range_m {
                         continue;
                     }
                     for &(k, bytes) in &self.broadcasts[b0 as usize..b1 as usize] {
