@@ -47,6 +47,7 @@ pub mod engine;
 
 pub mod io;
 
+mod cache;
 mod error;
 
 pub use error::{Error, Result};

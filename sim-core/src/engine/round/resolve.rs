@@ -10,13 +10,15 @@ use rayon::prelude::*;
 
 use crate::agent::Needs;
 use crate::agent::StrategyOutput;
+use crate::cache::prefetch;
 use crate::engine::simulation::{Agent, Fanout, Outgoing, Simulation, Turn};
 use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
 use crate::world::{
     Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
 };
 
-/// How many turns ahead step 3 reads a robot's contact list (4 and 8 did alike).
+/// How many turns ahead step 3 prefetches a robot's contact list (and twice as many, its
+/// agent).
 const TURNS_READ_AHEAD: usize = 4;
 
 impl Simulation {
@@ -36,13 +38,23 @@ impl Simulation {
         self.alive_at_resolve.clear();
         self.alive_at_resolve.extend(self.robots.iter().map(|r| r.alive));
         for i in 0..self.robots.len() {
-            // Read the contact list of a robot a few turns ahead, so that its cache miss
-            // overlaps this turn's work rather than stalling that turn (issue 11: each list,
-            // written in step 2, was a miss; in the moonshot's crowd a third of this
-            // step's own perf samples sat on it). Without `unsafe`, a plain load is the
-            // prefetch.
-            if let Some(ahead) = self.agents.get(i + TURNS_READ_AHEAD) {
-                std::hint::black_box(ahead.planned_near.first().copied());
+            // Prefetch what the turns ahead read of their agents (spread over an agent of
+            // about a kilobyte), then, once that has arrived, their contact lists (issue 11:
+            // in the moonshot's crowd each was a miss; a plain load of the list ahead stalled
+            // the loop as long, a third of this step's samples).
+            if let Some(ahead) = self.agents.get(i + 2 * TURNS_READ_AHEAD) {
+                prefetch(&ahead.planned_near);
+                prefetch(&ahead.planned_move);
+                prefetch(&ahead.action);
+                prefetch(&ahead.failure);
+                prefetch(&ahead.mind.output);
+            }
+            if let Some(first) = self
+                .agents
+                .get(i + TURNS_READ_AHEAD)
+                .and_then(|a| a.planned_near.first())
+            {
+                prefetch(first);
             }
             if !self.robots[i].alive || turns[i].alone {
                 continue;
