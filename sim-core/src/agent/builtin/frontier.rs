@@ -2,14 +2,152 @@
 
 use glam::DVec2;
 
-use super::claims::{self, Claim, Update};
 use super::explorer::{Explorer, Sharing, share_knowledge};
 use crate::agent::{Ctx, Needs, Strategy};
 use crate::world::{Action, Payload};
 
+/// Team mates' goals, with the round heard, sorted by robot id. The round is kept in 32 bits
+/// (saturating after 4×10⁹ rounds): 24 bytes a claim instead of 32, as a crowded robot's
+/// claims are read and written in full every round (issue 11).
+type Claims = Vec<(u32, DVec2, u32)>;
+
+/// What a round's announcements do to the claims: a goal to keep (`Some`) or forget.
+type Update = (u32, Option<DVec2>);
+
+/// `claims` with `updates` applied (both sorted by robot id; of a robot's updates the
+/// last counts), into `out`, by one merge of the two lists.
+// Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
+// instructions (callgrind, bench-1000).
+#[inline(never)]
+fn merge_claims(claims: &[(u32, DVec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
+    out.clear();
+    let mut i = 0;
+    for (k, &(id, goal)) in updates.iter().enumerate() {
+        if updates.get(k + 1).is_some_and(|u| u.0 == id) {
+            continue;
+        }
+        while i < claims.len() && claims[i].0 < id {
+            out.push(claims[i]);
+            i += 1;
+        }
+        if i < claims.len() && claims[i].0 == id {
+            i += 1;
+        }
+        if let Some(g) = goal {
+            out.push((id, g, round));
+        }
+    }
+    out.extend_from_slice(&claims[i..]);
+}
+
+/// Keep the `max` claims heard last (of those heard in the same round, the lowest ids),
+/// in id order. Claims were heard in the last 60 rounds (older ones are forgotten every
+/// 10), so the cut is found by counting claims per round heard, without sorting.
+fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
+    if let Some(mut keep) = newest_cut(claims, max, round) {
+        claims.retain(|c| keep.keeps(c));
+    }
+}
+
+/// Empties `out` and gives it room for `n` claims. It grows by doubling, up to `max` claims
+/// (or `n`, if more), and a new block replaces the old rather than copying it: fitted
+/// exactly, a crowded robot's list grew, and was copied by `realloc`, nearly every round
+/// (issue 11: a tenth of the moonshot's strategy time).
+fn empty_with_room(out: &mut Claims, n: usize, max: usize) {
+    out.clear();
+    if out.capacity() < n {
+        *out = Vec::with_capacity(n.max(2 * out.capacity()).min(max.max(n)));
+    }
+}
+
+/// [`keep_newest`] of `claims`, written into `out` (its capacity at most `max` claims, or
+/// what is kept if more): the merged claims are cut while they are copied back (issue 12: a
+/// copy, then a pass to count and a pass to cut the robot's own list, were a tenth of
+/// `bench-1000`).
+#[inline(never)]
+fn keep_newest_into(claims: &[(u32, DVec2, u32)], max: usize, round: u64, out: &mut Claims) {
+    match newest_cut(claims, max, round) {
+        None => {
+            empty_with_room(out, claims.len(), max);
+            out.extend_from_slice(claims);
+        }
+        Some(mut keep) => {
+            empty_with_room(out, max, max);
+            for c in claims {
+                if keep.keeps(c) {
+                    out.push(*c);
+                }
+            }
+        }
+    }
+}
+
+/// Which claims [`keep_newest`] keeps: those heard less than `cut` rounds ago, and the
+/// first `room` (in id order) of those heard `cut` rounds ago (63: that long or longer).
+struct NewestCut {
+    round: u64,
+    cut: usize,
+    room: usize,
+    /// `round - cut`: claims heard later are kept.
+    newer_than: i64,
+}
+
+impl NewestCut {
+    fn age(&self, heard: u32) -> usize {
+        (self.round.saturating_sub(u64::from(heard))).min(63) as usize
+    }
+
+    /// Whether claim `c` is kept (called once per claim, in id order).
+    #[inline]
+    fn keeps(&mut self, c: &(u32, DVec2, u32)) -> bool {
+        // `age < cut`: heard after `round - cut` (the cut is at most 63, below the clamp).
+        if i64::from(c.2) > self.newer_than {
+            return true;
+        }
+        if self.room > 0 && self.age(c.2) == self.cut {
+            self.room -= 1;
+            return true;
+        }
+        false
+    }
+}
+
+/// The cut of [`keep_newest`], or `None` if all `claims` fit in `max`.
+fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<NewestCut> {
+    if claims.len() <= max {
+        return None;
+    }
+    let mut keep = NewestCut {
+        round,
+        cut: 63,
+        room: 0,
+        newer_than: 0,
+    };
+    let mut per_age = [0usize; 64];
+    for c in claims {
+        per_age[keep.age(c.2)] += 1;
+    }
+    // The oldest age kept, and how many claims of that age fit.
+    let mut kept = 0;
+    for (a, &n) in per_age.iter().enumerate() {
+        if kept + n >= max {
+            (keep.cut, keep.room) = (a, max - kept);
+            break;
+        }
+        kept += n;
+    }
+    keep.newer_than = i64::try_from(round).unwrap_or(i64::MAX) - keep.cut as i64;
+    Some(keep)
+}
+
+/// A round as a claim keeps it (see [`Claims`]).
+fn heard_in(round: u64) -> u32 {
+    u32::try_from(round).unwrap_or(u32::MAX)
+}
+
 thread_local! {
-    /// A worker's buffer for a round's announcements.
-    static UPDATES: std::cell::RefCell<Vec<Update>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// A worker's buffers for a round's announcements and the merged claims.
+    static SCRATCH: std::cell::RefCell<(Vec<Update>, Claims)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
 }
 
 /// `frontier` and `cooperative`.
@@ -17,10 +155,11 @@ thread_local! {
 pub(super) struct Frontier {
     core: Explorer,
     sharing: Option<Sharing>,
-    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds), in
-    /// no order (see [`claims`](super::claims); as a hash map they cost 14 % of a
-    /// `bench-1000` run, as a B-tree 15 %).
-    claims: Vec<Claim>,
+    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds),
+    /// sorted by robot id. In a crowd hundreds arrive a round, in sender order, so they are
+    /// merged in one pass (as a hash map they cost 14 % of a `bench-1000` run; as a B-tree
+    /// 15 %).
+    claims: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
 }
@@ -30,7 +169,7 @@ impl Frontier {
         Self {
             core: Explorer::default(),
             sharing,
-            claims: Vec::new(),
+            claims: Claims::default(),
             announced: None,
             shared_area: 0.0,
         }
@@ -60,27 +199,37 @@ impl Strategy for Frontier {
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();
             let round = ctx.round;
-            // This round's announcements, in a buffer of the worker thread, not of the robot
-            // (with a crowd of robots each hearing hundreds, spare copies per robot cost
-            // megabytes; fresh ones each round, grown as they filled, put a tenth of a
-            // crowded round in the allocator).
-            let forget = round.is_multiple_of(10).then_some((p, near));
-            UPDATES.with_borrow_mut(|updates| {
+            // This round's announcements, and the merge, in buffers of the worker thread, not
+            // of the robot (with a crowd of robots each holding hundreds of claims, spare
+            // copies per robot cost megabytes; fresh ones each round, grown as they filled,
+            // put a tenth of a crowded round in the allocator).
+            SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
                     Payload::Position { goal, .. } => Some((m.from.get(), goal.filter(|g| g.distance(p) <= near))),
                     _ => None,
                 }));
-                // Inboxes come in sender order; sort (stably: a sender's last word wins) if
-                // not.
-                if !updates.is_sorted_by_key(|u| u.0) {
-                    updates.sort_by_key(|u| u.0);
-                }
-                // Old and far claims are forgotten every tenth round.
-                if !updates.is_empty() || forget.is_some() || self.claims.len() > share.max_claims {
-                    claims::update(&mut self.claims, updates, round, share.max_claims, forget);
+                if !updates.is_empty() {
+                    // Inboxes come in sender order; sort (stably: a sender's last word wins)
+                    // if not.
+                    if !updates.is_sorted_by_key(|u| u.0) {
+                        updates.sort_by_key(|u| u.0);
+                    }
+                    merge_claims(&self.claims, updates, heard_in(round), merged);
+                    if round.is_multiple_of(10) {
+                        // Old and far claims are forgotten before the cut (below).
+                        empty_with_room(&mut self.claims, merged.len(), share.max_claims);
+                        self.claims.extend_from_slice(merged);
+                    } else {
+                        keep_newest_into(merged, share.max_claims, round, &mut self.claims);
+                    }
                 }
             });
+            if round.is_multiple_of(10) {
+                self.claims
+                    .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && g.distance(p) <= near);
+            }
+            keep_newest(&mut self.claims, share.max_claims, round);
         }
         if let Some(a) = self.core.reflexes(ctx) {
             return a;
@@ -97,5 +246,64 @@ impl Strategy for Frontier {
             });
         }
         action
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use glam::DVec2;
+    use proptest::prelude::*;
+
+    use super::{Update, keep_newest, keep_newest_into, merge_claims};
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(3), ..ProptestConfig::default() })]
+
+        /// The merge gives what inserting and removing the updates one by one in a map does.
+        #[test]
+        fn merged_claims_equal_updates_applied_one_by_one(
+            old in proptest::collection::btree_map(0u32..40, (0.0f64..10.0, 0u32..5), 0..20),
+            mut updates in proptest::collection::vec((0u32..40, proptest::option::of(0.0f64..10.0)), 0..30),
+        ) {
+            updates.sort_by_key(|u| u.0);
+            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| DVec2::new(x, -x)))).collect();
+            let claims: Vec<(u32, DVec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, DVec2::splat(x), r)).collect();
+            let mut expected: BTreeMap<u32, (DVec2, u32)> = claims.iter().map(|c| (c.0, (c.1, c.2))).collect();
+            for &(id, goal) in &updates {
+                match goal {
+                    Some(g) => expected.insert(id, (g, 9)),
+                    None => expected.remove(&id),
+                };
+            }
+            let mut out = Vec::new();
+            merge_claims(&claims, &updates, 9, &mut out);
+            let expected: Vec<(u32, DVec2, u32)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
+            prop_assert_eq!(out, expected);
+        }
+
+        /// Issue 11: a crowd's claims are cut to the `max` heard last (the lowest ids among
+        /// those heard in the same round), in id order, as sorting by recency would.
+        #[test]
+        fn issue11_claims_keep_the_most_recently_heard(
+            heard in proptest::collection::btree_map(0u32..500, 0u32..60, 0..300),
+            max in 0usize..200,
+        ) {
+            let round = 60;
+            let mut claims: Vec<(u32, DVec2, u32)> = heard.iter().map(|(&id, &r)| (id, DVec2::splat(f64::from(id)), r)).collect();
+            let mut by_recency = claims.clone();
+            by_recency.sort_by_key(|c| (std::cmp::Reverse(c.2), c.0));
+            by_recency.truncate(max);
+            by_recency.sort_by_key(|c| c.0);
+            let mut copied = Vec::new();
+            keep_newest_into(&claims, max, round, &mut copied);
+            keep_newest(&mut claims, max, round);
+            prop_assert_eq!(&claims, &by_recency);
+            // Issue 12: cut while copied, the same claims.
+            prop_assert_eq!(&copied, &by_recency);
+            // Issue 11: grown without copies, its block still holds at most `max` claims.
+            prop_assert!(copied.capacity() <= max.max(copied.len()));
+        }
     }
 }

@@ -2,7 +2,6 @@
 //! `transporter`, and `tactics` (composed of tactics by name). They use only sim-core's public API (`crate::agent`, `crate::world`,
 //! `crate::spatial`), so a strategy in another crate can do all that they do.
 
-mod claims;
 mod composed;
 mod explorer;
 mod frontier;
