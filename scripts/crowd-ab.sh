@@ -2,7 +2,8 @@
 # A/B timing of the moonshot's crowd: 10,000 robots crowded at home on the paper-scale map
 # (the moonshot's first 20 rounds, same digest, 2 s of set-up instead of 16), one thread.
 # Runs the given `smartteams-bench` binaries alternately, RUNS times each, and prints the
-# minimum and median of each step's time (perceive + decide, resolve, deliver) and their sum.
+# minimum and median of each step's time (perceive + decide, resolve, deliver, the rest) and
+# their sum.
 #
 #   scripts/crowd-ab.sh RUNS OLD_BINARY NEW_BINARY [MORE...]
 set -euo pipefail
@@ -25,9 +26,9 @@ import collections, statistics, sys
 runs = collections.defaultdict(list)
 for line in open(sys.argv[1]):
     fields = line.split()
-    runs[fields[0]].append([float(x) for x in fields[1:4]])
+    runs[fields[0]].append([float(x) for x in fields[1:5]])
 for binary, rows in runs.items():
     cols = list(zip(*rows)) + [[sum(r) for r in rows]]
-    names = ["perceive+decide", "resolve", "deliver", "total"]
+    names = ["perceive+decide", "resolve", "deliver", "other", "total"]
     print(binary, "  ".join(f"{n} {min(c):.3f}/{statistics.median(c):.3f}" for n, c in zip(names, cols)), "s (min/median)")
 PY

@@ -4,6 +4,7 @@
 use std::sync::Arc;
 
 use crate::agent::{SeenRobot, SeenTreasure};
+use crate::cache::prefetch;
 use crate::engine::simulation::{Agent, MergedFrom, Simulation, Turn};
 use crate::spatial::{RobotId, RobotIndex, TreasureIndex};
 use crate::world::{Event, Inbox, Payload, Robot, RobotType, Sighting, TreasureState};
@@ -17,7 +18,14 @@ impl Simulation {
         }
         let bag = Arc::new(std::mem::take(&mut self.mailbag));
         let mut held = false;
-        for (agent, picks) in self.agents.iter_mut().zip(self.inboxes.iter_mut()) {
+        for i in 0..self.agents.len() {
+            // An agent is about a kilobyte, and this loop is sequential: the inboxes ahead
+            // are prefetched (issue 11: each was a cache miss in the moonshot's crowd).
+            if let Some(ahead) = self.agents.get(i + AGENTS_AHEAD) {
+                prefetch(&ahead.mind.perception.inbox);
+                prefetch(&ahead.needs);
+            }
+            let (agent, picks) = (&mut self.agents[i], &mut self.inboxes[i]);
             // Last round's inbox gives its list back, to be filled again in step 3.
             let mut spare = agent.mind.perception.inbox.take_picks();
             if agent.needs.messages && !picks.is_empty() {
@@ -33,8 +41,14 @@ impl Simulation {
 
     /// First sightings of treasures, credited in id order.
     pub(super) fn record_discoveries(&mut self, round: u64) {
-        for ((robot, agent), turn) in self.robots.iter_mut().zip(&self.agents).zip(&self.turns) {
-            // Only robots with something to report are looked at (most have nothing).
+        for (i, ((robot, agent), turn)) in self.robots.iter_mut().zip(&self.agents).zip(&self.turns).enumerate() {
+            // Only robots with something to report are looked at (most have nothing); the
+            // agents of those a few ahead are prefetched.
+            if self.turns.get(i + AGENTS_AHEAD).is_some_and(|t| t.news) {
+                let ahead = &self.agents[i + AGENTS_AHEAD];
+                prefetch(&ahead.mind.perception.treasures);
+                prefetch(&ahead.mind.output);
+            }
             if !turn.news {
                 continue;
             }
@@ -58,6 +72,9 @@ impl Simulation {
         }
     }
 }
+
+/// How many agents ahead the sequential passes over them prefetch.
+const AGENTS_AHEAD: usize = 8;
 
 /// Known maps a robot merges per round at most; later ones that round are dropped.
 pub const MAX_MAP_MERGES_PER_ROUND: usize = 2;
