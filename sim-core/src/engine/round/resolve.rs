@@ -369,8 +369,8 @@ impl Simulation {
         }
         let n = self.robots.len();
         // Each sender's broadcasts, as (index in `outgoing`, bytes): contiguous, as resolve
-        // runs in sender order; `span[s]` is sender s's part.
-        let mut span = vec![(0u32, 0u32); n];
+        // runs in sender order; `span[s]` is sender s's part, and its range.
+        let mut span = vec![(0u32, 0u32, 0.0f64); n];
         let mut broadcasts: Vec<(u32, u64)> = Vec::new();
         let mut direct: Vec<(u32, u32)> = Vec::new();
         for (k, o) in outgoing.iter().enumerate() {
@@ -380,6 +380,7 @@ impl Simulation {
                     let end = u32::try_from(broadcasts.len() + 1).expect("fewer than 2^32 messages a round");
                     if span[o.from].0 == span[o.from].1 {
                         span[o.from].0 = end - 1;
+                        span[o.from].2 = o.range_m;
                     }
                     span[o.from].1 = end;
                     broadcasts.push((k, o.bytes));
@@ -399,13 +400,15 @@ impl Simulation {
         // Beside the index's entries, in its order, each sender's range and broadcasts: a
         // receiver reads them in step with the entries (issue 11: read from `outgoing` by
         // sender, in the index's order they were a cache miss each, a tenth of the
-        // moonshot's crowded rounds).
+        // moonshot's crowded rounds). The range was noted with the sender's first broadcast
+        // (all of a sender's sends have its type's range), so this sequential pass reads one
+        // table, not three.
         let by_entry: Vec<(f64, u32, u32)> = senders
             .entries()
             .iter()
             .map(|e| {
-                let (b0, b1) = span[e.id.index()];
-                (outgoing[broadcasts[b0 as usize].0 as usize].range_m, b0, b1)
+                let (b0, b1, range_m) = span[e.id.index()];
+                (range_m, b0, b1)
             })
             .collect();
         // Receivers are independent (each reads the shared sends and writes its own inbox),
