@@ -78,8 +78,9 @@ pub(super) struct Turn {
     pub(super) new_squares: Vec<CellSet>,
     /// Heap bytes of its known map after step 2 (steps 3 and 4 do not change it).
     pub(super) known_bytes: usize,
-    /// It saw treasures, changed its known map or raised events: the round's report has
-    /// something of it (see `record_discoveries`).
+    /// It saw treasures or raised events: the round's report takes something from its
+    /// agent (see `record_discoveries`; a changed known map is read from `known_changed`,
+    /// without touching the agent).
     pub(super) news: bool,
     /// Resolved in step 2, nothing in its turn depending on another robot (see
     /// `resolve_alone`).

@@ -122,9 +122,7 @@ impl Simulation {
                 }
                 *body = (robot.position, types[robot.type_index].radius_m);
                 turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
-                turn.news = turn.known_changed
-                    || !agent.mind.perception.treasures.is_empty()
-                    || !agent.mind.output.events().is_empty();
+                turn.news = !agent.mind.perception.treasures.is_empty() || !agent.mind.output.events().is_empty();
             });
         if pending.into_inner() {
             self.list_pending_hearers();
