@@ -140,6 +140,40 @@ fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<Ne
     Some(keep)
 }
 
+/// The claims `updates` (sorted by robot id) make, heard in `round`: of a robot's several,
+/// the last, if it names a goal.
+fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = (u32, DVec2, u32)> + '_ {
+    let heard = heard_in(round);
+    updates.iter().enumerate().filter_map(move |(k, &(id, goal))| {
+        let last = updates.get(k + 1).is_none_or(|u| u.0 != id);
+        goal.filter(|_| last).map(|g| (id, g, heard))
+    })
+}
+
+/// Apply a round's announcements `updates` (sorted by robot id) to `claims`, then, if
+/// `cut_now`, keep the `max` heard last ([`keep_newest`]); `merged` is a buffer. Without
+/// `cut_now` the claims may come back cut all the same when the round's fresh claims alone
+/// fill `max`, which is what any later forgetting of old or far claims and cut would leave
+/// as long as it keeps every claim heard in `round`.
+fn hear_claims(claims: &mut Claims, updates: &[Update], round: u64, max: usize, cut_now: bool, merged: &mut Claims) {
+    if max == 0 || fresh_claims(updates, round).nth(max - 1).is_some() {
+        // The round's fresh claims fill `max` on their own: the cut keeps the first `max` of
+        // them, all heard now, and none of the old, which are not read (issue 11: in the
+        // moonshot's crowd a robot hears a hundred new goals a round, and merging its cold
+        // list with them took as long as the rest of its claims).
+        empty_with_room(claims, max, max);
+        claims.extend(fresh_claims(updates, round).take(max));
+        return;
+    }
+    merge_claims(claims, updates, heard_in(round), merged);
+    if cut_now {
+        keep_newest_into(merged, max, round, claims);
+    } else {
+        empty_with_room(claims, merged.len(), max);
+        claims.extend_from_slice(merged);
+    }
+}
+
 /// A round as a claim keeps it (see [`Claims`]).
 fn heard_in(round: u64) -> u32 {
     u32::try_from(round).unwrap_or(u32::MAX)
@@ -215,14 +249,11 @@ impl Strategy for Frontier {
                     if !updates.is_sorted_by_key(|u| u.0) {
                         updates.sort_by_key(|u| u.0);
                     }
-                    merge_claims(&self.claims, updates, heard_in(round), merged);
-                    if round.is_multiple_of(10) {
-                        // Old and far claims are forgotten before the cut (below).
-                        empty_with_room(&mut self.claims, merged.len(), share.max_claims);
-                        self.claims.extend_from_slice(merged);
-                    } else {
-                        keep_newest_into(merged, share.max_claims, round, &mut self.claims);
-                    }
+                    // Every round but each tenth the merged claims are cut at once; each
+                    // tenth, old and far ones are forgotten before the cut (below). The
+                    // announcements' goals are all within `near` of `p`, as that asks.
+                    let cut_now = !round.is_multiple_of(10);
+                    hear_claims(&mut self.claims, updates, round, share.max_claims, cut_now, merged);
                 }
             });
             if round.is_multiple_of(10) {
@@ -256,7 +287,7 @@ mod tests {
     use glam::DVec2;
     use proptest::prelude::*;
 
-    use super::{Update, keep_newest, keep_newest_into, merge_claims};
+    use super::{Update, hear_claims, keep_newest, keep_newest_into, merge_claims};
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(3), ..ProptestConfig::default() })]
@@ -281,6 +312,29 @@ mod tests {
             merge_claims(&claims, &updates, 9, &mut out);
             let expected: Vec<(u32, DVec2, u32)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
             prop_assert_eq!(out, expected);
+        }
+
+        /// Issue 11: a round's announcements applied and cut, with or without the shortcut
+        /// for fresh claims that fill `max`, give what merging and cutting give.
+        #[test]
+        fn issue11_claims_heard_equal_merged_then_cut(
+            old in proptest::collection::btree_map(0u32..40, (0.0f64..10.0, 0u32..9), 0..30),
+            mut updates in proptest::collection::vec((0u32..40, proptest::option::weighted(0.8, 0.0f64..10.0)), 0..40),
+            max in 0usize..25,
+            cut_now in proptest::bool::ANY,
+        ) {
+            updates.sort_by_key(|u| u.0);
+            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| DVec2::new(x, -x)))).collect();
+            let claims: Vec<(u32, DVec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, DVec2::splat(x), r)).collect();
+            let round = 9;
+            let mut expected = Vec::new();
+            merge_claims(&claims, &updates, 9, &mut expected);
+            keep_newest(&mut expected, max, round);
+            let mut heard = claims.clone();
+            hear_claims(&mut heard, &updates, round, max, cut_now, &mut Vec::new());
+            // Uncut, the caller cuts later.
+            keep_newest(&mut heard, max, round);
+            prop_assert_eq!(heard, expected);
         }
 
         /// Issue 11: a crowd's claims are cut to the `max` heard last (the lowest ids among
