@@ -25,14 +25,11 @@ pub(super) struct Sharing {
 /// after 20 rounds and merged its list with hundreds more every round, a stream of memory
 /// that bounded the whole round).
 ///
-/// 64 rather than 256 (issue 11, measured in BENCHMARKS.md): claims live up to 50 rounds,
-/// and a team mate that reached its goal and moved out of earshot leaves its claim behind,
-/// keeping others off a frontier nobody is heading for. Where more than 64 goals are heard
-/// the stale ones now go first: 1,000 cooperative explorers explored 8–12 % more of the
-/// kernel map in 600 rounds (three seeds; 7 % in 1,000 rounds of a fourth) and 3–23 % more
-/// in `bench-1000`'s 400 rounds (four seeds), and the moonshot's crowded robots spend a
-/// sixth less time perceiving and deciding.
-pub(super) const MAX_CLAIMS: u64 = 64;
+/// 256 (issue 11, measured in BENCHMARKS.md, twelfth session): with 64, stale claims go
+/// sooner and 1,000 cooperative explorers cover 7–12 % more of the kernel map, but in
+/// `bench-1000` the diggers then dug 30 % less in 1,000 rounds (five seeds): a trade of
+/// the mission's, left to `max_claims`.
+pub(super) const MAX_CLAIMS: u64 = 256;
 
 fn default_max_claims() -> usize {
     MAX_CLAIMS as usize

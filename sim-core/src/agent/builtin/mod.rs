@@ -51,7 +51,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
     r.register(
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
-         (the max_claims most recently heard, 64 by default)",
+         (the max_claims most recently heard, 256 by default)",
         |p| {
             p.only(&["share_every", "avoid_radius_m", "max_claims"])?;
             let share = explorer::Sharing::from_params(p)?;
