@@ -14,6 +14,15 @@ type Claims = Vec<(u32, DVec2, u32)>;
 /// What a round's announcements do to the claims: a goal to keep (`Some`) or forget.
 type Update = (u32, Option<DVec2>);
 
+/// Of `updates` (sorted by robot id), each robot's last: the one that counts.
+fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
+    updates
+        .iter()
+        .enumerate()
+        .filter(|&(k, u)| updates.get(k + 1).is_none_or(|next| next.0 != u.0))
+        .map(|(_, &u)| u)
+}
+
 /// `claims` with `updates` applied (both sorted by robot id; of a robot's updates the
 /// last counts), into `out`, by one merge of the two lists.
 // Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
@@ -22,10 +31,7 @@ type Update = (u32, Option<DVec2>);
 fn merge_claims(claims: &[(u32, DVec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();
     let mut i = 0;
-    for (k, &(id, goal)) in updates.iter().enumerate() {
-        if updates.get(k + 1).is_some_and(|u| u.0 == id) {
-            continue;
-        }
+    for (id, goal) in last_words(updates) {
         while i < claims.len() && claims[i].0 < id {
             out.push(claims[i]);
             i += 1;
@@ -140,14 +146,11 @@ fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<Ne
     Some(keep)
 }
 
-/// The claims `updates` (sorted by robot id) make, heard in `round`: of a robot's several,
-/// the last, if it names a goal.
+/// The claims `updates` (sorted by robot id) make, heard in `round`: each robot's last
+/// word, if it names a goal.
 fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = (u32, DVec2, u32)> + '_ {
     let heard = heard_in(round);
-    updates.iter().enumerate().filter_map(move |(k, &(id, goal))| {
-        let last = updates.get(k + 1).is_none_or(|u| u.0 != id);
-        goal.filter(|_| last).map(|g| (id, g, heard))
-    })
+    last_words(updates).filter_map(move |(id, goal)| goal.map(|g| (id, g, heard)))
 }
 
 /// Apply a round's announcements `updates` (sorted by robot id) to `claims`, then, if

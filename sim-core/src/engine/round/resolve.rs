@@ -428,7 +428,8 @@ impl Simulation {
             turns: &self.turns,
         };
         let words = outgoing.len().div_ceil(64);
-        // Budgeted sends skip the bag until the end: picks are indices into `outgoing`.
+        // Budgeted sends skip the bag until the end: picks are indices into `outgoing`, and
+        // into the bag once `outgoing` is moved there, which it starts empty for.
         debug_assert!(self.mailbag.is_empty());
         let used = self
             .inboxes
@@ -451,7 +452,7 @@ impl Simulation {
                     a
                 },
             );
-        self.bag_accepted(&mut outgoing, &used);
+        self.bag_outgoing(&mut outgoing, &used);
         self.outgoing = outgoing;
     }
 
@@ -460,7 +461,7 @@ impl Simulation {
     /// a round in a crowd, was a sixth of budgeted delivery). Messages nobody accepted keep
     /// their place with an empty payload: theirs (whole known maps, often) are dropped now,
     /// not kept for a round.
-    fn bag_accepted(&mut self, outgoing: &mut Vec<Outgoing>, used: &[u64]) {
+    fn bag_outgoing(&mut self, outgoing: &mut Vec<Outgoing>, used: &[u64]) {
         let dropped = Arc::new(Payload::Custom {
             kind: String::new(),
             data: Vec::new(),
