@@ -1,18 +1,21 @@
 //! `frontier` and `cooperative`.
 
-use glam::DVec2;
+use glam::{DVec2, Vec2};
 
 use super::explorer::{Explorer, Sharing, share_knowledge};
 use crate::agent::{Ctx, Needs, Strategy};
 use crate::world::{Action, Payload};
 
 /// Team mates' goals, with the round heard, sorted by robot id. The round is kept in 32 bits
-/// (saturating after 4×10⁹ rounds): 24 bytes a claim instead of 32, as a crowded robot's
-/// claims are read and written in full every round (issue 11).
-type Claims = Vec<(u32, DVec2, u32)>;
+/// (saturating after 4×10⁹ rounds) and the goal in single precision, from the robot's home
+/// centre (within 4 mm on a 100 km map whatever its origin, against an avoidance radius of
+/// metres): 16 bytes a claim instead of 32, as a crowded robot's claims are read and
+/// written in full every round, and the merge waits on reading them (issue 11: at 24 bytes,
+/// the moonshot's perceive + decide took 4 % more).
+type Claims = Vec<(u32, Vec2, u32)>;
 
 /// What a round's announcements do to the claims: a goal to keep (`Some`) or forget.
-type Update = (u32, Option<DVec2>);
+type Update = (u32, Option<Vec2>);
 
 /// Of `updates` (sorted by robot id), each robot's last: the one that counts.
 fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
@@ -28,7 +31,7 @@ fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
 // Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
 // instructions (callgrind, bench-1000).
 #[inline(never)]
-fn merge_claims(claims: &[(u32, DVec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
+fn merge_claims(claims: &[(u32, Vec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();
     let mut i = 0;
     for (id, goal) in last_words(updates) {
@@ -71,7 +74,7 @@ fn empty_with_room(out: &mut Claims, n: usize, max: usize) {
 /// copy, then a pass to count and a pass to cut the robot's own list, were a tenth of
 /// `bench-1000`).
 #[inline(never)]
-fn keep_newest_into(claims: &[(u32, DVec2, u32)], max: usize, round: u64, out: &mut Claims) {
+fn keep_newest_into(claims: &[(u32, Vec2, u32)], max: usize, round: u64, out: &mut Claims) {
     match newest_cut(claims, max, round) {
         None => {
             empty_with_room(out, claims.len(), max);
@@ -105,7 +108,7 @@ impl NewestCut {
 
     /// Whether claim `c` is kept (called once per claim, in id order).
     #[inline]
-    fn keeps(&mut self, c: &(u32, DVec2, u32)) -> bool {
+    fn keeps(&mut self, c: &(u32, Vec2, u32)) -> bool {
         // `age < cut`: heard after `round - cut` (the cut is at most 63, below the clamp).
         if i64::from(c.2) > self.newer_than {
             return true;
@@ -119,7 +122,7 @@ impl NewestCut {
 }
 
 /// The cut of [`keep_newest`], or `None` if all `claims` fit in `max`.
-fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<NewestCut> {
+fn newest_cut(claims: &[(u32, Vec2, u32)], max: usize, round: u64) -> Option<NewestCut> {
     if claims.len() <= max {
         return None;
     }
@@ -148,7 +151,7 @@ fn newest_cut(claims: &[(u32, DVec2, u32)], max: usize, round: u64) -> Option<Ne
 
 /// The claims `updates` (sorted by robot id) make, heard in `round`: each robot's last
 /// word, if it names a goal.
-fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = (u32, DVec2, u32)> + '_ {
+fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = (u32, Vec2, u32)> + '_ {
     let heard = heard_in(round);
     last_words(updates).filter_map(move |(id, goal)| goal.map(|g| (id, g, heard)))
 }
@@ -235,6 +238,7 @@ impl Strategy for Frontier {
             // Only claims near enough to matter are kept, so crowds stay cheap.
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();
+            let home = ctx.home().center();
             let round = ctx.round;
             // This round's announcements, and the merge, in buffers of the worker thread, not
             // of the robot (with a crowd of robots each holding hundreds of claims, spare
@@ -243,7 +247,10 @@ impl Strategy for Frontier {
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
-                    Payload::Position { goal, .. } => Some((m.from.get(), goal.filter(|g| g.distance(p) <= near))),
+                    Payload::Position { goal, .. } => Some((
+                        m.from.get(),
+                        goal.filter(|g| g.distance(p) <= near).map(|g| (g - home).as_vec2()),
+                    )),
                     _ => None,
                 }));
                 if !updates.is_empty() {
@@ -260,8 +267,9 @@ impl Strategy for Frontier {
                 }
             });
             if round.is_multiple_of(10) {
-                self.claims
-                    .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && g.distance(p) <= near);
+                self.claims.retain(|(_, g, heard)| {
+                    round <= u64::from(*heard) + 50 && (home + g.as_dvec2()).distance(p) <= near
+                });
             }
             keep_newest(&mut self.claims, share.max_claims, round);
         }
@@ -269,7 +277,10 @@ impl Strategy for Frontier {
             return a;
         }
         let claims = &self.claims;
-        let action = self.core.explore(ctx, || claims.iter().map(|c| c.1).collect(), radius);
+        let home = ctx.home().center();
+        let action = self
+            .core
+            .explore(ctx, || claims.iter().map(|c| home + c.1.as_dvec2()).collect(), radius);
         // Announce a goal only when it changes: claims stay cheap in crowds.
         if self.sharing.is_some() && ctx.goal() != self.announced {
             self.announced = ctx.goal();
@@ -287,7 +298,7 @@ impl Strategy for Frontier {
 mod tests {
     use std::collections::BTreeMap;
 
-    use glam::DVec2;
+    use glam::Vec2;
     use proptest::prelude::*;
 
     use super::{Update, hear_claims, keep_newest, keep_newest_into, merge_claims};
@@ -298,13 +309,13 @@ mod tests {
         /// The merge gives what inserting and removing the updates one by one in a map does.
         #[test]
         fn merged_claims_equal_updates_applied_one_by_one(
-            old in proptest::collection::btree_map(0u32..40, (0.0f64..10.0, 0u32..5), 0..20),
-            mut updates in proptest::collection::vec((0u32..40, proptest::option::of(0.0f64..10.0)), 0..30),
+            old in proptest::collection::btree_map(0u32..40, (0.0f32..10.0, 0u32..5), 0..20),
+            mut updates in proptest::collection::vec((0u32..40, proptest::option::of(0.0f32..10.0)), 0..30),
         ) {
             updates.sort_by_key(|u| u.0);
-            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| DVec2::new(x, -x)))).collect();
-            let claims: Vec<(u32, DVec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, DVec2::splat(x), r)).collect();
-            let mut expected: BTreeMap<u32, (DVec2, u32)> = claims.iter().map(|c| (c.0, (c.1, c.2))).collect();
+            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| Vec2::new(x, -x)))).collect();
+            let claims: Vec<(u32, Vec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
+            let mut expected: BTreeMap<u32, (Vec2, u32)> = claims.iter().map(|c| (c.0, (c.1, c.2))).collect();
             for &(id, goal) in &updates {
                 match goal {
                     Some(g) => expected.insert(id, (g, 9)),
@@ -313,7 +324,7 @@ mod tests {
             }
             let mut out = Vec::new();
             merge_claims(&claims, &updates, 9, &mut out);
-            let expected: Vec<(u32, DVec2, u32)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
+            let expected: Vec<(u32, Vec2, u32)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
             prop_assert_eq!(out, expected);
         }
 
@@ -321,14 +332,14 @@ mod tests {
         /// for fresh claims that fill `max`, give what merging and cutting give.
         #[test]
         fn issue11_claims_heard_equal_merged_then_cut(
-            old in proptest::collection::btree_map(0u32..40, (0.0f64..10.0, 0u32..9), 0..30),
-            mut updates in proptest::collection::vec((0u32..40, proptest::option::weighted(0.8, 0.0f64..10.0)), 0..40),
+            old in proptest::collection::btree_map(0u32..40, (0.0f32..10.0, 0u32..9), 0..30),
+            mut updates in proptest::collection::vec((0u32..40, proptest::option::weighted(0.8, 0.0f32..10.0)), 0..40),
             max in 0usize..25,
             cut_now in proptest::bool::ANY,
         ) {
             updates.sort_by_key(|u| u.0);
-            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| DVec2::new(x, -x)))).collect();
-            let claims: Vec<(u32, DVec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, DVec2::splat(x), r)).collect();
+            let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| Vec2::new(x, -x)))).collect();
+            let claims: Vec<(u32, Vec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
             let round = 9;
             let mut expected = Vec::new();
             merge_claims(&claims, &updates, 9, &mut expected);
@@ -348,7 +359,7 @@ mod tests {
             max in 0usize..200,
         ) {
             let round = 60;
-            let mut claims: Vec<(u32, DVec2, u32)> = heard.iter().map(|(&id, &r)| (id, DVec2::splat(f64::from(id)), r)).collect();
+            let mut claims: Vec<(u32, Vec2, u32)> = heard.iter().map(|(&id, &r)| (id, Vec2::splat(f32::from(u16::try_from(id).expect("ids below 500"))), r)).collect();
             let mut by_recency = claims.clone();
             by_recency.sort_by_key(|c| (std::cmp::Reverse(c.2), c.0));
             by_recency.truncate(max);
