@@ -13,7 +13,10 @@ use crate::world::{Action, Payload};
 /// from the robot's home centre ([`stored_goal`]): within 6 mm on a 100 km map whatever its
 /// origin (half a unit in the last place, 4 mm, on each axis), against avoidance radii of
 /// metres.
-type Claims = Vec<(u32, Vec2, u32)>;
+type Claims = Vec<Claim>;
+
+/// One claim of [`Claims`]: (robot id, goal, round heard).
+type Claim = (u32, Vec2, u32);
 
 /// A team mate's goal as a claim keeps it: from `home` (the robot's home centre), in single
 /// precision (see [`Claims`]).
@@ -43,7 +46,7 @@ fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
 // Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
 // instructions (callgrind, bench-1000).
 #[inline(never)]
-fn merge_claims(claims: &[(u32, Vec2, u32)], updates: &[Update], round: u32, out: &mut Claims) {
+fn merge_claims(claims: &[Claim], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();
     let mut i = 0;
     for (id, goal) in last_words(updates) {
@@ -86,7 +89,7 @@ fn empty_with_room(out: &mut Claims, n: usize, max: usize) {
 /// copy, then a pass to count and a pass to cut the robot's own list, were a tenth of
 /// `bench-1000`).
 #[inline(never)]
-fn keep_newest_into(claims: &[(u32, Vec2, u32)], max: usize, round: u64, out: &mut Claims) {
+fn keep_newest_into(claims: &[Claim], max: usize, round: u64, out: &mut Claims) {
     match newest_cut(claims, max, round) {
         None => {
             empty_with_room(out, claims.len(), max);
@@ -120,7 +123,7 @@ impl NewestCut {
 
     /// Whether claim `c` is kept (called once per claim, in id order).
     #[inline]
-    fn keeps(&mut self, c: &(u32, Vec2, u32)) -> bool {
+    fn keeps(&mut self, c: &Claim) -> bool {
         // `age < cut`: heard after `round - cut` (the cut is at most 63, below the clamp).
         if i64::from(c.2) > self.newer_than {
             return true;
@@ -134,7 +137,7 @@ impl NewestCut {
 }
 
 /// The cut of [`keep_newest`], or `None` if all `claims` fit in `max`.
-fn newest_cut(claims: &[(u32, Vec2, u32)], max: usize, round: u64) -> Option<NewestCut> {
+fn newest_cut(claims: &[Claim], max: usize, round: u64) -> Option<NewestCut> {
     if claims.len() <= max {
         return None;
     }
@@ -163,7 +166,7 @@ fn newest_cut(claims: &[(u32, Vec2, u32)], max: usize, round: u64) -> Option<New
 
 /// The claims `updates` (sorted by robot id) make, heard in `round`: each robot's last
 /// word, if it names a goal.
-fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = (u32, Vec2, u32)> + '_ {
+fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = Claim> + '_ {
     let heard = heard_in(round);
     last_words(updates).filter_map(move |(id, goal)| goal.map(|g| (id, g, heard)))
 }
@@ -244,13 +247,14 @@ impl Strategy for Frontier {
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
         let mut radius = 0.0;
+        // Claims keep their goals from here (see [`Claims`]).
+        let home = ctx.home().center();
         if let Some(share) = self.sharing {
             share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
             radius = share.avoid_radius_m;
             // Only claims near enough to matter are kept, so crowds stay cheap.
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();
-            let home = ctx.home().center();
             let round = ctx.round;
             // This round's announcements, and the merge, in buffers of the worker thread, not
             // of the robot (with a crowd of robots each holding hundreds of claims, spare
@@ -288,7 +292,6 @@ impl Strategy for Frontier {
             return a;
         }
         let claims = &self.claims;
-        let home = ctx.home().center();
         let action = self
             .core
             .explore(ctx, || claims.iter().map(|c| goal_of(c.1, home)).collect(), radius);
@@ -312,7 +315,7 @@ mod tests {
     use glam::Vec2;
     use proptest::prelude::*;
 
-    use super::{Update, goal_of, hear_claims, keep_newest, keep_newest_into, merge_claims, stored_goal};
+    use super::{Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, merge_claims, stored_goal};
 
     /// Issue 11: a goal kept in single precision from the home comes back within 6 mm on a
     /// 100 km map whatever its origin, here 5,000 km out (a projected map's coordinates),
@@ -346,7 +349,7 @@ mod tests {
         ) {
             updates.sort_by_key(|u| u.0);
             let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| Vec2::new(x, -x)))).collect();
-            let claims: Vec<(u32, Vec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
+            let claims: Claims = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
             let mut expected: BTreeMap<u32, (Vec2, u32)> = claims.iter().map(|c| (c.0, (c.1, c.2))).collect();
             for &(id, goal) in &updates {
                 match goal {
@@ -356,7 +359,7 @@ mod tests {
             }
             let mut out = Vec::new();
             merge_claims(&claims, &updates, 9, &mut out);
-            let expected: Vec<(u32, Vec2, u32)> = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
+            let expected: Claims = expected.into_iter().map(|(id, (g, r))| (id, g, r)).collect();
             prop_assert_eq!(out, expected);
         }
 
@@ -371,7 +374,7 @@ mod tests {
         ) {
             updates.sort_by_key(|u| u.0);
             let updates: Vec<Update> = updates.into_iter().map(|(id, g)| (id, g.map(|x| Vec2::new(x, -x)))).collect();
-            let claims: Vec<(u32, Vec2, u32)> = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
+            let claims: Claims = old.iter().map(|(&id, &(x, r))| (id, Vec2::splat(x), r)).collect();
             let round = 9;
             let mut expected = Vec::new();
             merge_claims(&claims, &updates, 9, &mut expected);
@@ -391,7 +394,7 @@ mod tests {
             max in 0usize..200,
         ) {
             let round = 60;
-            let mut claims: Vec<(u32, Vec2, u32)> = heard.iter().map(|(&id, &r)| (id, Vec2::splat(f32::from(u16::try_from(id).expect("ids below 500"))), r)).collect();
+            let mut claims: Claims = heard.iter().map(|(&id, &r)| (id, Vec2::splat(f32::from(u16::try_from(id).expect("ids below 500"))), r)).collect();
             let mut by_recency = claims.clone();
             by_recency.sort_by_key(|c| (std::cmp::Reverse(c.2), c.0));
             by_recency.truncate(max);
