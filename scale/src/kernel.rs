@@ -23,11 +23,17 @@ pub struct Kernel {
     pub robots: u32,
     /// Seed of the run (default 7).
     pub seed: u64,
+    /// The explorers' `max_detour_m` (default `None`: unbounded, `cooperative`'s default).
+    pub max_detour_m: Option<f64>,
 }
 
 impl Default for Kernel {
     fn default() -> Self {
-        Self { robots: 1_000, seed: 7 }
+        Self {
+            robots: 1_000,
+            seed: 7,
+            max_detour_m: None,
+        }
     }
 }
 
@@ -80,7 +86,13 @@ impl Kernel {
             .with_group(
                 Group::new("cooperative", 0, self.robots)
                     .with_name("explorers")
-                    .with_params(Params::from_pairs([("share_every", "20")])),
+                    .with_params(
+                        self.max_detour_m
+                            .into_iter()
+                            .fold(Params::from_pairs([("share_every", "20")]), |p, d| {
+                                p.with("max_detour_m", d.to_string())
+                            }),
+                    ),
             )
             .build(&StrategyRegistry::with_builtins())?)
     }

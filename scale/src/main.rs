@@ -79,6 +79,10 @@ enum Scenario {
         /// Seed of the run.
         #[arg(long, default_value_t = 7)]
         seed: u64,
+        /// The explorers' `max_detour_m` (how much farther than the nearest frontier they
+        /// walk to one no team mate claims); unbounded if not given.
+        #[arg(long)]
+        max_detour_m: Option<f64>,
     },
     /// Curves: `swarm` rounds per second and peak memory against robots (100 → 10,000) and
     /// against leaves (10⁵ → 10⁷), and the speed-up from 1 to 2 threads. Each point runs in
@@ -222,7 +226,18 @@ fn run(cli: &Cli) -> Result<()> {
             };
             ("swarm", swarm.scenario()?, csv_row)
         }
-        Scenario::Kernel { robots, seed } => ("kernel", Kernel { robots, seed }.scenario(&Kernel::map())?, false),
+        Scenario::Kernel {
+            robots,
+            seed,
+            max_detour_m,
+        } => {
+            let kernel = Kernel {
+                robots,
+                seed,
+                max_detour_m,
+            };
+            ("kernel", kernel.scenario(&Kernel::map())?, false)
+        }
     };
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, cli.rounds, cli.threads)?;

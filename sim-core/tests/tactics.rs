@@ -320,9 +320,12 @@ fn navigator_frontier_route_leaves_the_known_disc() {
     let ctx = w.ctx();
     let nav = ctx.nav();
     frontier.sync(nav, ctx.data.known.as_mut().unwrap());
-    let route = Navigator::frontier_route(&ctx, Some(&frontier), &[], 0.0).expect("a frontier");
+    let route = Navigator::frontier_route(&ctx, Some(&frontier), &[], 0.0, f64::INFINITY).expect("a frontier");
     // Asking the set or the map finds the same route.
-    assert_eq!(Navigator::frontier_route(&ctx, None, &[], 0.0), Some(route.clone()));
+    assert_eq!(
+        Navigator::frontier_route(&ctx, None, &[], 0.0, f64::INFINITY),
+        Some(route.clone())
+    );
     let last = *route.waypoints.last().unwrap();
     let known = ctx.known().unwrap();
     let off_or_border = !known.is_known(last)
@@ -459,4 +462,43 @@ fn blocked_means_a_move_held_back() {
         to: DVec2::new(0.5, 2.5),
     });
     assert!(blocked(&w.ctx()));
+}
+
+/// Issue 12: a frontier search honours a team mate's claim only within `max_detour_m`.
+/// A corridor one cell high and 60 m long, in four pieces of free space (x from 1, 17, 33
+/// and 49). The robot at x = 21.5 knows it from x = 19 to x = 39 (discs of 3 m, whose
+/// cells lie within 2.5 m of their centres on this line). Its nearest frontier is the west
+/// end of what it knows, x = 18.5, 3 m off, in its own piece; a team mate claims it (a
+/// claim at x = 17.5 with a 3 m radius). The nearest clear one is the east end, x = 39.5,
+/// in the next piece east, which the search enters at x = 33: 11.5 m beyond the robot's
+/// own piece. So a detour of 20 m is allowed, one of 5 m is not.
+#[test]
+fn issue12_frontier_search_honours_claims_within_max_detour() {
+    let inner = format!("{}R{}", ".".repeat(20), ".".repeat(39));
+    let art = format!("{w}\n#{inner}#\n{w}", w = "#".repeat(62));
+    let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();
+    let p = w.robot.position;
+    assert_eq!(p, DVec2::new(21.5, 1.5));
+    for x in [21.5, 26.5, 31.5, 36.5] {
+        w = w.knowing_disc(DVec2::new(x, 1.5), 3.0);
+    }
+    let ctx = w.ctx();
+    let claim = [DVec2::new(17.5, 1.5)];
+    let end = |avoid: &[DVec2], detour: f64| {
+        let r = Navigator::frontier_route(&ctx, None, avoid, 3.0, detour).expect("a frontier");
+        *r.waypoints.last().unwrap()
+    };
+    let west = DVec2::new(18.5, 1.5);
+    let east = DVec2::new(39.5, 1.5);
+    // Unclaimed, the west end; claimed, the east end unless the detour is bounded below
+    // 11.5 m.
+    for detour in [f64::INFINITY, 0.0] {
+        assert!(end(&[], detour).distance(west) < EPS);
+    }
+    for detour in [f64::INFINITY, 20.0, 11.6] {
+        assert!(end(&claim, detour).distance(east) < EPS, "detour {detour}");
+    }
+    for detour in [11.4, 5.0, 0.0] {
+        assert!(end(&claim, detour).distance(west) < EPS, "detour {detour}");
+    }
 }

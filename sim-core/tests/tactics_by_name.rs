@@ -433,3 +433,20 @@ fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     let at = run("shortest_path", "0");
     assert!(at.distance(DVec2::new(3.0, 3.5)) < 0.5, "not optimistic: moved to {at}");
 }
+
+/// Issue 12: `cooperative` takes `max_detour_m` (a distance, unbounded when absent) and
+/// refuses nonsense with the parameter's name.
+#[test]
+fn issue12_cooperative_takes_max_detour_m() {
+    let registry = StrategyRegistry::with_builtins();
+    let make = |v: &str| registry.create("cooperative", &Params::default().with("max_detour_m", v));
+    assert!(make("5").is_ok());
+    assert!(make("0").is_ok());
+    for bad in ["-1", "far", "NaN", "inf"] {
+        let e = make(bad).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(
+            e.contains("parameter 'max_detour_m' must be a number in [0, 1000000]"),
+            "{bad}: {e}"
+        );
+    }
+}

@@ -17,6 +17,10 @@ pub(super) struct Sharing {
     /// Team mates' goals remembered at most (the most recently heard).
     #[serde(default = "default_max_claims")]
     pub(super) max_claims: usize,
+    /// How much farther than the nearest frontier a robot walks to one no team mate
+    /// claims (`None`: as far as it takes; see [`FrontierSeeking::seek`]).
+    #[serde(default)]
+    pub(super) max_detour_m: Option<f64>,
 }
 
 /// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
@@ -40,10 +44,15 @@ impl Sharing {
         let every_rounds = p.u64_in("share_every", 10, SHARE_EVERY)?;
         let avoid_radius_m = p.f64_in("avoid_radius_m", 5.0, 0.0..=MAX_DISTANCE_M)?;
         let max_claims = p.u64_in("max_claims", MAX_CLAIMS, 0..=1_000_000)? as usize;
+        let max_detour_m = match p.text("max_detour_m") {
+            Some(_) => Some(p.f64_in("max_detour_m", 0.0, 0.0..=MAX_DISTANCE_M)?),
+            None => None,
+        };
         Ok(Self {
             every_rounds,
             avoid_radius_m,
             max_claims,
+            max_detour_m,
         })
     }
 }
@@ -72,8 +81,14 @@ impl Explorer {
 
     /// One step of frontier exploration (see [`FrontierSeeking::seek`]); home when nothing
     /// is left to explore.
-    pub(super) fn explore(&mut self, ctx: &mut Ctx, avoid: impl FnOnce() -> Vec<DVec2>, avoid_radius_m: f64) -> Action {
-        if let Some(a) = self.frontier.seek(ctx, avoid, avoid_radius_m) {
+    pub(super) fn explore(
+        &mut self,
+        ctx: &mut Ctx,
+        avoid: impl FnOnce() -> Vec<DVec2>,
+        avoid_radius_m: f64,
+        max_detour_m: f64,
+    ) -> Action {
+        if let Some(a) = self.frontier.seek(ctx, avoid, avoid_radius_m, max_detour_m) {
             return a;
         }
         // Nothing left to explore: go home and wait there.

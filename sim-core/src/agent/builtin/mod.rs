@@ -51,9 +51,10 @@ fn register_builtins(r: &mut StrategyRegistry) {
     r.register(
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
-         (the max_claims most recently heard, 256 by default)",
+         (the max_claims most recently heard, 256 by default; by a detour of at most max_detour_m, \
+         unbounded by default)",
         |p| {
-            p.only(&["share_every", "avoid_radius_m", "max_claims"])?;
+            p.only(&["share_every", "avoid_radius_m", "max_claims", "max_detour_m"])?;
             let share = explorer::Sharing::from_params(p)?;
             Ok(Box::new(frontier::Frontier::new(Some(share))))
         },

@@ -32,8 +32,16 @@ impl FrontierSeeking {
     /// One step towards the nearest frontier whose target lies more than `avoid_radius_m`
     /// from every point `avoid` gives (team mates' goals; asked for only when a new
     /// target is chosen: in crowds they are hundreds, and most rounds keep the target), or
-    /// the nearest frontier at all if every one is taken. `None` when none is known.
-    pub fn seek(&mut self, ctx: &mut Ctx, avoid: impl FnOnce() -> Vec<DVec2>, avoid_radius_m: f64) -> Option<Action> {
+    /// the nearest frontier at all if every one is taken or the nearest clear one is more
+    /// than about `max_detour_m` farther (see [`Navigator::frontier_route`];
+    /// `f64::INFINITY`: no bound). `None` when none is known.
+    pub fn seek(
+        &mut self,
+        ctx: &mut Ctx,
+        avoid: impl FnOnce() -> Vec<DVec2>,
+        avoid_radius_m: f64,
+        max_detour_m: f64,
+    ) -> Option<Action> {
         // Keep walking to a frontier target even once it is seen: the way on reveals more in
         // the same direction, and a new search only every few metres keeps planning cheap.
         // Re-plan on arrival, when the route is gone, or when the target was revealed from
@@ -46,8 +54,8 @@ impl FrontierSeeking {
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let memo = &mut self.memo;
             let found = ctx.timed_planning(|| {
-                Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m)
-                    .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0))
+                Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m, max_detour_m)
+                    .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0, f64::INFINITY))
             });
             if let Some(route) = found {
                 self.target = route.waypoints.last().copied();
@@ -66,7 +74,7 @@ impl FrontierSeeking {
 
 impl Tactic for FrontierSeeking {
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
-        self.seek(ctx, Vec::new, 0.0)
+        self.seek(ctx, Vec::new, 0.0, f64::INFINITY)
     }
 
     fn needs(&self) -> Needs {

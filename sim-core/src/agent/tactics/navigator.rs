@@ -92,7 +92,11 @@ impl Navigator {
     /// Route to the nearest frontier (by path): the closest piece of free space the known map
     /// touches that is either partly unknown (the route ends at its nearest unknown point) or
     /// borders a piece not known at all (the route ends just across their shared edge).
-    /// Targets within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped.
+    /// Targets within `avoid_radius_m` of a point in `avoid` (team mates' goals) are skipped,
+    /// but only while the search stays within `max_detour_m` of the nearest skipped one:
+    /// once it settles a piece entered more than `max_detour_m` beyond the piece of the
+    /// first target it skipped, the route goes to that target after all (`f64::INFINITY`:
+    /// no bound; the search goes on to the nearest target clear of every claim).
     ///
     /// With `frontier` (the robot's [`Frontier`], synced with its known map) the search asks
     /// the set whether a node is a frontier before asking the map; without, it asks the map
@@ -104,8 +108,16 @@ impl Navigator {
         frontier: Option<&Frontier>,
         avoid: &[DVec2],
         avoid_radius_m: f64,
+        max_detour_m: f64,
     ) -> Option<Route> {
-        Self::frontier_route_memo(ctx, &mut PieceMemo::default(), frontier, avoid, avoid_radius_m)
+        Self::frontier_route_memo(
+            ctx,
+            &mut PieceMemo::default(),
+            frontier,
+            avoid,
+            avoid_radius_m,
+            max_detour_m,
+        )
     }
 
     /// [`frontier_route`](Self::frontier_route) that remembers, in `memo`, which pieces the
@@ -117,6 +129,7 @@ impl Navigator {
         frontier: Option<&Frontier>,
         avoid: &[DVec2],
         avoid_radius_m: f64,
+        max_detour_m: f64,
     ) -> Option<Route> {
         let terrain = ctx.terrain()?;
         let known = terrain.known;
@@ -129,6 +142,9 @@ impl Navigator {
         // kept in between (a "no" is not in the memo).
         let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::with_capacity(32));
         let start_hint = memo.route_end();
+        // The first target skipped for a claim: its piece, the distance walked to enter
+        // that piece, and the target.
+        let skipped: Cell<Option<(NavNodeId, f64, DVec2)>> = Cell::new(None);
         let memo = RefCell::new(memo);
         // The pieces asked about lie close together: descents of the known map start from
         // where the last one passed.
@@ -142,13 +158,27 @@ impl Navigator {
                 let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
                 hit.unwrap_or_else(|| touches(m))
             },
-            |n, reached| {
+            |n, d, reached| {
                 touched.borrow_mut().clear();
+                // Pieces settle in the order of the distance walked to enter them, so this
+                // is the first piece beyond the detour allowed: the skipped target it is.
+                if let Some((n0, _, t0)) = skipped.get().filter(|s| d > s.1 + max_detour_m) {
+                    return Some((n0, t0));
+                }
                 if frontier.is_some_and(|f| !f.contains(n)) {
                     return None;
                 }
+                let taken = |t: DVec2| {
+                    let ok = clear(t);
+                    if !ok && skipped.get().is_none() {
+                        skipped.set(Some((n, d, t)));
+                    }
+                    ok
+                };
                 if !memo.borrow_mut().covered_from(nav, known, &mut finger.borrow_mut(), n) {
-                    return nearest_unknown(known, &nav.bounds(n), p).filter(|t| clear(*t));
+                    return nearest_unknown(known, &nav.bounds(n), p)
+                        .filter(|t| taken(*t))
+                        .map(|t| (n, t));
                 }
                 let mut cache = touched.borrow_mut();
                 for m in nav.neighbors(n) {
@@ -164,10 +194,10 @@ impl Navigator {
                     }
                     let portal = nav.portal(n, m);
                     let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
-                    let found = Some(portal + inward * step_in).filter(|t| clear(*t));
+                    let found = Some(portal + inward * step_in).filter(|t| taken(*t));
                     if found.is_some() {
                         // The search ends here: the other neighbours are not needed.
-                        return found;
+                        return found.map(|t| (n, t));
                     }
                 }
                 None

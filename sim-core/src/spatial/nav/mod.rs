@@ -633,7 +633,14 @@ impl NavGraph {
         mut is_goal: impl FnMut(NavNodeId) -> Option<DVec2>,
         max_nodes: usize,
     ) -> Option<Route> {
-        self.search_knowing_reached(from, None, terrain, usable, |n, _| is_goal(n), max_nodes)
+        self.search_knowing_reached(
+            from,
+            None,
+            terrain,
+            usable,
+            |n, _, _| is_goal(n).map(|g| (n, g)),
+            max_nodes,
+        )
     }
 
     /// [`search`](Self::search) whose goal test also gets a test of whether this search has
@@ -648,7 +655,7 @@ impl NavGraph {
         start_hint: Option<NavNodeId>,
         terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
-        is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
+        is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
         max_nodes: usize,
     ) -> Option<Route> {
         let (nodes, goal) = self.best_first(from, start_hint, usable, is_goal, None, max_nodes)?;
@@ -670,7 +677,7 @@ impl NavGraph {
         from: DVec2,
         start_hint: Option<NavNodeId>,
         mut usable: impl FnMut(NavNodeId) -> bool,
-        mut is_goal: impl FnMut(NavNodeId, &dyn Fn(NavNodeId) -> bool) -> Option<DVec2>,
+        mut is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
         estimate: Option<&dyn Fn(DVec2) -> f64>,
         max_nodes: usize,
     ) -> Option<(Vec<NavNodeId>, DVec2)> {
@@ -724,7 +731,7 @@ impl NavGraph {
                 marks[n as usize].0 = settled_stamp;
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
-                if let Some(goal) = is_goal(node, &reached) {
+                if let Some((NavNodeId(n), goal)) = is_goal(node, d, &reached) {
                     let parent = |cur: u32| Some(entry[marks[cur as usize].1 as usize].3).filter(|&p| p != u32::MAX);
                     // The chain counted first: one allocation of the route's size.
                     let len = std::iter::successors(Some(n), |&cur| parent(cur)).count();
@@ -777,7 +784,7 @@ impl NavGraph {
             from,
             None,
             |n| self.touched_by(known, n),
-            |n, _| (n == goal).then_some(to),
+            |n, _, _| (n == goal).then_some((n, to)),
             Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
@@ -806,9 +813,9 @@ impl NavGraph {
             from,
             None,
             |n| self.touched_by(known, n),
-            |n, _| {
+            |n, _, _| {
                 if Some(n) == goal {
-                    return Some(to);
+                    return Some((n, to));
                 }
                 if !Frontier::is_frontier(self, known, n) {
                     return None;
@@ -821,7 +828,10 @@ impl NavGraph {
                 let (lo, hi) = (b.min + inset, b.max - inset);
                 let mut exits = [to.clamp(lo, hi), lo, DVec2::new(hi.x, lo.y), DVec2::new(lo.x, hi.y), hi];
                 exits[1..].sort_by(|a, b| a.distance_squared(to).total_cmp(&b.distance_squared(to)));
-                exits.into_iter().find(|&exit| terrain.hopeful(exit, to))
+                exits
+                    .into_iter()
+                    .find(|&exit| terrain.hopeful(exit, to))
+                    .map(|e| (n, e))
             },
             Some(&|p: DVec2| p.distance(to)),
             max_nodes,
