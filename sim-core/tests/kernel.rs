@@ -677,8 +677,8 @@ fn state_bytes(sim: &Simulation) -> Vec<u8> {
 /// Issue 13: a run saved after k rounds and restored into a simulation set up afresh from
 /// the same scenario plays on exactly as the run that was never stopped (every round's
 /// metrics, events and robot bits, and the final state byte for byte), for every built-in
-/// strategy at once, with known maps and sightings in flight and a finite radio budget, on
-/// one thread and on two.
+/// strategy at once (`cooperative` with and without `max_detour_m`), with known maps and
+/// sightings in flight and a finite radio budget, on one thread and on two.
 #[test]
 fn issue13_a_restored_run_plays_on_bit_for_bit() {
     const ROUNDS: u64 = 160;
@@ -695,7 +695,7 @@ fn issue13_a_restored_run_plays_on_bit_for_bit() {
             },
         ];
         let radio = RobotType::explorer().with_radio_bytes_per_round(600);
-        scenario(
+        let mut s = scenario(
             rooms_map(treasures),
             11,
             ROUNDS,
@@ -708,7 +708,10 @@ fn issue13_a_restored_run_plays_on_bit_for_bit() {
                 (2, RobotType::excavator(), "excavator"),
                 (2, RobotType::transporter(), "transporter"),
             ],
-        )
+        );
+        // A bounded detour past claimed frontiers is part of the saved state too.
+        s.groups[1].params = Params::default().with("max_detour_m", "2");
+        s
     };
     // Plays to round `until`; returns the messages sent.
     let play = |sim: &mut Simulation, until: u64, trace: &mut Trace| {
