@@ -79,6 +79,11 @@ impl Explorer {
         None
     }
 
+    /// [`explore`](Self::explore) with no team mates' goals to avoid.
+    pub(super) fn explore_unclaimed(&mut self, ctx: &mut Ctx) -> Action {
+        self.explore(ctx, Vec::new, 0.0, f64::INFINITY)
+    }
+
     /// One step of frontier exploration (see [`FrontierSeeking::seek`]); home when nothing
     /// is left to explore.
     pub(super) fn explore(

@@ -246,13 +246,13 @@ impl Strategy for Frontier {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        let (mut radius, mut max_detour_m) = (0.0, f64::INFINITY);
+        let mut radius = 0.0;
+        let max_detour_m = self.sharing.and_then(|s| s.max_detour_m).unwrap_or(f64::INFINITY);
         // Claims keep their goals from here (see [`Claims`]).
         let home = ctx.home().center();
         if let Some(share) = self.sharing {
             share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
             radius = share.avoid_radius_m;
-            max_detour_m = share.max_detour_m.unwrap_or(f64::INFINITY);
             // Only claims near enough to matter are kept, so crowds stay cheap.
             let near = (4.0 * radius).max(20.0);
             let p = ctx.position();

@@ -31,7 +31,7 @@ impl Strategy for TeamExplorer {
         let action = match self.team.suggest(ctx) {
             Some(follow) => follow,
             // A leader explores, at 60 % of its speed so that followers can keep up.
-            None if self.team.leader().is_none() => match self.core.explore(ctx, Vec::new, 0.0, f64::INFINITY) {
+            None if self.team.leader().is_none() => match self.core.explore_unclaimed(ctx) {
                 Action::MoveTo { to } => {
                     let p = ctx.position();
                     Action::MoveTo {

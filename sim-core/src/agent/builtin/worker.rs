@@ -43,7 +43,7 @@ impl Worker {
             if !self.explorer.frontier.navigator().go_to(ctx, to) {
                 self.explorer.frontier.navigator().clear();
                 self.heading_to = None;
-                return self.explorer.explore(ctx, Vec::new, 0.0, f64::INFINITY);
+                return self.explorer.explore_unclaimed(ctx);
             }
         }
         ctx.set_goal(Some(to));
@@ -104,7 +104,7 @@ impl Strategy for Excavator {
             return a;
         }
         let Some(t) = Worker::nearest(ctx, |s| s.buried > 0) else {
-            return self.core.explorer.explore(ctx, Vec::new, 0.0, f64::INFINITY);
+            return self.core.explorer.explore_unclaimed(ctx);
         };
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
@@ -145,7 +145,7 @@ impl Strategy for Transporter {
             if load > 0 {
                 return self.core.go(ctx, ctx.home().center());
             }
-            return self.core.explorer.explore(ctx, Vec::new, 0.0, f64::INFINITY);
+            return self.core.explorer.explore_unclaimed(ctx);
         };
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
