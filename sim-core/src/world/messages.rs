@@ -24,6 +24,15 @@ pub struct Sighting {
     pub round: u64,
 }
 
+/// The work a [`Payload::Claim`] is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Task {
+    /// Digging the treasure out.
+    Excavate,
+    /// Carrying its dug units home.
+    Transport,
+}
+
 /// What a message carries.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub enum Payload {
@@ -38,6 +47,18 @@ pub enum Payload {
         /// Where it is heading, if anywhere.
         goal: Option<DVec2>,
     },
+    /// A worker's claim on a treasure: it is on its way there (or at it) to do `task`,
+    /// `distance_m` away when it said so. Team mates doing the same task that are farther
+    /// from the treasure leave it to the claimant (see the `excavator` and `transporter`
+    /// strategies).
+    Claim {
+        /// The treasure.
+        treasure: TreasureId,
+        /// What the claimant will do there.
+        task: Task,
+        /// The claimant's straight-line distance to the treasure when it spoke.
+        distance_m: f32,
+    },
     /// Anything else a strategy wants to say.
     Custom {
         /// A tag the receiving strategy recognises.
@@ -49,12 +70,14 @@ pub enum Payload {
 
 impl Payload {
     /// Size on the air in bytes (for accounting): sightings 28 bytes each, a known map its
-    /// encoded tree at 2 bits a node, positions 33 bytes, custom its tag and data.
+    /// encoded tree at 2 bits a node, positions 33 bytes, claims 9 bytes (treasure, task,
+    /// distance), custom its tag and data.
     pub fn size_bytes(&self) -> u64 {
         match self {
             Payload::Sightings(s) => 28 * s.len() as u64,
             Payload::KnownMap(m) => (4 * m.tree().internal_nodes() as u64 + 1).div_ceil(4),
             Payload::Position { .. } => 33,
+            Payload::Claim { .. } => 9,
             Payload::Custom { kind, data } => (kind.len() + data.len()) as u64,
         }
     }

@@ -66,7 +66,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "excavator",
-        "goes to known treasures and digs them out; explores when it knows none",
+        "goes to the nearest known treasure no nearer excavator claimed, claims it and digs it out; explores when it knows none",
         |p| Ok(Box::new(worker::Excavator::from_params(p)?)),
     );
     r.register_composed(
@@ -77,7 +77,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "transporter",
-        "fetches dug units (waiting at treasures being dug) and delivers them home",
+        "fetches dug units (waiting at treasures being dug), one transporter per treasure as excavators do, and delivers them home",
         |p| Ok(Box::new(worker::Transporter::from_params(p)?)),
     );
 }

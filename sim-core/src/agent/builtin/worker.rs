@@ -6,7 +6,8 @@ use super::SHARE_EVERY;
 use super::explorer::{Explorer, share_knowledge};
 use crate::Result;
 use crate::agent::{Ctx, Needs, Params, Strategy};
-use crate::world::{Action, REACH_M, Sighting};
+use crate::spatial::{RobotId, TreasureId};
+use crate::world::{Action, Payload, REACH_M, Sighting, Task};
 
 /// What workers perceive: everything but other robots, which they never look at (the
 /// physical unit keeps bodies apart and the collision tactic handles being stuck). Issue 11:
@@ -16,13 +17,49 @@ const WORKER_NEEDS: Needs = Needs {
     ..Needs::ALL
 };
 
-/// The part excavators and transporters share: exploration, sharing and going places.
+/// Rounds a team mate's claim is kept after it was last heard. Claimants repeat theirs
+/// every [`CLAIM_REPEAT_ROUNDS`] while they hold it, so one not heard again for this long
+/// belongs to a robot that moved on or out of range.
+const CLAIM_LIFETIME_ROUNDS: u64 = 30;
+
+/// How often a worker repeats the claim it holds.
+const CLAIM_REPEAT_ROUNDS: u64 = 10;
+
+/// Team mates' claims remembered at most, the most recently heard (a scalable memory
+/// list: a crowd's memory stays linear in its size).
+const MAX_CLAIMS: usize = 64;
+
+/// A team mate's [`Payload::Claim`] as heard.
+#[derive(Clone, Copy, serde::Serialize, serde::Deserialize)]
+struct HeardClaim {
+    treasure: TreasureId,
+    by: RobotId,
+    distance_m: f32,
+    heard_round: u64,
+}
+
+/// The part excavators and transporters share: exploration, sharing, claims on treasures
+/// and going places.
+///
+/// A worker heads for the nearest treasure it knows that needs its task, leaving to a team
+/// mate of the same task any treasure that mate claimed from nearer (ties to the lower id),
+/// and claims its own choice: so the workers spread over the treasures they know, one of
+/// each task per treasure, instead of all walking to the same one (measured in
+/// BENCHMARKS.md, fifteenth session: in `bench-1000` the diggers crowded round the nearest
+/// treasure, blocking one another and the haulers waiting there, and dug 42–73 units in
+/// 1,000 rounds; with claims 126–149).
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Worker {
     explorer: Explorer,
     share_every: u64,
     heading_to: Option<DVec2>,
     shared_area: f64,
+    /// Team mates' claims for this worker's task: each robot's last word, in the order heard.
+    #[serde(default)]
+    claims: Vec<HeardClaim>,
+    /// The treasure this worker claimed last, and the round it said so.
+    #[serde(default)]
+    claimed: Option<(TreasureId, u64)>,
 }
 
 impl Worker {
@@ -32,6 +69,8 @@ impl Worker {
             share_every: p.u64_in("share_every", 10, SHARE_EVERY)?,
             heading_to: None,
             shared_area: 0.0,
+            claims: Vec::new(),
+            claimed: None,
         })
     }
 
@@ -70,9 +109,11 @@ impl Worker {
             })
     }
 
-    /// What every worker does first: share what it knows, then let energy management and
-    /// collision avoidance take over if they want to (dropping the current route).
-    fn begin_round(&mut self, ctx: &mut Ctx) -> Option<Action> {
+    /// What every worker does first: hear team mates' claims for `task`, share what it
+    /// knows, then let energy management and collision avoidance take over if they want to
+    /// (dropping the current route).
+    fn begin_round(&mut self, ctx: &mut Ctx, task: Task) -> Option<Action> {
+        self.hear_claims(ctx, task);
         share_knowledge(ctx, self.share_every, &mut self.shared_area);
         let reflex = self.explorer.reflexes(ctx);
         if reflex.is_some() {
@@ -81,12 +122,69 @@ impl Worker {
         reflex
     }
 
+    /// Take in this round's claims for `task`, forgetting those not heard again in
+    /// [`CLAIM_LIFETIME_ROUNDS`].
+    fn hear_claims(&mut self, ctx: &Ctx, task: Task) {
+        let round = ctx.round;
+        self.claims.retain(|c| c.heard_round + CLAIM_LIFETIME_ROUNDS > round);
+        for m in ctx.messages() {
+            if let Payload::Claim {
+                treasure,
+                task: t,
+                distance_m,
+            } = *m.payload
+                && t == task
+            {
+                self.claims.retain(|c| c.by != m.from);
+                self.claims.push(HeardClaim {
+                    treasure,
+                    by: m.from,
+                    distance_m,
+                    heard_round: round,
+                });
+            }
+        }
+        let excess = self.claims.len().saturating_sub(MAX_CLAIMS);
+        self.claims.drain(..excess);
+    }
+
+    /// Whether a team mate claimed treasure `s` from nearer than this robot is now.
+    fn left_to_others(&self, ctx: &Ctx, s: &Sighting) -> bool {
+        let (me, d) = (ctx.me.id, ctx.position().distance(s.position) as f32);
+        self.claims
+            .iter()
+            .any(|c| c.treasure == s.treasure && c.distance_m.total_cmp(&d).then(c.by.cmp(&me)).is_lt())
+    }
+
+    /// The remembered treasure nearest to the robot that `want` accepts and no nearer team
+    /// mate claimed.
+    fn choose(&self, ctx: &Ctx, want: impl Fn(&Sighting) -> bool) -> Option<Sighting> {
+        Self::nearest(ctx, |s| want(s) && !self.left_to_others(ctx, s))
+    }
+
+    /// Claim `t` for `task`: said when the choice changes and repeated every
+    /// [`CLAIM_REPEAT_ROUNDS`] while it holds.
+    fn claim(&mut self, ctx: &mut Ctx, task: Task, t: &Sighting) {
+        if self
+            .claimed
+            .is_some_and(|(c, at)| c == t.treasure && ctx.round < at + CLAIM_REPEAT_ROUNDS)
+        {
+            return;
+        }
+        self.claimed = Some((t.treasure, ctx.round));
+        ctx.broadcast(Payload::Claim {
+            treasure: t.treasure,
+            task,
+            distance_m: ctx.position().distance(t.position) as f32,
+        });
+    }
+
     fn within_reach(ctx: &Ctx, p: DVec2) -> bool {
         ctx.position().distance(p) <= ctx.kind.radius_m + REACH_M
     }
 }
 
-/// Digs out known treasures.
+/// Digs out known treasures, one excavator per treasure (see [`Worker`]).
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Excavator {
     core: Worker,
@@ -100,12 +198,13 @@ impl Strategy for Excavator {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        if let Some(a) = self.core.begin_round(ctx) {
+        if let Some(a) = self.core.begin_round(ctx, Task::Excavate) {
             return a;
         }
-        let Some(t) = Worker::nearest(ctx, |s| s.buried > 0) else {
+        let Some(t) = self.core.choose(ctx, |s| s.buried > 0) else {
             return self.core.explorer.explore_unclaimed(ctx);
         };
+        self.core.claim(ctx, Task::Excavate, &t);
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
             return Action::Excavate { treasure: t.treasure };
@@ -114,7 +213,7 @@ impl Strategy for Excavator {
     }
 }
 
-/// Fetches dug units and delivers them.
+/// Fetches dug units and delivers them, one transporter per treasure (see [`Worker`]).
 #[derive(serde::Serialize, serde::Deserialize)]
 pub(super) struct Transporter {
     core: Worker,
@@ -128,13 +227,16 @@ impl Strategy for Transporter {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        if let Some(a) = self.core.begin_round(ctx) {
+        if let Some(a) = self.core.begin_round(ctx, Task::Transport) {
             return a;
         }
         let load = ctx.me.load();
         let full = load >= ctx.kind.carry_capacity;
         // Loose units first; otherwise wait at a treasure still being dug.
-        let pick = Worker::nearest(ctx, |s| s.loose > 0).or_else(|| Worker::nearest(ctx, |s| s.buried > 0));
+        let pick = self
+            .core
+            .choose(ctx, |s| s.loose > 0)
+            .or_else(|| self.core.choose(ctx, |s| s.buried > 0));
         if load > 0 && (full || pick.is_none_or(|s| s.loose == 0 && load * 2 >= ctx.kind.carry_capacity)) {
             if ctx.home().contains(ctx.position()) {
                 return Action::Unload;
@@ -147,6 +249,7 @@ impl Strategy for Transporter {
             }
             return self.core.explorer.explore_unclaimed(ctx);
         };
+        self.core.claim(ctx, Task::Transport, &t);
         if Worker::within_reach(ctx, t.position) {
             ctx.set_goal(Some(t.position));
             return if t.loose > 0 {

@@ -204,7 +204,7 @@ pub(super) fn perceive(
                         }
                     }
                 }
-                Payload::Position { .. } | Payload::Custom { .. } => {}
+                Payload::Position { .. } | Payload::Claim { .. } | Payload::Custom { .. } => {}
             }
         }
     }
