@@ -127,3 +127,46 @@ fn issue12_a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant(
     let (goal, _) = haul(vec![claim(3, 0, Task::Excavate, 0.5)]);
     assert_eq!(goal, Some(NEAR));
 }
+
+/// Issue 12 (fifteenth session): a transporter carrying a part load delivers it once no
+/// loose units it knows of are left, instead of waiting at a buried treasure until half full
+/// (which kept units off the home for hundreds of rounds in `bench-1000`).
+#[test]
+fn issue12_a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
+    // Home 8 m west of the robot, a treasure with 3 units still buried 4 m east.
+    let art = "
+        ....................
+        H.......R...........
+        ....................";
+    let home = DVec2::new(0.5, 1.5);
+    let treasure = DVec2::new(12.5, 1.5);
+    let goal_with = |load: u32, loose: u32| {
+        let mut w = TestWorld::from_ascii(art, 1.0)
+            .unwrap()
+            .with_type(RobotType::transporter())
+            .knowing_all();
+        let id = TreasureId::new(0);
+        let sighting = Sighting {
+            treasure: id,
+            position: treasure,
+            buried: 3,
+            loose,
+            round: 0,
+        };
+        w.mind.data.treasures.record(id, sighting, 0);
+        if load > 0 {
+            w.robot.cargo.push((TreasureId::new(1), load));
+        }
+        let mut s = StrategyRegistry::with_builtins()
+            .create("transporter", &Params::default())
+            .unwrap();
+        s.decide(&mut w.ctx());
+        w.mind.output.goal()
+    };
+    // Empty: it goes to wait at the buried treasure.
+    assert_eq!(goal_with(0, 0), Some(treasure));
+    // 2 units of 10 and nothing loose anywhere it knows: home.
+    assert_eq!(goal_with(2, 0), Some(home));
+    // 2 units, and loose units at the treasure: it fetches them first.
+    assert_eq!(goal_with(2, 1), Some(treasure));
+}

@@ -78,7 +78,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "transporter",
-        "fetches dug units (waiting at treasures being dug), one transporter per treasure as excavators do, and delivers them home",
+        "fetches dug units (waiting at treasures being dug), one transporter per treasure as excavators do, and delivers them home as soon as no loose units it knows of are left",
         |p| Ok(Box::new(worker::Transporter::from_params(p)?)),
     );
 }

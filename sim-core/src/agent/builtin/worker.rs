@@ -237,16 +237,17 @@ impl Strategy for Transporter {
             .core
             .choose(ctx, |s| s.loose > 0)
             .or_else(|| self.core.choose(ctx, |s| s.buried > 0));
-        if load > 0 && (full || pick.is_none_or(|s| s.loose == 0 && load * 2 >= ctx.kind.carry_capacity)) {
+        // Deliver what it carries once no loose units it knows of are left to load (issue
+        // 12, fifteenth session: waiting for more at buried treasures with a part load, until
+        // half full, kept units off the home for hundreds of rounds; `bench-1000` delivered
+        // 25 units in 1,000 rounds that way, 56 this way, five seeds).
+        if load > 0 && (full || pick.is_none_or(|s| s.loose == 0)) {
             if ctx.home().contains(ctx.position()) {
                 return Action::Unload;
             }
             return self.core.go(ctx, ctx.home().center());
         }
         let Some(t) = pick else {
-            if load > 0 {
-                return self.core.go(ctx, ctx.home().center());
-            }
             return self.core.explorer.explore_unclaimed(ctx);
         };
         self.core.claim(ctx, Task::Transport, &t);
