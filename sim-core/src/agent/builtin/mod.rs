@@ -51,7 +51,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
     r.register(
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
-         (the max_claims most recently heard, 256 by default; by a detour of at most max_detour_m, \
+         (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
          0 by default: the nearest unclaimed frontier no farther than the nearest claimed one, \
          else that one)",
         |p| {
