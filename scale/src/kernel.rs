@@ -23,7 +23,7 @@ pub struct Kernel {
     pub robots: u32,
     /// Seed of the run (default 7).
     pub seed: u64,
-    /// The explorers' `max_detour_m` (default `None`: `cooperative`'s default, 0).
+    /// The explorers' `max_detour_m` (default `None`: unbounded, `cooperative`'s default).
     pub max_detour_m: Option<f64>,
 }
 

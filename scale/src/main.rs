@@ -80,8 +80,7 @@ enum Scenario {
         #[arg(long, default_value_t = 7)]
         seed: u64,
         /// The explorers' `max_detour_m` (how much farther than the nearest frontier they
-        /// walk to one no team mate claims); `cooperative`'s default (0) if not given, 1000000
-        /// for no bound.
+        /// walk to one no team mate claims); unbounded if not given.
         #[arg(long)]
         max_detour_m: Option<f64>,
     },

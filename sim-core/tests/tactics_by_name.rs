@@ -434,7 +434,7 @@ fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     assert!(at.distance(DVec2::new(3.0, 3.5)) < 0.5, "not optimistic: moved to {at}");
 }
 
-/// Issue 12: `cooperative` takes `max_detour_m` (a distance, 0 when absent) and
+/// Issue 12: `cooperative` takes `max_detour_m` (a distance, unbounded when absent) and
 /// refuses nonsense with the parameter's name.
 #[test]
 fn issue12_cooperative_takes_max_detour_m() {

@@ -18,8 +18,10 @@ pub(super) struct Sharing {
     #[serde(default = "default_max_claims")]
     pub(super) max_claims: usize,
     /// How much farther than the nearest frontier a robot walks to one no team mate
-    /// claims (see [`FrontierSeeking::seek`]; `None`, as far as it takes, only in
-    /// checkpoints written before the bound existed, whose runs had no bound).
+    /// claims (`None`: as far as it takes; see [`FrontierSeeking::seek`]). Unbounded by
+    /// default (issue 12, BENCHMARKS.md, fifteenth session: 0 explores a fifth more of the
+    /// kernel's large map in 1,500 rounds and plans less, but eight robots then took 1.3 to
+    /// 2.1 times as long to cover 95 % of the example maps).
     #[serde(default)]
     pub(super) max_detour_m: Option<f64>,
 }
@@ -39,17 +41,6 @@ pub(super) struct Sharing {
 /// that back.
 pub(super) const MAX_CLAIMS: u64 = 64;
 
-/// How much farther than the nearest frontier a cooperative robot walks, by default, to
-/// one no team mate claims: none. Past the first claimed frontier the search takes the
-/// nearest unclaimed one still within the same distance, or else that claimed one (issue 12,
-/// measured in BENCHMARKS.md, fourteenth and fifteenth sessions: half of the kernel's
-/// frontier search work was spent searching past claimed frontiers; with no bound, 1,000
-/// explorers covered 19 % of the kernel map in 1,500 rounds, with this one 23 %, planning
-/// a fifth less a robot-round; once the workers claimed treasures themselves, `bench-1000`
-/// explored 43 → 56 % in 1,000 rounds, found 87 → 109 treasures and delivered as much).
-/// The largest value, 1,000 km, bounds nothing on any map: the behaviour before.
-pub(super) const MAX_DETOUR_M: f64 = 0.0;
-
 fn default_max_claims() -> usize {
     MAX_CLAIMS as usize
 }
@@ -59,7 +50,10 @@ impl Sharing {
         let every_rounds = p.u64_in("share_every", 10, SHARE_EVERY)?;
         let avoid_radius_m = p.f64_in("avoid_radius_m", 5.0, 0.0..=MAX_DISTANCE_M)?;
         let max_claims = p.u64_in("max_claims", MAX_CLAIMS, 0..=1_000_000)? as usize;
-        let max_detour_m = Some(p.f64_in("max_detour_m", MAX_DETOUR_M, 0.0..=MAX_DISTANCE_M)?);
+        let max_detour_m = match p.text("max_detour_m") {
+            Some(_) => Some(p.f64_in("max_detour_m", 0.0, 0.0..=MAX_DISTANCE_M)?),
+            None => None,
+        };
         Ok(Self {
             every_rounds,
             avoid_radius_m,

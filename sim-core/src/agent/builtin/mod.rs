@@ -52,8 +52,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
          (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
-         0 by default: the nearest unclaimed frontier no farther than the nearest claimed one, \
-         else that one)",
+         unbounded by default)",
         |p| {
             p.only(&["share_every", "avoid_radius_m", "max_claims", "max_detour_m"])?;
             let share = explorer::Sharing::from_params(p)?;
