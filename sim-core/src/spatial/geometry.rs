@@ -374,21 +374,37 @@ impl Disc {
     /// 64-row buffers, and per-column tables, were a third of marking a robot's view).
     pub fn contained_rows_into(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
         let old_len = out.len;
-        let fits = self.contained_rows_unclean(grid, clip, out);
+        (out.x0, out.y0, out.len) = (0, 0, 0);
+        let fits = match grid.cells_touching(&self.bounds()) {
+            None => true,
+            Some((lo, hi)) if hi.0 - lo.0 >= 64 || hi.1 - lo.1 >= 64 => false,
+            // Column tables as wide as the disc needs (issue 11: zeroing two 64-wide tables
+            // for a view of 11 columns was a call to memset, 3 % of a random walker's round).
+            Some((lo, hi)) if hi.0 - lo.0 < 16 => {
+                self.contained_rows_unclean::<16>(grid, clip, lo, hi, out);
+                true
+            }
+            Some((lo, hi)) => {
+                self.contained_rows_unclean::<64>(grid, clip, lo, hi, out);
+                true
+            }
+        };
         if out.len < old_len {
             out.rows[out.len..old_len].fill(0);
         }
         fits
     }
 
-    fn contained_rows_unclean(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
-        (out.x0, out.y0, out.len) = (0, 0, 0);
-        let Some(((x0, y0), (x1, y1))) = grid.cells_touching(&self.bounds()) else {
-            return true;
-        };
-        if x1 - x0 >= 64 || y1 - y0 >= 64 {
-            return false;
-        }
+    /// The rows of the cells `(x0, y0) ..= (x1, y1)` that the disc's bounds touch, at most
+    /// `N` (≤ 64) columns and 64 rows.
+    fn contained_rows_unclean<const N: usize>(
+        &self,
+        grid: &crate::spatial::grid::Grid,
+        clip: &Aabb,
+        (x0, y0): (u32, u32),
+        (x1, y1): (u32, u32),
+        out: &mut CellRows,
+    ) {
         let r2 = self.radius * self.radius;
         let (width, len) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
         // Per column (and row): squared distances to the nearest point and to the farthest
@@ -397,7 +413,7 @@ impl Disc {
         // its neighbours): the nearest point is on the line before the centre, the line
         // after it, or level with it (0); the farthest edge is the farther line (issue 11:
         // working out both lines of each column and row was a fifth of this function).
-        let (mut near_x, mut far_x) = ([0.0; 64], [0.0; 64]);
+        let (mut near_x, mut far_x) = ([0.0; N], [0.0; N]);
         let mut cols_within = 0u64;
         let (cx, mut a) = (self.center.x, grid.corner(x0, 0).x);
         let mut da = (a - cx) * (a - cx);
@@ -450,7 +466,6 @@ impl Disc {
             let run = (u64::MAX >> (63 - (hi - lo))) << lo;
             out.rows[j] = run & cols_within;
         }
-        true
     }
 }
 

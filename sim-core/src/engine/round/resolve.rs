@@ -738,22 +738,31 @@ impl<'a> Bodies<'a> {
         // The robots for_each_within would visit, tested without a branch per robot: in a
         // crowd each test goes either way (issue 11: mispredicted, they made this query an
         // eighth of the moonshot's round). Each robot is written, and kept by counting it.
+        // Two passes: the cheap disc test first, listing where kept robots stand in the run,
+        // then the segment test (a division) on those alone (issue 11: a run holds the rows
+        // of cells around the disc, four times its area; testing all of them against the
+        // segment was a sixth of a dense random walker's round).
         self.index.for_each_run_near(mid, r, |_, run, cell| {
             let start = near.len();
             near.resize(start + run.len(), 0);
             let out = &mut near[start..];
-            let mut kept = 0;
-            for e in run {
-                let id = e.id.get();
-                let within = if id < i { moved } else { standing };
+            let mut in_disc = 0;
+            for (k, e) in run.iter().enumerate() {
                 // Bitwise on purpose: every test is made, none is a branch.
                 #[allow(clippy::needless_bitwise_bool)]
-                let keep = cell.is_none_or(|c| e.cell == c)
-                    & (e.position.distance_squared(mid) <= r2)
-                    & (id != i)
-                    & (point_segment_distance_squared(e.position, from, to) <= within);
+                let keep =
+                    cell.is_none_or(|c| e.cell == c) & (e.position.distance_squared(mid) <= r2) & (e.id.get() != i);
+                out[in_disc] = u32::try_from(k).expect("runs hold u32 entries");
+                in_disc += usize::from(keep);
+            }
+            let mut kept = 0;
+            for j in 0..in_disc {
+                // `kept <= j`: each slot is read before it is written.
+                let e = &run[out[j] as usize];
+                let id = e.id.get();
+                let within = if id < i { moved } else { standing };
                 out[kept] = id;
-                kept += usize::from(keep);
+                kept += usize::from(point_segment_distance_squared(e.position, from, to) <= within);
             }
             near.truncate(start + kept);
         });
