@@ -403,7 +403,8 @@ proptest! {
     /// where the cells are, no shape tests) hold exactly the cells the general walk marks,
     /// and report exactly the cells that changed, each once; the collective map fed those
     /// reports holds the same cells; obstacle counts over the reported sets match brute
-    /// force.
+    /// force. `validate` also checks the blocks each map caches beside its tree (issue 11)
+    /// against the tree, after every mark and merge.
     #[test]
     fn issue11_views_marked_by_blocks_are_the_walks_cells(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -9,11 +9,11 @@ use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape}
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
-use crate::spatial::quadtree::{CellSet, Finger, PartialCells, Square};
+use crate::spatial::quadtree::{BlockCache, CellSet, Finger, PartialCells, Square};
 use crate::spatial::tile_log::TileLog;
 
 /// The explored part of the map, as seen by one robot (or a team).
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub struct KnownMap {
     tree: RegionQuadtree,
     /// Cells known, kept up to date by every mutation (maps only grow).
@@ -22,10 +22,29 @@ pub struct KnownMap {
     last_view: Option<Disc>,
     /// That view's cells, when it was marked by its rows: all known.
     last_rows: Option<Box<CellRows>>,
+    /// The cells of the blocks around the views marked by their rows, as the tree holds
+    /// them; cleared by every other change. Not saved: a restored map starts without.
+    #[serde(skip)]
+    blocks: Option<Box<BlockCache>>,
     /// Which tiles changed when, once a reader asked for it ([`track_changes`](Self::track_changes));
     /// not saved: a restored map starts a new log.
     #[serde(skip)]
     log: Option<Box<TileLog>>,
+}
+
+/// A copy without the cached blocks: copies are mostly maps sent to others, who never
+/// mark views in them (and a copy that does fills its own cache).
+impl Clone for KnownMap {
+    fn clone(&self) -> Self {
+        Self {
+            tree: self.tree.clone(),
+            known_cells: self.known_cells,
+            last_view: self.last_view,
+            last_rows: self.last_rows.clone(),
+            blocks: None,
+            log: self.log.clone(),
+        }
+    }
 }
 
 impl KnownMap {
@@ -36,6 +55,7 @@ impl KnownMap {
             known_cells: 0,
             last_view: None,
             last_rows: None,
+            blocks: None,
             log: None,
         }
     }
@@ -48,6 +68,7 @@ impl KnownMap {
             known_cells,
             last_view: None,
             last_rows: None,
+            blocks: None,
             log: None,
         }
     }
@@ -104,10 +125,11 @@ impl KnownMap {
         // Only the cells the last view did not hold: a walker's view moves a fraction of
         // itself a round, so most rounds that is a thin crescent, or nothing.
         let log = &mut self.log;
+        let blocks = self.blocks.get_or_insert_default();
         let by_rows = disc.contained_rows_into(self.tree.grid(), &clip, &mut rows)
             && self
                 .tree
-                .fill_new_rows_reporting(&rows, self.last_rows.as_deref(), true, |set| {
+                .fill_new_rows_cached(&rows, self.last_rows.as_deref(), true, Some(blocks), |set| {
                     added += set.cells();
                     if let Some(log) = log {
                         log.stamp(set.square());
@@ -134,6 +156,13 @@ impl KnownMap {
         self.known_cells > before
     }
 
+    /// Drop the cached blocks: the tree is about to change otherwise than by a view's rows.
+    fn forget_blocks(&mut self) {
+        if let Some(blocks) = &mut self.blocks {
+            blocks.clear();
+        }
+    }
+
     /// Mark as known every map cell lying wholly inside `shape`.
     pub fn mark<S: Shape>(&mut self, shape: &S) -> bool {
         let before = self.known_cells;
@@ -146,6 +175,7 @@ impl KnownMap {
     /// square's coordinates (the square must lie inside the map; whole squares that do not
     /// take the general path).
     pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) {
+        self.forget_blocks();
         let sq = set.square();
         let square = self.grid().square(sq.x, sq.y, sq.level);
         if set.is_whole() && !self.grid().extent().contains_box(&square) {
@@ -173,6 +203,7 @@ impl KnownMap {
         shape: &S,
         mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
     ) {
+        self.forget_blocks();
         let clip = self.grid().extent();
         let mut added = 0;
         let log = &mut self.log;
@@ -250,6 +281,7 @@ impl KnownMap {
     /// Add everything `other` knows (both over the same map). Returns whether anything new
     /// became known.
     pub fn merge(&mut self, other: &KnownMap) -> bool {
+        self.forget_blocks();
         let added = match &mut self.log {
             None => self.tree.union_counting(&other.tree),
             Some(log) => {
@@ -328,6 +360,9 @@ impl KnownMap {
             && rows.len > rows.rows.len()
         {
             return Err(format!("the last view's {} rows exceed {}", rows.len, rows.rows.len()));
+        }
+        if let Some(blocks) = &self.blocks {
+            blocks.check(&self.tree)?;
         }
         Ok(())
     }

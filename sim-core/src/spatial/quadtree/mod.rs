@@ -23,6 +23,7 @@
 //! space). Node references are internal to sim-core; users see squares, values and shapes.
 
 pub(crate) mod block;
+mod block_cache;
 mod build;
 mod codec;
 mod components;
@@ -34,6 +35,7 @@ mod tests;
 mod update;
 mod validate;
 
+pub use block_cache::BlockCache;
 pub use build::{BitGrid, Region};
 pub use components::Components;
 pub use query::Finger;
@@ -471,6 +473,20 @@ impl RegionQuadtree {
                 block::join_kids(level, |i| self.bits_of(kids[i], level - 1))
             }
         }
+    }
+
+    /// The cells (Z-order bits) of the square at [`BLOCK_LEVEL`] `sq` (packed trees), by one
+    /// descent.
+    pub(crate) fn block_bits_at(&self, sq: Square) -> u64 {
+        debug_assert!(self.packed && sq.level == BLOCK_LEVEL);
+        let mut n = self.root;
+        let mut level = self.grid.depth();
+        while level > BLOCK_LEVEL && !is_leaf(n) {
+            level -= 1;
+            let i = (((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1)) as usize;
+            n = self.groups[n as usize][i];
+        }
+        self.bits_of(n, BLOCK_LEVEL)
     }
 
     /// Replace node `n` at [`BLOCK_LEVEL`] (a leaf or a block) by the square whose cells

@@ -2,7 +2,7 @@
 //! follows the size of the region it describes, not the number of updates made to it.
 
 use super::block::{self, BLOCK_LEVEL, Node};
-use super::{CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
+use super::{BlockCache, CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
 use crate::spatial::geometry::{Aabb, CellRows, Overlap, Shape};
 use crate::spatial::grid::MAX_DEPTH;
 
@@ -56,7 +56,7 @@ impl RegionQuadtree {
     pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
         if !set.is_whole() {
             // A block's cells: there are blocks only in packed trees.
-            self.fill_block_cells(set.square(), set.bits, value, &mut changed);
+            let _ = self.fill_block_cells(set.square(), set.bits, value, &mut changed);
             return;
         }
         self.fill_square_reporting(set.square(), value, |sq| changed(CellSet::whole(sq)));
@@ -67,8 +67,8 @@ impl RegionQuadtree {
     /// changed (issue 11: the recursive descent wrote back and tested for merging at every
     /// level, ≈ 300 instructions a block, and marking a view touches several blocks a round).
     /// A leaf of the other value on the way is split along the path, as the recursive
-    /// descent would. Packed trees only.
-    fn fill_block_cells(&mut self, sq: Square, cover: u64, value: bool, changed: &mut impl FnMut(CellSet)) {
+    /// descent would. Packed trees only. Returns the block's cells after (Z order).
+    fn fill_block_cells(&mut self, sq: Square, cover: u64, value: bool, changed: &mut impl FnMut(CellSet)) -> u64 {
         debug_assert!(self.packed && sq.level == BLOCK_LEVEL);
         let want = leaf(value);
         let mut path = [(0u32, 0usize); MAX_DEPTH as usize];
@@ -83,14 +83,14 @@ impl RegionQuadtree {
             n = self.groups[n as usize][i];
         }
         if n == want {
-            return;
+            return self.bits_of(n, BLOCK_LEVEL);
         }
         // `n` is the block, or a leaf of the other value at `level` (≥ the block's): the
         // block's cells either way.
         let bits = self.bits_of(n, BLOCK_LEVEL);
         let filled = if value { bits | cover } else { bits & !cover };
         if filled == bits {
-            return;
+            return bits;
         }
         changed(CellSet::of_block(sq, filled ^ bits));
         // Every group on the way down holds the changed cells.
@@ -118,6 +118,7 @@ impl RegionQuadtree {
             old = g;
             new = if is_leaf(new) { self.merge_if_uniform(g) } else { g };
         }
+        filled
     }
 
     /// One step of setting the whole grid square `target` to leaf `want` by a descent along
@@ -177,6 +178,20 @@ impl RegionQuadtree {
         cells: &CellRows,
         seen: Option<&CellRows>,
         value: bool,
+        changed: impl FnMut(CellSet),
+    ) -> bool {
+        self.fill_new_rows_cached(cells, seen, value, None, changed)
+    }
+
+    /// [`fill_new_rows_reporting`](Self::fill_new_rows_reporting), skipping the blocks in
+    /// which `cache` shows nothing would change and keeping it up to date (see
+    /// [`BlockCache`]). The cache must hold this tree's cells where it holds a block.
+    pub fn fill_new_rows_cached(
+        &mut self,
+        cells: &CellRows,
+        seen: Option<&CellRows>,
+        value: bool,
+        mut cache: Option<&mut BlockCache>,
         mut changed: impl FnMut(CellSet),
     ) -> bool {
         if !self.packed {
@@ -219,7 +234,22 @@ impl RegionQuadtree {
                         y: by << BLOCK_LEVEL,
                         level: BLOCK_LEVEL,
                     };
-                    self.fill_block_cells(sq, block::z_order(mask), value, &mut changed);
+                    let cover = block::z_order(mask);
+                    let Some(cache) = cache.as_deref_mut() else {
+                        let _ = self.fill_block_cells(sq, cover, value, &mut changed);
+                        continue;
+                    };
+                    let unchanged = |bits: u64| {
+                        if value {
+                            bits | cover == bits
+                        } else {
+                            bits & !cover == bits
+                        }
+                    };
+                    if cache.get(sq).is_none_or(|bits| !unchanged(bits)) {
+                        let bits = self.fill_block_cells(sq, cover, value, &mut changed);
+                        cache.put(sq, bits);
+                    }
                 }
             }
         }
