@@ -1,5 +1,6 @@
 //! The cells of the few blocks around a robot's view, as its known map last saw them.
 
+use crate::cache::prefetch;
 use crate::spatial::quadtree::block::BLOCK_LEVEL;
 use crate::spatial::quadtree::{RegionQuadtree, Square};
 
@@ -18,6 +19,7 @@ const NO_BLOCK: u64 = u64::MAX;
 ///
 /// Whoever changes the tree otherwise must [`clear`](Self::clear) it.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[repr(align(64))] // four whole cache lines, fetched together
 pub struct BlockCache {
     /// Block `(bx, by)` as `bx << 32 | by`, or [`NO_BLOCK`].
     keys: [u64; SLOTS],
@@ -56,6 +58,15 @@ impl BlockCache {
     pub(crate) fn put(&mut self, sq: Square, bits: u64) {
         let (slot, key) = Self::slot(sq.x, sq.y);
         (self.keys[slot], self.bits[slot]) = (key, bits);
+    }
+
+    /// Start loading the cache's lines (see [`prefetch`]).
+    #[inline]
+    pub(crate) fn prefetch(&self) {
+        prefetch(&self.keys[0]);
+        prefetch(&self.keys[8]);
+        prefetch(&self.bits[0]);
+        prefetch(&self.bits[8]);
     }
 
     /// Hold nothing.
