@@ -8,7 +8,6 @@ use std::cell::RefCell;
 use glam::DVec2;
 
 use crate::cache::prefetch;
-
 use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape};
 use crate::spatial::grid::Grid;
 use crate::spatial::obstacle_map::ObstacleMap;
@@ -125,10 +124,6 @@ impl KnownMap {
         if self.last_view == Some(disc) {
             return false;
         }
-        // A view up to 64 cells across: its cells worked out at once, then set by one walk
-        // that goes only where they are (issue 11: the walk from the root along the view's
-        // rim, with shape tests at every node, was half of a random walker's round). Bigger
-        // views take that walk, which skips what the last view marked.
         // Each map's caches sit in allocations of their own, most likely out of the
         // processor's caches by the time a robot's turn comes round again: their lines are
         // fetched while the view's rows are worked out (issue 11: the first reads of each
@@ -141,6 +136,10 @@ impl KnownMap {
         if let Some(blocks) = &self.blocks {
             blocks.prefetch();
         }
+        // A view up to 64 cells across: its cells worked out at once, then set by one walk
+        // that goes only where they are (issue 11: the walk from the root along the view's
+        // rim, with shape tests at every node, was half of a random walker's round). Bigger
+        // views take that walk, which skips what the last view marked.
         let clip = self.grid().extent();
         let mut added = 0;
         let by_rows = ROWS.with_borrow_mut(|rows| {
