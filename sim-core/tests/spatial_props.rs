@@ -981,3 +981,62 @@ proptest! {
         prop_assert_eq!(area.cells_with_part_near(&cells, p, limit), want);
     }
 }
+
+/// Issue 11: views whose rim passes exactly through grid corners (centres on grid corners
+/// or cell centres, whole radii: the 3-4-5 corners of a 5-cell view lie on it) keep the
+/// cells whose farthest corner is on the rim, as the brute-force test does, near the map's
+/// edge as well as away from it (the rows skip the per-line clip tests when the view's
+/// cells all lie inside the map).
+#[test]
+fn issue11_view_rows_keep_cells_whose_corner_is_on_the_rim() {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 64, 64).unwrap();
+    let clip = grid.extent();
+    for center in [
+        DVec2::new(20.0, 20.0),
+        DVec2::new(20.5, 20.5),
+        DVec2::new(3.0, 4.0),
+        DVec2::new(0.5, 60.5),
+    ] {
+        for radius in [1.0, 2.0, 5.0, 10.0, 13.0] {
+            let disc = Disc { center, radius };
+            let rows = disc.contained_rows(&grid, &clip).expect("at most 63 cells across");
+            let mut got = BTreeSet::new();
+            for (j, &row) in rows.rows[..rows.len].iter().enumerate() {
+                for i in 0..64 {
+                    if row >> i & 1 == 1 {
+                        got.insert((rows.x0 + i, rows.y0 + j as u32));
+                    }
+                }
+            }
+            let r2 = radius * radius;
+            let want: BTreeSet<(u32, u32)> = (0..64u32)
+                .flat_map(|x| (0..64u32).map(move |y| (x, y)))
+                .filter(|&(x, y)| {
+                    let corners = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)];
+                    corners
+                        .iter()
+                        .all(|&(cx, cy)| (f64::from(cx) - center.x).powi(2) + (f64::from(cy) - center.y).powi(2) <= r2)
+                })
+                .collect();
+            assert_eq!(got, want, "centre {center}, radius {radius}");
+        }
+    }
+    // By hand: the 5-cell view centred on the corner (20, 20) holds cell (22, 23), whose
+    // corners lie (2..3, 3..4) off the centre: the farthest, (3, 4), exactly on the rim
+    // (3² + 4² = 5²); and not cell (23, 23), whose farthest corner (4, 4) is 32 > 25 away.
+    let disc = Disc {
+        center: DVec2::new(20.0, 20.0),
+        radius: 5.0,
+    };
+    let rows = disc.contained_rows(&grid, &clip).unwrap();
+    assert_eq!(
+        rows.row_from(23, 22) & 1,
+        1,
+        "cell (22, 23), far corner (23, 24) on the rim"
+    );
+    assert_eq!(
+        rows.row_from(23, 23) & 1,
+        0,
+        "cell (23, 23), far corner (24, 24) outside"
+    );
+}

@@ -414,14 +414,21 @@ impl Disc {
         // after it, or level with it (0); the farthest edge is the farther line (issue 11:
         // working out both lines of each column and row was a fifth of this function).
         let (mut near_x, mut far_x) = ([0.0; N], [0.0; N]);
-        let mut cols_within = 0u64;
+        // Grid lines grow with their index, so when the outer lines lie within `clip`, every
+        // column and row does (the usual case, a view away from the map's edges), and the
+        // per-line tests are skipped.
+        let (lo, hi) = (grid.corner(x0, y0), grid.corner(x1 + 1, y1 + 1));
+        let box_within = clip.min.x <= lo.x && hi.x <= clip.max.x && clip.min.y <= lo.y && hi.y <= clip.max.y;
+        let mut cols_within = if box_within { u64::MAX >> (64 - width) } else { 0 };
         let (cx, mut a) = (self.center.x, grid.corner(x0, 0).x);
         let mut da = (a - cx) * (a - cx);
         for i in 0..width {
             let b = grid.corner(x0 + i as u32 + 1, 0).x;
             let db = (b - cx) * (b - cx);
             (near_x[i], far_x[i]) = line_distances(cx, (a, da), (b, db));
-            cols_within |= u64::from(clip.min.x <= a && b <= clip.max.x) << i;
+            if !box_within {
+                cols_within |= u64::from(clip.min.x <= a && b <= clip.max.x) << i;
+            }
             (a, da) = (b, db);
         }
         // Along a row both distances fall to the column of the centre and rise after it,
@@ -438,9 +445,15 @@ impl Disc {
             let b = grid.corner(0, y0 + j as u32 + 1).y;
             let db = (b - cy) * (b - cy);
             let (ny, fy) = line_distances(cy, (a, da), (b, db));
-            let row_within = clip.min.y <= a && b <= clip.max.y;
+            let row_within = box_within || (clip.min.y <= a && b <= clip.max.y);
             (a, da) = (b, db);
-            let inside = |i: usize| far_x[i] + fy <= r2 && near_x[i] + ny < r2;
+            // `near_x[i] + ny <= far_x[i] + fy` always (term by term, and rounding keeps the
+            // order of sums), so the nearer point's test matters only when the farther
+            // corner lies exactly on the rim.
+            let inside = |i: usize| {
+                let far = far_x[i] + fy;
+                far <= r2 && (far < r2 || near_x[i] + ny < r2)
+            };
             out.rows[j] = 0;
             if !(row_within && inside(mid)) {
                 continue;
