@@ -289,6 +289,17 @@ impl<K: ListKey, T: Clone> MemoryList<K, T> {
         self.newest = i;
     }
 
+    /// Of `keys`, distinct and all to be recorded in one round, in order, the tail that
+    /// gives the same list as recording them all: all of them, or under
+    /// [`Retention::LastN`]`(n)` the last `n` when there are more (those are all the list
+    /// keeps after, newest last, and everything else is forgotten either way).
+    pub fn kept_of<'k, Q>(&self, keys: &'k [Q]) -> &'k [Q] {
+        match self.retention {
+            Retention::LastN(n) => &keys[keys.len().saturating_sub(n)..],
+            Retention::LastRounds(_) => keys,
+        }
+    }
+
     /// Number of items remembered.
     pub fn len(&self) -> usize {
         self.index.len
@@ -384,6 +395,41 @@ mod tests {
         m.record('b', 22, 9);
         m.evict(12);
         assert_eq!(m.iter().map(|(v, _)| *v).collect::<Vec<_>>(), vec![22]);
+    }
+
+    /// Issue 11: recording only the tail `kept_of` gives of a round's distinct keys leaves
+    /// the list as recording them all does, under either policy, whatever it held before.
+    #[test]
+    fn recording_the_kept_tail_is_recording_all() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for retention in [
+            Retention::LastN(1),
+            Retention::LastN(5),
+            Retention::LastN(64),
+            Retention::LastRounds(3),
+        ] {
+            let (mut all, mut tail) = (MemoryList::new(retention), MemoryList::new(retention));
+            for round in 0..200u64 {
+                // A round's keys: distinct, in increasing order (as robots seen, by id).
+                let mut keys: Vec<u32> = (0..rng.random_range(0..120))
+                    .map(|_| rng.random_range(0..300))
+                    .collect();
+                keys.sort_unstable();
+                keys.dedup();
+                for &k in &keys {
+                    all.record(k, round * 1000 + u64::from(k), round);
+                }
+                for &k in tail.kept_of(&keys) {
+                    tail.record(k, round * 1000 + u64::from(k), round);
+                }
+                all.evict(round);
+                tail.evict(round);
+                tail.assert_well_formed();
+                let listed = |m: &MemoryList<u32, u64>| m.iter().map(|(v, r)| (*v, r)).collect::<Vec<_>>();
+                assert_eq!(listed(&tail), listed(&all), "{retention:?}, round {round}");
+            }
+        }
     }
 
     #[test]

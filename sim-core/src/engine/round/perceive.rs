@@ -124,7 +124,9 @@ pub(super) fn perceive(
             }
         });
         perception.robots.sort_by_key(|r| r.id);
-        for r in &perception.robots {
+        // Only those the memory will keep (issue 11: in the moonshot's crowd a robot sees
+        // hundreds, and recording each into a list of 64 forgot all but the last 64).
+        for r in data.robots.kept_of(&perception.robots) {
             data.robots.record(r.id, (r.position, round), round);
         }
     }
