@@ -12,7 +12,7 @@ const SLOTS: usize = 16;
 const NO_BLOCK: u64 = u64::MAX;
 
 /// The cells (Z-order bits, as the tree stores a block) of up to 16 blocks of a tree,
-/// exactly as the tree holds them: [`RegionQuadtree::fill_new_rows_reporting`] keeps it up
+/// exactly as the tree holds them: [`RegionQuadtree::fill_new_rows_cached`] keeps it up
 /// to date and skips the blocks in which it would change nothing without descending the
 /// tree (issue 11: a dense random walker's view touches two blocks a round; three times in
 /// four they were known already, and the descents to them were a sixth of its round).
