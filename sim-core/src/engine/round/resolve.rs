@@ -531,7 +531,7 @@ impl Sends<'_> {
         let mine = self.direct.partition_point(|e| e.0 < to.get());
         for &(_, k) in self.direct[mine..].iter().take_while(|e| e.0 == to.get()) {
             let o = &self.outgoing[k as usize];
-            if o.from != r && self.turns[o.from].start.distance(here) <= o.range_m && fits(o.bytes) {
+            if o.from != r && within_range(self.turns[o.from].start, here, o.range_m) && fits(o.bytes) {
                 accept(k);
             }
         }

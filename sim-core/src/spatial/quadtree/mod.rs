@@ -475,20 +475,6 @@ impl RegionQuadtree {
         }
     }
 
-    /// The cells (Z-order bits) of the square at [`BLOCK_LEVEL`] `sq` (packed trees), by one
-    /// descent.
-    pub(crate) fn block_bits_at(&self, sq: Square) -> u64 {
-        debug_assert!(self.packed && sq.level == BLOCK_LEVEL);
-        let mut n = self.root;
-        let mut level = self.grid.depth();
-        while level > BLOCK_LEVEL && !is_leaf(n) {
-            level -= 1;
-            let i = (((sq.x >> level) & 1) | (((sq.y >> level) & 1) << 1)) as usize;
-            n = self.groups[n as usize][i];
-        }
-        self.bits_of(n, BLOCK_LEVEL)
-    }
-
     /// Replace node `n` at [`BLOCK_LEVEL`] (a leaf or a block) by the square whose cells
     /// are `bits`: a leaf if they agree, else a block (`n`'s own if it was one).
     pub(crate) fn store_bits(&mut self, n: NodeRef, bits: u64) -> NodeRef {

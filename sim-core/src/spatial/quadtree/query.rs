@@ -750,7 +750,14 @@ impl RegionQuadtree {
         if set.is_whole() {
             return self.count_cells_in(set.square(), value);
         }
-        let bits = match self.descend_to(set.square()) {
+        let bits = self.block_bits_at(set.square());
+        let held = if value { bits } else { !bits };
+        u64::from((held & set.bits).count_ones())
+    }
+
+    /// The cells (Z-order bits) of the square at [`BLOCK_LEVEL`] `sq`, by one descent.
+    pub(crate) fn block_bits_at(&self, sq: Square) -> u64 {
+        match self.descend_to(sq) {
             Node::Leaf(v) => {
                 if v {
                     u64::MAX
@@ -760,9 +767,7 @@ impl RegionQuadtree {
             }
             Node::Bits { bits, .. } => bits,
             Node::Group(g) => self.bits_of(g, BLOCK_LEVEL),
-        };
-        let held = if value { bits } else { !bits };
-        u64::from((held & set.bits).count_ones())
+        }
     }
 
     /// Number of cells where `self` holds `a` and `other` holds `b`. Both trees must cover

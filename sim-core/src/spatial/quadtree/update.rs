@@ -15,6 +15,12 @@ pub enum PartialCells {
     Exclude,
 }
 
+/// A block's cells `bits` once its cells `cover` are set to `value` (Z-order bits).
+#[inline]
+fn filled_bits(bits: u64, cover: u64, value: bool) -> u64 {
+    if value { bits | cover } else { bits & !cover }
+}
+
 impl RegionQuadtree {
     /// Set every cell covered by `shape` (world coordinates) to `value`; cells it covers in
     /// part follow `partial`. Returns whether anything changed.
@@ -88,7 +94,7 @@ impl RegionQuadtree {
         // `n` is the block, or a leaf of the other value at `level` (≥ the block's): the
         // block's cells either way.
         let bits = self.bits_of(n, BLOCK_LEVEL);
-        let filled = if value { bits | cover } else { bits & !cover };
+        let filled = filled_bits(bits, cover, value);
         if filled == bits {
             return bits;
         }
@@ -239,14 +245,7 @@ impl RegionQuadtree {
                         let _ = self.fill_block_cells(sq, cover, value, &mut changed);
                         continue;
                     };
-                    let unchanged = |bits: u64| {
-                        if value {
-                            bits | cover == bits
-                        } else {
-                            bits & !cover == bits
-                        }
-                    };
-                    if cache.get(sq).is_none_or(|bits| !unchanged(bits)) {
+                    if cache.get(sq).is_none_or(|bits| filled_bits(bits, cover, value) != bits) {
                         let bits = self.fill_block_cells(sq, cover, value, &mut changed);
                         cache.put(sq, bits);
                     }
