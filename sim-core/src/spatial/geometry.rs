@@ -211,7 +211,7 @@ fn edge_distances(c: f64, lo: f64, hi: f64) -> (f64, f64) {
 /// is not above it, `hi` when it is not below it, else `c` itself (distance 0); and the
 /// square of the larger distance is the larger square, squaring being monotone.
 #[inline]
-fn line_distances(c: f64, (lo, d_lo): (f64, f64), (hi, d_hi): (f64, f64)) -> (f64, f64) {
+pub(crate) fn line_distances(c: f64, (lo, d_lo): (f64, f64), (hi, d_hi): (f64, f64)) -> (f64, f64) {
     let near = if c > lo { if c < hi { 0.0 } else { d_hi } } else { d_lo };
     (near, above(d_lo, d_hi))
 }

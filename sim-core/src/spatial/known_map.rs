@@ -14,11 +14,13 @@ use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::{BlockCache, CellSet, Finger, PartialCells, Square};
 use crate::spatial::tile_log::TileLog;
+use crate::spatial::view_stencil::Stencils;
 
 thread_local! {
     /// The rows of a view being marked, in a buffer kept from call to call (issue 11:
-    /// zeroing a fresh one was a call to memset, 3 % of a random walker's round).
-    static ROWS: RefCell<CellRows> = RefCell::new(CellRows::empty());
+    /// zeroing a fresh one was a call to memset, 3 % of a random walker's round), and the
+    /// stencils of the views this thread marks.
+    static VIEW: RefCell<(CellRows, Stencils)> = RefCell::new((CellRows::empty(), Stencils::default()));
 }
 
 /// The explored part of the map, as seen by one robot (or a team).
@@ -142,12 +144,17 @@ impl KnownMap {
         // views take that walk, which skips what the last view marked.
         let clip = self.grid().extent();
         let mut added = 0;
-        let by_rows = ROWS.with_borrow_mut(|rows| {
+        let by_rows = VIEW.with_borrow_mut(|(rows, stencils)| {
             // Only the cells the last view did not hold: a walker's view moves a fraction
             // of itself a round, so most rounds that is a thin crescent, or nothing.
             let log = &mut self.log;
             let blocks = self.blocks.get_or_insert_default();
-            let by_rows = disc.contained_rows_into(self.tree.grid(), &clip, rows)
+            let grid = self.tree.grid();
+            // From the stencil of views of this radius, when the thread has one.
+            let stenciled = stencils
+                .get(radius_m, grid.cell_m())
+                .is_some_and(|stencil| stencil.rows_into(&disc, grid, &clip, rows));
+            let by_rows = (stenciled || disc.contained_rows_into(grid, &clip, rows))
                 && self
                     .tree
                     .fill_new_rows_cached(rows, self.last_rows.as_deref(), true, Some(blocks), |set| {

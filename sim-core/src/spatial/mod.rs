@@ -13,6 +13,7 @@ mod quadtree;
 mod robot_index;
 mod tile_log;
 mod treasure_index;
+mod view_stencil;
 
 pub use anyangle::{AnyAnglePath, AnyAnglePlanner, MAX_RASTER_CELLS, MAX_VERTICES, NoPath, reference};
 pub use geometry::{
