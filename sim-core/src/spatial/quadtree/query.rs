@@ -345,7 +345,7 @@ impl RegionQuadtree {
     /// arithmetic, so an answer is that of [`any_leaf_in`](Self::any_leaf_in). A cell
     /// nearer the radius than that (a route's leg pulled round a corner to its clearance,
     /// a robot stopped where it touched a wall) is decided by the walk's own tests on the
-    /// way down to it ([`walk_meets_cell`](Self::walk_meets_cell)).
+    /// way down to it (the private `walk_meets_cell`).
     ///
     /// A capsule within 2 × 2 blocks reads their cells; a longer one, row of blocks by row
     /// of blocks, only those within its reach (issue 12: the tree walks for routes' long
