@@ -139,9 +139,9 @@ impl Progress {
 ///
 /// The simulation thread only copies what a round shows into a frame (a private type); a
 /// logging thread turns frames into Rerun archetypes and logs them, so the serialisation
-/// overlaps the next round (whose resolve phase leaves a core idle). Log errors (serialisation only: transport
-/// trouble such as a vanished viewer is absorbed by the sink) stop the run like any observer
-/// error.
+/// overlaps the next round (whose resolve phase leaves a core idle). Log errors
+/// (serialisation only: transport trouble such as a vanished viewer is absorbed by the sink)
+/// stop the run like any observer error.
 pub struct RerunObserver {
     rec: rerun::RecordingStream,
     opts: LogOptions,
