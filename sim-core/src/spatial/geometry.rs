@@ -216,6 +216,16 @@ pub(crate) fn line_distances(c: f64, (lo, d_lo): (f64, f64), (hi, d_hi): (f64, f
     (near, above(d_lo, d_hi))
 }
 
+/// Whether a cell lies wholly inside an open disc of squared radius `r2`, from the squared
+/// distances of its farthest corner and its nearest point (as [`line_distances`] sums them
+/// per axis): `near <= far` always (term by term, and rounding keeps the order of sums), so
+/// the nearer point's test matters only when the farther corner lies exactly on the rim.
+/// The one test of a view's cells, worked out directly or by a stencil.
+#[inline]
+pub(crate) fn cell_within(far: f64, near: f64, r2: f64) -> bool {
+    far <= r2 && (far < r2 || near < r2)
+}
+
 /// The larger of two numbers, by one comparison, as glam's vector `max` selects: `f64::max`
 /// for numbers (zeros aside, whose sign the squares taken here drop) without the NaN
 /// handling that made it five instructions (issue 11: a walker's view marking computes
@@ -417,8 +427,10 @@ impl Disc {
         // Grid lines grow with their index, so when the outer lines lie within `clip`, every
         // column and row does (the usual case, a view away from the map's edges), and the
         // per-line tests are skipped.
-        let (lo, hi) = (grid.corner(x0, y0), grid.corner(x1 + 1, y1 + 1));
-        let box_within = clip.min.x <= lo.x && hi.x <= clip.max.x && clip.min.y <= lo.y && hi.y <= clip.max.y;
+        let box_within = clip.contains_box(&Aabb {
+            min: grid.corner(x0, y0),
+            max: grid.corner(x1 + 1, y1 + 1),
+        });
         let mut cols_within = if box_within { u64::MAX >> (64 - width) } else { 0 };
         let (cx, mut a) = (self.center.x, grid.corner(x0, 0).x);
         let mut da = (a - cx) * (a - cx);
@@ -447,13 +459,7 @@ impl Disc {
             let (ny, fy) = line_distances(cy, (a, da), (b, db));
             let row_within = box_within || (clip.min.y <= a && b <= clip.max.y);
             (a, da) = (b, db);
-            // `near_x[i] + ny <= far_x[i] + fy` always (term by term, and rounding keeps the
-            // order of sums), so the nearer point's test matters only when the farther
-            // corner lies exactly on the rim.
-            let inside = |i: usize| {
-                let far = far_x[i] + fy;
-                far <= r2 && (far < r2 || near_x[i] + ny < r2)
-            };
+            let inside = |i: usize| cell_within(far_x[i] + fy, near_x[i] + ny, r2);
             out.rows[j] = 0;
             if !(row_within && inside(mid)) {
                 continue;

@@ -10,7 +10,7 @@
 //! direct rows were two thousand instructions per view, a quarter of a dense random
 //! walker's round).
 
-use crate::spatial::geometry::{Aabb, CellRows, Disc, Shape, floor, line_distances};
+use crate::spatial::geometry::{Aabb, CellRows, Disc, Shape, cell_within, floor, line_distances};
 use crate::spatial::grid::Grid;
 
 /// Bins per cell side.
@@ -111,9 +111,10 @@ impl ViewStencil {
         let Some((lo, hi)) = grid.cells_touching(&disc.bounds()) else {
             return false;
         };
-        let (box_lo, box_hi) = (grid.corner(lo.0, lo.1), grid.corner(hi.0 + 1, hi.1 + 1));
-        let within =
-            clip.min.x <= box_lo.x && box_hi.x <= clip.max.x && clip.min.y <= box_lo.y && box_hi.y <= clip.max.y;
+        let within = clip.contains_box(&Aabb {
+            min: grid.corner(lo.0, lo.1),
+            max: grid.corner(hi.0 + 1, hi.1 + 1),
+        });
         let c = disc.center;
         // Rounding in the coordinates is a few units in the last place of the largest of
         // them: far below the margin while they are under a million cells.
@@ -158,8 +159,7 @@ impl ViewStencil {
                             ring &= ring - 1;
                             let x = u32::try_from(sx + i64::from(i)).expect("the box's cells are the grid's");
                             let (nx, fx) = distances(c.x, grid.corner(x, 0).x, grid.corner(x + 1, 0).x);
-                            let far = fx + fy;
-                            if far <= r2 && (far < r2 || nx + ny < r2) {
+                            if cell_within(fx + fy, nx + ny, r2) {
                                 row |= 1 << i;
                             }
                         }
