@@ -62,7 +62,6 @@ pub struct RobotIndex {
     starts: Vec<u32>,
     entries: Vec<Entry>,
     scratch: Vec<(u32, Entry)>,
-    cursor: Vec<u32>,
 }
 
 /// The cell of `p` for cells of `cell_m` metres: where a rebuild files a robot and where a
@@ -98,7 +97,6 @@ impl RobotIndex {
             starts: vec![0, 0],
             entries: Vec::new(),
             scratch: Vec::new(),
-            cursor: Vec::new(),
         }
     }
 
@@ -189,10 +187,18 @@ impl RobotIndex {
         for i in 0..n {
             let b = self.bucket(self.scratch[i].1.cell);
             self.scratch[i].0 = b as u32;
-            self.starts[b + 1] += 1;
+            self.starts[b] += 1;
         }
-        for b in 0..buckets {
-            self.starts[b + 1] += self.starts[b];
+        // Running sums, so that `starts[b]` is where bucket `b` ends; placing the robots
+        // from the last one back then leaves it where `b` starts, with each bucket in input
+        // order (stable, so query order is deterministic). The sum is kept in a register
+        // and no copy of the starts is made (issue 11: perf put half of this rebuild's
+        // samples on reloading each sum from memory; its share of a 1-thread dense random
+        // walk fell from 1.6 to 0.9 %).
+        let mut end = 0;
+        for start in &mut self.starts {
+            end += *start;
+            *start = end;
         }
         let placeholder = Entry {
             position: DVec2::ZERO,
@@ -201,12 +207,10 @@ impl RobotIndex {
         };
         self.entries.clear();
         self.entries.resize(n, placeholder);
-        // Stable placement (input order within a bucket) keeps query order deterministic.
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.starts);
-        for &(b, e) in &self.scratch {
-            self.entries[self.cursor[b as usize] as usize] = e;
-            self.cursor[b as usize] += 1;
+        for &(b, e) in self.scratch.iter().rev() {
+            let at = &mut self.starts[b as usize];
+            *at -= 1;
+            self.entries[*at as usize] = e;
         }
     }
 
@@ -327,7 +331,6 @@ impl RobotIndex {
             + self.starts.capacity() * 4
             + self.entries.capacity() * std::mem::size_of::<Entry>()
             + self.scratch.capacity() * std::mem::size_of::<(u32, Entry)>()
-            + self.cursor.capacity() * 4
     }
 }
 
