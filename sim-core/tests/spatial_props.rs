@@ -1040,3 +1040,59 @@ fn issue11_view_rows_keep_cells_whose_corner_is_on_the_rim() {
         "cell (23, 23), far corner (24, 24) outside"
     );
 }
+
+proptest! {
+    #![proptest_config(config(24))]
+
+    /// Issue 11: views marked through the window of known cells around them (maps at least
+    /// 64 cells a side, views at most 32 cells across) hold exactly the cells the general
+    /// walk marks and report exactly the cells that changed; walks that leave the window
+    /// (it is loaded again), views too wide for it, views at the map's edges, and merges
+    /// between views (the window is forgotten) included. `validate` checks the window
+    /// against the tree after every mark and merge.
+    #[test]
+    fn issue11_views_through_the_known_window_are_the_walks_cells(
+        size in (64u32..200, 64u32..200),
+        cell_m in prop_oneof![Just(1.0), Just(0.5), 0.2f64..2.0],
+        seed in any::<u64>(),
+    ) {
+        let w = World::generate(size.0, size.1, 0.3, cell_m, seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x77);
+        let mut by_view = KnownMap::new(w.grid);
+        let mut by_walk = KnownMap::new(w.grid);
+        let mut c = w.random_point(&mut rng);
+        let mut r = rng.random_range(0.5..15.0) * cell_m;
+        for step in 0..120 {
+            match rng.random_range(0..40) {
+                0 => c = w.random_point(&mut rng),
+                1 => r = rng.random_range(0.5..15.0) * cell_m,
+                2 => r = rng.random_range(16.5..24.0) * cell_m,
+                3 => {}
+                _ => c += DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..2.0) * cell_m,
+            }
+            if step % 25 == 24 {
+                let mut other = KnownMap::new(w.grid);
+                other.mark_disc(c + DVec2::new(3.0, -2.0) * cell_m, 4.0 * cell_m);
+                by_view.merge(&other);
+                by_walk.merge(&other);
+                by_view.validate().unwrap();
+            }
+            let before = by_walk.clone();
+            let mut reported = BTreeSet::new();
+            let grew = by_view.mark_view_reporting(c, r, |set| {
+                set.for_each_cell(|x, y| assert!(reported.insert((x, y)), "cell ({x}, {y}) reported twice"));
+            });
+            by_walk.mark_reporting(&Disc { center: c, radius: r }, |_| {});
+            by_view.validate().unwrap();
+            prop_assert_eq!(by_view.known_cells(), by_walk.known_cells());
+            prop_assert_eq!(grew, !reported.is_empty());
+            for &(x, y) in &reported {
+                prop_assert!(!before.tree().cell_value(x, y) && by_walk.tree().cell_value(x, y), "cell ({}, {})", x, y);
+            }
+            prop_assert_eq!(reported.len() as u64, by_walk.known_cells() - before.known_cells());
+        }
+        for (x, y) in w.cells() {
+            prop_assert_eq!(by_view.tree().cell_value(x, y), by_walk.tree().cell_value(x, y), "cell ({}, {})", x, y);
+        }
+    }
+}

@@ -7,6 +7,7 @@ mod geometry;
 mod grid;
 mod ids;
 mod known_map;
+mod known_window;
 mod nav;
 mod obstacle_map;
 mod quadtree;

@@ -107,6 +107,22 @@ impl ViewStencil {
     /// caller works the rows out directly), and for centres so far from the origin that
     /// rounding could reach the margin.
     pub(crate) fn rows_into(&self, disc: &Disc, grid: &Grid, clip: &Aabb, out: &mut CellRows) -> bool {
+        self.rows_except_into(disc, grid, clip, None, out)
+    }
+
+    /// [`rows_into`](Self::rows_into) without the cells of `known`, which must cover the
+    /// view's box of cells: a view's cells not known yet. The cells on the view's rim that
+    /// `known` holds are not tested.
+    pub(crate) fn rows_except_into(
+        &self,
+        disc: &Disc,
+        grid: &Grid,
+        clip: &Aabb,
+        known: Option<KnownRows>,
+        out: &mut CellRows,
+    ) -> bool {
+        /// What no cell being known looks like.
+        const NOTHING_KNOWN: [u64; 64] = [0; 64];
         debug_assert!(self.is_for(disc.radius, grid.cell_m()));
         let Some((lo, hi)) = grid.cells_touching(&disc.bounds()) else {
             return false;
@@ -129,11 +145,17 @@ impl ViewStencil {
         let bin_of = |f: f64| ((f * BINS as f64) as usize).min(BINS - 1);
         let bin = bin_of(rel.y - iy) * BINS + bin_of(rel.x - ix);
         let side = 2 * self.reach as usize + 1;
-        let rows = &self.rows[bin * side..(bin + 1) * side];
         // Stencil column 0 and row 0 as grid cells (`ix`, `iy` are within the box).
         let (sx, sy) = (ix as i64 - i64::from(self.reach), iy as i64 - i64::from(self.reach));
-        let shift = sx - i64::from(lo.0);
         let len = (hi.1 - lo.1 + 1) as usize;
+        // The box's rows of the stencil (all of them lie in it: a cell touching the disc's
+        // box lies within `ceil(rho) + 1` cells of the centre's).
+        let Some(rows) = usize::try_from(i64::from(lo.1) - sy)
+            .ok()
+            .and_then(|t0| self.rows[bin * side..(bin + 1) * side].get(t0..t0 + len))
+        else {
+            return false;
+        };
         // The box's columns, as stencil bits (cells beyond it, off the map, are not
         // the view's: the direct rows hold the box's cells only).
         let (first, last) = (i64::from(lo.0) - sx, i64::from(hi.0) - sx);
@@ -142,33 +164,34 @@ impl ViewStencil {
         } else {
             (u64::MAX >> (63 - last.min(63))) & (u64::MAX << first.max(0))
         };
+        // Stencil columns to the box's (the output's), and the known rows' columns to the
+        // stencil's, each as a left and a right shift, so that rows take no branch.
+        let split = |d: i64| (d.max(0) as u32, (-d).max(0) as u32);
+        let (out_left, out_right) = split(sx - i64::from(lo.0));
+        let (known_rows, (known_left, known_right)) = match known {
+            Some(k) => (&k.rows[(lo.1 - k.y0) as usize..][..len], split(i64::from(k.x0) - sx)),
+            None => (&NOTHING_KNOWN[..len], (0, 0)),
+        };
         let r2 = disc.radius * disc.radius;
         let old_len = out.len;
-        for j in 0..len {
-            let y = lo.1 + j as u32;
-            let t = i64::from(y) - sy;
-            let row = match usize::try_from(t).ok().and_then(|t| rows.get(t)) {
-                None => 0,
-                Some(&(sure, maybe)) => {
-                    let mut row = sure;
-                    let mut ring = maybe & !sure & cols;
-                    if ring != 0 {
-                        let (ny, fy) = distances(c.y, grid.corner(0, y).y, grid.corner(0, y + 1).y);
-                        while ring != 0 {
-                            let i = ring.trailing_zeros();
-                            ring &= ring - 1;
-                            let x = u32::try_from(sx + i64::from(i)).expect("the box's cells are the grid's");
-                            let (nx, fx) = distances(c.x, grid.corner(x, 0).x, grid.corner(x + 1, 0).x);
-                            if cell_within(fx + fy, nx + ny, r2) {
-                                row |= 1 << i;
-                            }
-                        }
+        for (j, (&(sure, maybe), &known)) in rows.iter().zip(known_rows).enumerate() {
+            let known = (known << known_left) >> known_right;
+            let mut row = sure & !known;
+            let mut ring = maybe & !sure & cols & !known;
+            if ring != 0 {
+                let y = lo.1 + j as u32;
+                let (ny, fy) = distances(c.y, grid.corner(0, y).y, grid.corner(0, y + 1).y);
+                while ring != 0 {
+                    let i = ring.trailing_zeros();
+                    ring &= ring - 1;
+                    let x = u32::try_from(sx + i64::from(i)).expect("the box's cells are the grid's");
+                    let (nx, fx) = distances(c.x, grid.corner(x, 0).x, grid.corner(x + 1, 0).x);
+                    if cell_within(fx + fy, nx + ny, r2) {
+                        row |= 1 << i;
                     }
-                    let row = row & cols;
-                    if shift >= 0 { row << shift } else { row >> -shift }
                 }
-            };
-            out.rows[j] = row;
+            }
+            out.rows[j] = ((row & cols) >> out_right) << out_left;
         }
         if len < old_len {
             out.rows[len..old_len].fill(0);
@@ -176,6 +199,18 @@ impl ViewStencil {
         (out.x0, out.y0, out.len) = (lo.0, lo.1, len);
         true
     }
+}
+
+/// Cells known already, which [`ViewStencil::rows_except_into`] leaves out of a view: bit
+/// `i` of `rows[j]` is cell `(x0 + i, y0 + j)`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct KnownRows<'a> {
+    /// Column of bit 0.
+    pub(crate) x0: u32,
+    /// Row of `rows[0]`.
+    pub(crate) y0: u32,
+    /// The rows, south to north.
+    pub(crate) rows: &'a [u64],
 }
 
 /// Squared distances from `c` to the nearest point and to the farther line of the span
@@ -222,7 +257,7 @@ mod tests {
     use glam::DVec2;
     use rand::{Rng, SeedableRng};
 
-    use super::{BINS, ViewStencil};
+    use super::{BINS, KnownRows, ViewStencil};
     use crate::spatial::geometry::{CellRows, Disc};
     use crate::spatial::grid::Grid;
 
@@ -266,7 +301,25 @@ mod tests {
                     let disc = Disc { center, radius };
                     let mut got = CellRows::empty();
                     assert!(stencil.rows_into(&disc, &grid, &grid.extent(), &mut got));
-                    assert_eq!(got, direct(&disc, &grid), "centre {center}, radius {radius}");
+                    let want = direct(&disc, &grid);
+                    assert_eq!(got, want, "centre {center}, radius {radius}");
+                    // Leaving out known cells, given from a column and row at or before the
+                    // box's: exactly the rest (issue 11).
+                    let width = want.rows[..want.len].iter().fold(0, |a, r| a | r);
+                    let spare = 63 - (64 - width.leading_zeros()).min(63);
+                    let x0 = want.x0 - rng.random_range(0..=spare.min(want.x0));
+                    let y0 = want.y0 - rng.random_range(0..=want.y0.min(3));
+                    let rows: Vec<u64> = (0..70).map(|_| rng.random::<u64>() & rng.random::<u64>()).collect();
+                    let known = KnownRows { x0, y0, rows: &rows };
+                    assert!(stencil.rows_except_into(&disc, &grid, &grid.extent(), Some(known), &mut got));
+                    for j in 0..want.len {
+                        let known = rows[j + (want.y0 - y0) as usize] >> (want.x0 - x0);
+                        assert_eq!(
+                            got.rows[j],
+                            want.rows[j] & !known,
+                            "centre {center}, radius {radius}, row {j}"
+                        );
+                    }
                 }
             }
         }

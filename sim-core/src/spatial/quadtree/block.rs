@@ -119,6 +119,15 @@ pub(crate) const fn z_order(w: u64) -> u64 {
     delta_swap(w, index_bit_swap_mask(3, 4), (1 << 4) - (1 << 3))
 }
 
+/// A block's cells in Z order as a row-major 8 × 8 mask: the inverse of [`z_order`] (each
+/// exchange undoes itself, so the three are made in the reverse order).
+#[inline]
+pub(crate) const fn row_major(z: u64) -> u64 {
+    let z = delta_swap(z, index_bit_swap_mask(3, 4), (1 << 4) - (1 << 3));
+    let z = delta_swap(z, index_bit_swap_mask(2, 3), (1 << 3) - (1 << 2));
+    delta_swap(z, index_bit_swap_mask(1, 3), (1 << 3) - (1 << 1))
+}
+
 /// The leaves of a mixed block whose cells are all in `wanted` and that share a cell with
 /// `hits`, as the Z index of their first cell: `(every such leaf, those that are 4 × 4
 /// quarters, those that are 2 × 2 squares)`; the rest are single cells. Word operations
@@ -256,6 +265,20 @@ mod tests {
         for i in 0..64 {
             let (x, y) = cell_at(i);
             assert_eq!(cell_index(x, y), i);
+        }
+    }
+
+    #[test]
+    fn row_major_undoes_z_order() {
+        for y in 0..8 {
+            for x in 0..8 {
+                assert_eq!(row_major(1 << cell_index(x, y)), 1 << (8 * y + x), "cell ({x}, {y})");
+            }
+        }
+        let mut w = 0x0123_4567_89AB_CDEFu64;
+        for _ in 0..100 {
+            assert_eq!(row_major(z_order(w)), w);
+            w = w.rotate_left(7).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x5555;
         }
     }
 
