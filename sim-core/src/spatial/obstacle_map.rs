@@ -13,7 +13,7 @@ use crate::spatial::geometry::{Aabb, Capsule, Disc, Shape, clip_line, segment_bo
 use crate::spatial::grid::Grid;
 use crate::spatial::quadtree::RegionQuadtree;
 use crate::spatial::quadtree::Square;
-use crate::spatial::quadtree::{BitGrid, Region};
+use crate::spatial::quadtree::{BitGrid, Directory, Region};
 
 /// Blocks of the tree (8 × 8 cells) within reach of a long leg that the swept-disc test
 /// reads the cells of; past that, the tree walk decides.
@@ -23,6 +23,8 @@ pub(crate) const MAX_LEG_BLOCKS: u32 = 64;
 #[derive(Clone, Debug)]
 pub struct ObstacleMap {
     tree: RegionQuadtree,
+    /// The tree's nodes at one level, for descents to its blocks (the tree never changes).
+    directory: Option<Directory>,
 }
 
 impl ObstacleMap {
@@ -33,31 +35,31 @@ impl ObstacleMap {
 
     /// Build from "is cell `(x, y)` blocked" (cell (0, 0) at the lower-left corner).
     pub fn from_fn(grid: Grid, blocked: impl FnMut(u32, u32) -> bool) -> Self {
-        Self {
-            tree: RegionQuadtree::from_fn(grid, true, blocked),
-        }
+        Self::wrap(RegionQuadtree::from_fn(grid, true, blocked))
     }
 
     /// Build from a raster of blocked cells the size of the map (row 0 at the bottom).
     pub fn from_bitgrid(grid: Grid, blocked: &BitGrid) -> Result<Self> {
-        Ok(Self {
-            tree: RegionQuadtree::from_bitgrid(grid, blocked, true)?,
-        })
+        Ok(Self::wrap(RegionQuadtree::from_bitgrid(grid, blocked, true)?))
     }
 
     /// Build top-down from a classifier of squares (see [`RegionQuadtree::from_regions`]):
     /// `Full` = blocked.
     pub fn from_regions(grid: Grid, classify: impl FnMut(Square) -> Region) -> Self {
-        Self {
-            tree: RegionQuadtree::from_regions(grid, true, classify),
-        }
+        Self::wrap(RegionQuadtree::from_regions(grid, true, classify))
     }
 
     /// Wrap a tree whose `FULL` leaves are obstacles. Its padding must be blocked.
     pub fn from_tree(tree: RegionQuadtree) -> crate::Result<Self> {
-        let map = Self { tree };
+        let map = Self::wrap(tree);
         map.validate()?;
         Ok(map)
+    }
+
+    /// The map of `tree`, with its directory.
+    fn wrap(tree: RegionQuadtree) -> Self {
+        let directory = Directory::new(&tree);
+        Self { tree, directory }
     }
 
     /// The grid.
@@ -140,7 +142,7 @@ impl ObstacleMap {
     /// capsule must lie inside the map.
     fn capsule_free_by_cells(&self, capsule: &Capsule) -> Option<bool> {
         self.tree
-            .capsule_meets_cells(capsule, true, MAX_LEG_BLOCKS)
+            .capsule_meets_cells_via(self.directory.as_ref(), capsule, true, MAX_LEG_BLOCKS)
             .map(|hit| !hit)
     }
 
@@ -155,7 +157,9 @@ impl ObstacleMap {
         let grid = self.grid();
         let (lo, hi) = grid.cells_near(area)?;
         self.tree
-            .visit_cells_in_rect(lo, hi, true, |x, y| visit(grid.square(x, y, 0)))
+            .visit_cells_in_rect_via(self.directory.as_ref(), lo, hi, true, |x, y| {
+                visit(grid.square(x, y, 0))
+            })
     }
 
     /// How far along move `d` from `from` a disc of `radius_m` gets before an obstacle or the
@@ -322,7 +326,7 @@ impl ObstacleMap {
 
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
-        self.tree.memory_bytes()
+        self.tree.memory_bytes() + self.directory.as_ref().map_or(0, Directory::memory_bytes)
     }
 
     /// Tree invariants plus: every padding cell is blocked.
@@ -332,6 +336,9 @@ impl ObstacleMap {
 
     fn problems(&self) -> Result<(), String> {
         self.tree.problems()?;
+        if let Some(directory) = &self.directory {
+            self.tree.check_directory(directory)?;
+        }
         let g = *self.grid();
         let (w, h) = (u64::from(g.width_cells()), u64::from(g.height_cells()));
         let mut bad = None;

@@ -27,6 +27,7 @@ mod block_cache;
 mod build;
 mod codec;
 mod components;
+mod directory;
 mod hash;
 mod query;
 mod state;
@@ -38,6 +39,7 @@ mod validate;
 pub use block_cache::BlockCache;
 pub use build::{BitGrid, Region};
 pub use components::Components;
+pub(crate) use directory::Directory;
 pub use query::Finger;
 pub use update::PartialCells;
 

@@ -5,6 +5,7 @@ use std::ops::ControlFlow;
 use glam::DVec2;
 
 use super::block::{self, BLOCK_LEVEL, Node};
+use super::directory::Directory;
 use super::{CellSet, NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Capsule, Overlap, Shape, clip_line, segment_box_distance_squared};
 
@@ -269,10 +270,23 @@ impl RegionQuadtree {
         value: bool,
         visit: impl FnMut(u32, u32) -> ControlFlow<()>,
     ) -> Option<ControlFlow<()>> {
+        self.visit_cells_in_rect_via(None, lo, hi, value, visit)
+    }
+
+    /// [`visit_cells_in_rect`](Self::visit_cells_in_rect), each block found from its entry
+    /// in `dir` (this tree's) when given.
+    pub(crate) fn visit_cells_in_rect_via(
+        &self,
+        dir: Option<&Directory>,
+        lo: (u32, u32),
+        hi: (u32, u32),
+        value: bool,
+        visit: impl FnMut(u32, u32) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
         if (hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) > 1 || (hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) > 1 {
             return None;
         }
-        self.visit_cells_in_blocks(lo, hi, value, |_| true, visit)
+        self.visit_cells_in_blocks_via(dir, lo, hi, value, |_| true, visit)
     }
 
     /// [`visit_cells_in_rect`](Self::visit_cells_in_rect) over any number of blocks, but
@@ -280,6 +294,20 @@ impl RegionQuadtree {
     /// long shape, the blocks along it. `None` if the tree has no blocks.
     pub fn visit_cells_in_blocks(
         &self,
+        lo: (u32, u32),
+        hi: (u32, u32),
+        value: bool,
+        near: impl FnMut(Square) -> bool,
+        visit: impl FnMut(u32, u32) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
+        self.visit_cells_in_blocks_via(None, lo, hi, value, near, visit)
+    }
+
+    /// [`visit_cells_in_blocks`](Self::visit_cells_in_blocks), each block found from its
+    /// entry in `dir` (this tree's) when given.
+    pub(crate) fn visit_cells_in_blocks_via(
+        &self,
+        dir: Option<&Directory>,
         (x0, y0): (u32, u32),
         (x1, y1): (u32, u32),
         value: bool,
@@ -301,7 +329,7 @@ impl RegionQuadtree {
                 if !near(sq) {
                     continue;
                 }
-                let cells = match self.descend_to(sq) {
+                let cells = match self.descend_via(dir, sq) {
                     Node::Leaf(v) => {
                         if v == value {
                             u64::MAX
@@ -352,6 +380,18 @@ impl RegionQuadtree {
     /// legs, and for the known map under corner cuts, were a tenth of the frontier
     /// searches).
     pub fn capsule_meets_cells(&self, capsule: &Capsule, value: bool, max_blocks: u32) -> Option<bool> {
+        self.capsule_meets_cells_via(None, capsule, value, max_blocks)
+    }
+
+    /// [`capsule_meets_cells`](Self::capsule_meets_cells), each block found from its entry
+    /// in `dir` (this tree's) when given.
+    pub(crate) fn capsule_meets_cells_via(
+        &self,
+        dir: Option<&Directory>,
+        capsule: &Capsule,
+        value: bool,
+        max_blocks: u32,
+    ) -> Option<bool> {
         if capsule.radius <= 0.0 {
             return None;
         }
@@ -397,7 +437,7 @@ impl RegionQuadtree {
         let flow = if (hi.0 >> BLOCK_LEVEL) - (lo.0 >> BLOCK_LEVEL) <= 1
             && (hi.1 >> BLOCK_LEVEL) - (lo.1 >> BLOCK_LEVEL) <= 1
         {
-            self.visit_cells_in_blocks(lo, hi, value, |_| true, &mut visit)?
+            self.visit_cells_in_blocks_via(dir, lo, hi, value, |_| true, &mut visit)?
         } else {
             // A block farther than the radius by a part in a million holds no cell within a
             // part in 10⁷ of it, whatever the rounding, so skipping it changes no answer; a
@@ -443,7 +483,7 @@ impl RegionQuadtree {
                     return None;
                 }
                 budget -= blocks;
-                flow = self.visit_cells_in_blocks((x0, y0), (x1, y1), value, near, &mut visit)?;
+                flow = self.visit_cells_in_blocks_via(dir, (x0, y0), (x1, y1), value, near, &mut visit)?;
                 if flow.is_break() {
                     break;
                 }
@@ -583,7 +623,13 @@ impl RegionQuadtree {
     /// From node `n` at `level` down toward `sq` (inside `n`'s square) to `sq`'s node or
     /// the leaf above it, showing `passed` each node met below `n` with its level.
     #[inline]
-    fn descend_from(&self, mut n: Node, mut level: u8, sq: Square, mut passed: impl FnMut(u8, Node)) -> Node {
+    pub(super) fn descend_from(
+        &self,
+        mut n: Node,
+        mut level: u8,
+        sq: Square,
+        mut passed: impl FnMut(u8, Node),
+    ) -> Node {
         while level > sq.level {
             if let Node::Leaf(_) = n {
                 break;
@@ -736,7 +782,7 @@ impl RegionQuadtree {
 
     /// The node of square `sq`, or the leaf above it that covers it.
     #[inline]
-    fn descend_to(&self, sq: Square) -> Node {
+    pub(super) fn descend_to(&self, sq: Square) -> Node {
         self.descend_from(self.node(self.root), self.grid.depth(), sq, |_, _| {})
     }
 
