@@ -748,34 +748,34 @@ impl<'a> Bodies<'a> {
         let i = u32::try_from(i).expect("robot indices are u32");
         // The robots for_each_within would visit, tested without a branch per robot: in a
         // crowd each test goes either way (issue 11: mispredicted, they made this query an
-        // eighth of the moonshot's round). Each robot is written, and kept by counting it.
-        // Two passes: the cheap disc test first, listing where kept robots stand in the run,
-        // then the segment test (a division) on those alone (issue 11: a run holds the rows
-        // of cells around the disc, four times its area; testing all of them against the
-        // segment was a sixth of a dense random walker's round).
+        // eighth of the moonshot's round). Two passes over each run of up to 64 robots: the
+        // cheap disc test first, into a bit per robot, then the segment test (a division)
+        // on the robots kept, written to a buffer and counted (issue 11: a run holds the
+        // rows of cells around the disc, four times its area; testing all of them against
+        // the segment was a sixth of a dense random walker's round).
         self.index.for_each_run_near(mid, r, |_, run, cell| {
-            let start = near.len();
-            near.resize(start + run.len(), 0);
-            let out = &mut near[start..];
-            let mut in_disc = 0;
-            for (k, e) in run.iter().enumerate() {
-                // Bitwise on purpose: every test is made, none is a branch.
-                #[allow(clippy::needless_bitwise_bool)]
-                let keep =
-                    cell.is_none_or(|c| e.cell == c) & (e.position.distance_squared(mid) <= r2) & (e.id.get() != i);
-                out[in_disc] = u32::try_from(k).expect("runs hold u32 entries");
-                in_disc += usize::from(keep);
+            for chunk in run.chunks(64) {
+                let mut in_disc = 0u64;
+                for (k, e) in chunk.iter().enumerate() {
+                    // Bitwise on purpose: every test is made, none is a branch.
+                    #[allow(clippy::needless_bitwise_bool)]
+                    let keep =
+                        cell.is_none_or(|c| e.cell == c) & (e.position.distance_squared(mid) <= r2) & (e.id.get() != i);
+                    in_disc |= u64::from(keep) << k;
+                }
+                let mut kept = [0u32; 64];
+                let mut count = 0;
+                while in_disc != 0 {
+                    let e = &chunk[in_disc.trailing_zeros() as usize];
+                    in_disc &= in_disc - 1;
+                    let id = e.id.get();
+                    let within = if id < i { moved } else { standing };
+                    // `count` is below the bits set so far, at most 63 here.
+                    kept[count % 64] = id;
+                    count += usize::from(point_segment_distance_squared(e.position, from, to) <= within);
+                }
+                near.extend_from_slice(&kept[..count]);
             }
-            let mut kept = 0;
-            for j in 0..in_disc {
-                // `kept <= j`: each slot is read before it is written.
-                let e = &run[out[j] as usize];
-                let id = e.id.get();
-                let within = if id < i { moved } else { standing };
-                out[kept] = id;
-                kept += usize::from(point_segment_distance_squared(e.position, from, to) <= within);
-            }
-            near.truncate(start + kept);
         });
     }
 }
