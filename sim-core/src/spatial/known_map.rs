@@ -168,25 +168,25 @@ impl KnownMap {
             // (issue 11: see `known_window`); two times in three there are none.
             if let Some(stencil) = stencil
                 && KnownWindow::fits(&self.tree)
-                && let Some((lo, hi)) = grid.cells_touching(&disc.bounds())
+                && let Some(view) = stencil.place(&disc, grid, &clip)
+                && let (lo, hi) = view.cells()
                 && hi.0 - lo.0 < known_window::MAX_VIEW_CELLS
                 && hi.1 - lo.1 < known_window::MAX_VIEW_CELLS
             {
                 let window = self.window.get_or_insert_default();
                 window.cover(&self.tree, lo, hi);
-                if stencil.rows_except_into(&disc, grid, &clip, Some(window.known_rows()), rows) {
-                    let new = &rows.rows[..rows.len];
-                    if new.iter().any(|&row| row != 0) {
-                        let filled = self.tree.fill_new_rows_cached(rows, None, true, None, &mut report);
-                        debug_assert!(filled, "a tree the window fits is packed");
-                        window.add_rows(rows.x0, rows.y0, new);
-                        // Dropped, not cleared: views of this map mostly keep to this path.
-                        self.blocks = None;
-                    }
-                    // The direct rows below leave out the last view's rows: not this one's.
-                    self.last_rows = None;
-                    return true;
+                view.rows_except_into(grid, Some(window.known_rows()), rows);
+                let new = &rows.rows[..rows.len];
+                if new.iter().any(|&row| row != 0) {
+                    let filled = self.tree.fill_new_rows_cached(rows, None, true, None, &mut report);
+                    debug_assert!(filled, "a tree the window fits is packed");
+                    window.add_rows(rows.x0, rows.y0, new);
+                    // Dropped, not cleared: views of this map mostly keep to this path.
+                    self.blocks = None;
                 }
+                // The direct rows below leave out the last view's rows: not this one's.
+                self.last_rows = None;
+                return true;
             }
             // Otherwise a view up to 64 cells across: its cells worked out at once, then set
             // by one walk that goes only where they are (issue 11: the walk from the root

@@ -10,6 +10,8 @@
 //! direct rows were two thousand instructions per view, a quarter of a dense random
 //! walker's round).
 
+use glam::DVec2;
+
 use crate::spatial::geometry::{Aabb, CellRows, Disc, Shape, cell_within, floor, line_distances};
 use crate::spatial::grid::Grid;
 
@@ -107,26 +109,18 @@ impl ViewStencil {
     /// caller works the rows out directly), and for centres so far from the origin that
     /// rounding could reach the margin.
     pub(crate) fn rows_into(&self, disc: &Disc, grid: &Grid, clip: &Aabb, out: &mut CellRows) -> bool {
-        self.rows_except_into(disc, grid, clip, None, out)
+        self.place(disc, grid, clip)
+            .map(|view| view.rows_except_into(grid, None, out))
+            .is_some()
     }
 
-    /// [`rows_into`](Self::rows_into) without the cells of `known`, which must cover the
-    /// view's box of cells: a view's cells not known yet. The cells on the view's rim that
-    /// `known` holds are not tested.
-    pub(crate) fn rows_except_into(
-        &self,
-        disc: &Disc,
-        grid: &Grid,
-        clip: &Aabb,
-        known: Option<KnownRows>,
-        out: &mut CellRows,
-    ) -> bool {
-        /// What no cell being known looks like.
-        const NOTHING_KNOWN: [u64; 64] = [0; 64];
+    /// The stencil placed for a view `disc` of its radius on `grid` (of its cell size): its
+    /// box of cells and the bin's rows over it, or `None` where [`rows_into`](Self::rows_into)
+    /// declines (a box not within `clip` and the grid, or centres so far from the origin
+    /// that rounding could reach the margin).
+    pub(crate) fn place<'a>(&'a self, disc: &Disc, grid: &Grid, clip: &Aabb) -> Option<PlacedView<'a>> {
         debug_assert!(self.is_for(disc.radius, grid.cell_m()));
-        let Some((lo, hi)) = grid.cells_touching(&disc.bounds()) else {
-            return false;
-        };
+        let (lo, hi) = grid.cells_touching(&disc.bounds())?;
         let within = clip.contains_box(&Aabb {
             min: grid.corner(lo.0, lo.1),
             max: grid.corner(hi.0 + 1, hi.1 + 1),
@@ -136,7 +130,7 @@ impl ViewStencil {
         // them: far below the margin while they are under a million cells.
         let scale = c.x.abs().max(c.y.abs()) + grid.origin().x.abs().max(grid.origin().y.abs()) + disc.radius;
         if !within || hi.0 - lo.0 >= 64 || hi.1 - lo.1 >= 64 || scale * 1e-12 > MARGIN_CELLS * self.cell_m {
-            return false;
+            return None;
         }
         // The centre's cell and its place in it, in bins (clamped: rounding may put it a
         // hair outside the cell, which the margin covers).
@@ -150,12 +144,9 @@ impl ViewStencil {
         let len = (hi.1 - lo.1 + 1) as usize;
         // The box's rows of the stencil (all of them lie in it: a cell touching the disc's
         // box lies within `ceil(rho) + 1` cells of the centre's).
-        let Some(rows) = usize::try_from(i64::from(lo.1) - sy)
+        let rows = usize::try_from(i64::from(lo.1) - sy)
             .ok()
-            .and_then(|t0| self.rows[bin * side..(bin + 1) * side].get(t0..t0 + len))
-        else {
-            return false;
-        };
+            .and_then(|t0| self.rows[bin * side..(bin + 1) * side].get(t0..t0 + len))?;
         // The box's columns, as stencil bits (cells beyond it, off the map, are not
         // the view's: the direct rows hold the box's cells only).
         let (first, last) = (i64::from(lo.0) - sx, i64::from(hi.0) - sx);
@@ -164,6 +155,49 @@ impl ViewStencil {
         } else {
             (u64::MAX >> (63 - last.min(63))) & (u64::MAX << first.max(0))
         };
+        Some(PlacedView {
+            center: c,
+            r2: disc.radius * disc.radius,
+            lo,
+            hi,
+            sx,
+            rows,
+            cols,
+        })
+    }
+}
+
+/// A [`ViewStencil`] placed for one view (see [`ViewStencil::place`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PlacedView<'a> {
+    center: DVec2,
+    r2: f64,
+    /// The view's box of cells.
+    lo: (u32, u32),
+    hi: (u32, u32),
+    /// Stencil column 0 as a grid column.
+    sx: i64,
+    /// The bin's (surely inside, possibly inside) rows over the box's rows.
+    rows: &'a [(u64, u64)],
+    /// The box's columns, as stencil bits.
+    cols: u64,
+}
+
+impl PlacedView<'_> {
+    /// The view's box of cells, `lo ..= hi`.
+    #[inline]
+    pub(crate) fn cells(&self) -> ((u32, u32), (u32, u32)) {
+        (self.lo, self.hi)
+    }
+
+    /// The view's cells (see [`ViewStencil::rows_into`]) without those of `known`, which
+    /// must cover the view's box of cells: a view's cells not known yet. The cells on the
+    /// view's rim that `known` holds are not tested.
+    pub(crate) fn rows_except_into(&self, grid: &Grid, known: Option<KnownRows>, out: &mut CellRows) {
+        /// What no cell being known looks like.
+        const NOTHING_KNOWN: [u64; 64] = [0; 64];
+        let (lo, c, sx, cols, r2) = (self.lo, self.center, self.sx, self.cols, self.r2);
+        let len = self.rows.len();
         // Stencil columns to the box's (the output's), and the known rows' columns to the
         // stencil's, each as a left and a right shift, so that rows take no branch.
         let split = |d: i64| (d.max(0) as u32, (-d).max(0) as u32);
@@ -172,9 +206,9 @@ impl ViewStencil {
             Some(k) => (&k.rows[(lo.1 - k.y0) as usize..][..len], split(i64::from(k.x0) - sx)),
             None => (&NOTHING_KNOWN[..len], (0, 0)),
         };
-        let r2 = disc.radius * disc.radius;
         let old_len = out.len;
-        for (j, (&(sure, maybe), &known)) in rows.iter().zip(known_rows).enumerate() {
+        let rows = self.rows.iter().zip(known_rows);
+        for (j, (o, (&(sure, maybe), &known))) in out.rows[..len].iter_mut().zip(rows).enumerate() {
             let known = (known << known_left) >> known_right;
             let mut row = sure & !known;
             let mut ring = maybe & !sure & cols & !known;
@@ -191,17 +225,16 @@ impl ViewStencil {
                     }
                 }
             }
-            out.rows[j] = ((row & cols) >> out_right) << out_left;
+            *o = ((row & cols) >> out_right) << out_left;
         }
         if len < old_len {
             out.rows[len..old_len].fill(0);
         }
         (out.x0, out.y0, out.len) = (lo.0, lo.1, len);
-        true
     }
 }
 
-/// Cells known already, which [`ViewStencil::rows_except_into`] leaves out of a view: bit
+/// Cells known already, which [`PlacedView::rows_except_into`] leaves out of a view: bit
 /// `i` of `rows[j]` is cell `(x0 + i, y0 + j)`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct KnownRows<'a> {
@@ -311,7 +344,8 @@ mod tests {
                     let y0 = want.y0 - rng.random_range(0..=want.y0.min(3));
                     let rows: Vec<u64> = (0..70).map(|_| rng.random::<u64>() & rng.random::<u64>()).collect();
                     let known = KnownRows { x0, y0, rows: &rows };
-                    assert!(stencil.rows_except_into(&disc, &grid, &grid.extent(), Some(known), &mut got));
+                    let view = stencil.place(&disc, &grid, &grid.extent()).expect("inside the map");
+                    view.rows_except_into(&grid, Some(known), &mut got);
                     for j in 0..want.len {
                         let known = rows[j + (want.y0 - y0) as usize] >> (want.x0 - x0);
                         assert_eq!(
