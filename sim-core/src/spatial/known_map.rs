@@ -175,9 +175,10 @@ impl KnownMap {
             {
                 let window = self.window.get_or_insert_default();
                 window.cover(&self.tree, lo, hi);
-                view.rows_except_into(grid, Some(window.known_rows()), rows);
-                let new = &rows.rows[..rows.len];
-                if new.iter().any(|&row| row != 0) {
+                if view.rows_except_into(grid, Some(window.known_rows()), rows)
+                    && let new = &rows.rows[..rows.len]
+                    && new.iter().any(|&row| row != 0)
+                {
                     let filled = self.tree.fill_new_rows_cached(rows, None, true, None, &mut report);
                     debug_assert!(filled, "a tree the window fits is packed");
                     window.add_rows(rows.x0, rows.y0, new);
