@@ -139,7 +139,7 @@ impl KnownMap {
         // fetched while the view's rows are worked out (issue 11: the first reads of each
         // were a fifth of marking a random walker's view).
         if let Some(window) = &self.window {
-            window.prefetch_around(self.tree.grid(), center);
+            window.prefetch();
         } else {
             if let Some(last) = &self.last_rows {
                 prefetch(&last.len);
