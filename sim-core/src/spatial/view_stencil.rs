@@ -206,6 +206,8 @@ impl PlacedView<'_> {
             Some(k) => (&k.rows[(lo.1 - k.y0) as usize..][..len], split(i64::from(k.x0) - sx)),
             None => (&NOTHING_KNOWN[..len], (0, 0)),
         };
+        // A known row in the stencil's columns.
+        let aligned = |known: u64| (known << known_left) >> known_right;
         // Two views in three of a dense random walker hold only known cells: a word
         // operation a row tells, before any rim cell is tested or row written (issue 11).
         if known.is_some()
@@ -213,14 +215,14 @@ impl PlacedView<'_> {
                 .rows
                 .iter()
                 .zip(known_rows)
-                .all(|(&(_, maybe), &known)| maybe & cols & !((known << known_left) >> known_right) == 0)
+                .all(|(&(_, maybe), &known)| maybe & cols & !aligned(known) == 0)
         {
             return false;
         }
         let old_len = out.len;
         let rows = self.rows.iter().zip(known_rows);
         for (j, (o, (&(sure, maybe), &known))) in out.rows[..len].iter_mut().zip(rows).enumerate() {
-            let known = (known << known_left) >> known_right;
+            let known = aligned(known);
             let mut row = sure & !known;
             let mut ring = maybe & !sure & cols & !known;
             if ring != 0 {

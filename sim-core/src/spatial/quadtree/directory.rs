@@ -53,9 +53,10 @@ impl Directory {
     /// Set the entries under node `n` of square `sq`.
     fn fill(&mut self, tree: &RegionQuadtree, n: NodeRef, sq: Square) {
         if sq.level == self.level || is_leaf(n) {
-            // A leaf's square holds every directory square under it.
+            // A leaf's square holds every directory square under it (`sq` is never below
+            // the directory's level).
             let (x0, y0) = (sq.x >> self.level, sq.y >> self.level);
-            let side = sq.side_cells().max(1 << self.level) >> self.level;
+            let side = sq.side_cells() >> self.level;
             for y in y0..y0 + side {
                 let row = (y * self.per_side) as usize;
                 self.nodes[row + x0 as usize..row + (x0 + side) as usize].fill(n);
