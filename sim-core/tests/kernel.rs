@@ -547,6 +547,77 @@ fn issue11_map_explored_once_and_every_free_cell_credited_once() {
     assert!((credited - free_m2).abs() < 1e-6, "credited {credited} m² of {free_m2}");
 }
 
+/// Issue 11: the robots whose known map changed are listed on the explored map's thread,
+/// and the first sightings only in rounds that step 2 found news in. Each round's report
+/// still lists exactly the robots whose known cells grew (maps only grow), in id order,
+/// and a `TreasureFound` for each treasure in the round its `found_round` names, once.
+#[test]
+fn issue11_reports_list_changed_maps_and_first_sightings() {
+    let treasures = vec![
+        TreasureSpec {
+            position: DVec2::new(12.5, 30.5),
+            quantity: 2,
+        },
+        TreasureSpec {
+            position: DVec2::new(35.5, 20.5),
+            quantity: 2,
+        },
+    ];
+    let registry = StrategyRegistry::with_builtins();
+    let mut sim = new_sim(
+        scenario(
+            rooms_map(treasures),
+            7,
+            300,
+            vec![
+                (3, RobotType::explorer(), "cooperative"),
+                (2, RobotType::explorer(), "random_walk"),
+            ],
+        ),
+        &registry,
+    )
+    .unwrap();
+    let ids: Vec<_> = sim.robots().iter().map(|r| r.id).collect();
+    let cells = |sim: &Simulation| -> Vec<u64> {
+        ids.iter()
+            .map(|&id| sim.known_map(id).map_or(0, sim_core::spatial::KnownMap::known_cells))
+            .collect()
+    };
+    let (mut some_changed, mut some_unchanged, mut found) = (0, 0, Vec::new());
+    while sim.round() < 300 {
+        let before = cells(&sim);
+        let report = sim.step().clone();
+        let after = cells(&sim);
+        let grew: Vec<_> = ids
+            .iter()
+            .zip(before.iter().zip(&after))
+            .filter(|(_, (b, a))| a > b)
+            .map(|(&id, _)| id)
+            .collect();
+        assert_eq!(report.known_changed, grew, "round {}", report.round);
+        some_changed += usize::from(!grew.is_empty());
+        some_unchanged += usize::from(grew.len() < ids.len());
+        for e in &report.events {
+            if let sim_core::world::Event::TreasureFound { treasure, .. } = e {
+                found.push((*treasure, report.round));
+            }
+        }
+    }
+    assert!(
+        some_changed > 10 && some_unchanged > 10,
+        "{some_changed} {some_unchanged}"
+    );
+    let expected: Vec<_> = (0..2)
+        .filter_map(|t| {
+            let id = TreasureId::new(t);
+            sim.treasure(id).and_then(|s| s.found_round).map(|r| (id, r))
+        })
+        .collect();
+    found.sort_by_key(|&(t, _)| t.get());
+    assert_eq!(expected.len(), 2, "both treasures are found within 300 rounds");
+    assert_eq!(found, expected);
+}
+
 /// Walks east; robot 2 panics in round 10, after queueing a message.
 struct Fragile;
 

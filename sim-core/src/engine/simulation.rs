@@ -92,6 +92,21 @@ pub(super) struct Turn {
     pub(super) slow: Option<Duration>,
 }
 
+impl Turn {
+    /// A fresh turn for a robot standing at `start` (`has_known` and the buffer of squares'
+    /// capacity are kept).
+    pub(super) fn begin(&mut self, start: DVec2) {
+        self.start = start;
+        self.sensed_m = None;
+        self.known_changed = false;
+        self.news = false;
+        self.alone = false;
+        self.hearers_pending = false;
+        self.slow = None;
+        self.new_squares.clear();
+    }
+}
+
 /// A move's obstacle test done ahead of step 3: the robot standing at `from` moving by `d`
 /// (already trimmed to speed and energy) with a body of `radius_m` gets as far as `free`
 /// before an obstacle. It depends on nothing another robot does, so step 2 works it out in

@@ -25,8 +25,9 @@ use crate::world::{Action, Recipient, Robot, RobotType};
 pub(super) const ROBOTS_PER_TASK: usize = 16;
 
 impl Simulation {
-    /// Steps 1 and 2, in parallel over robots.
-    pub(super) fn perceive_and_decide(&mut self, round: u64) {
+    /// Steps 1 and 2, in parallel over robots. Returns whether some turn has news (see
+    /// `Turn::news`).
+    pub(super) fn perceive_and_decide(&mut self, round: u64) -> bool {
         let world = WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types)
             .with_time_planning(self.time_planning);
         let planning_ns = AtomicU64::new(0);
@@ -49,6 +50,7 @@ impl Simulation {
         let home = self.map.home;
         let alone_allowed = self.resolve_alone;
         let pending = AtomicBool::new(false);
+        let any_news = AtomicBool::new(false);
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
@@ -56,14 +58,7 @@ impl Simulation {
             .zip(self.bodies_now.par_iter_mut())
             .with_max_len(ROBOTS_PER_TASK)
             .for_each(|(((agent, robot), turn), body)| {
-                turn.start = robot.position;
-                turn.sensed_m = None;
-                turn.known_changed = false;
-                turn.news = false;
-                turn.alone = false;
-                turn.hearers_pending = false;
-                turn.slow = None;
-                turn.new_squares.clear();
+                turn.begin(robot.position);
                 agent.mind.output.begin_round();
                 agent.planned_move = None;
                 if robot.alive {
@@ -123,6 +118,9 @@ impl Simulation {
                 *body = (robot.position, types[robot.type_index].radius_m);
                 turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
                 turn.news = !agent.mind.perception.treasures.is_empty() || !agent.mind.output.events().is_empty();
+                if turn.news {
+                    any_news.store(true, Ordering::Relaxed);
+                }
             });
         if pending.into_inner() {
             self.list_pending_hearers();
@@ -136,6 +134,7 @@ impl Simulation {
                 .filter_map(|(t, r)| t.slow.map(|took| (r.id, took)));
             self.report.slow_decisions.extend(slow);
         }
+        any_news.into_inner()
     }
 
     /// The hearers of the broadcasts step 2 left pending (see `Turn::hearers_pending`), on

@@ -4,10 +4,12 @@
 //! The update reads only the start of the round (where each robot perceived, what its own
 //! map gained), so it runs alongside step 3 on another thread: [`ExploredUpdate::take`]
 //! moves what it needs out of the simulation, [`ExploredUpdate::run`] does the work, and
-//! [`ExploredUpdate::finish`] puts it back and credits the robots in id order.
+//! [`ExploredUpdate::finish`] puts it back and credits the robots in id order. It also lists
+//! the robots whose known map changed, for the round's report (issue 11: a sequential pass
+//! of its own over the turns, 5 µs of a dense random walk's round).
 
 use crate::engine::simulation::{Simulation, Turn};
-use crate::spatial::{CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap};
+use crate::spatial::{CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap, RobotId};
 use crate::world::Event;
 
 /// The explored-map update of one round, detached from the simulation.
@@ -16,6 +18,8 @@ pub(super) struct ExploredUpdate {
     views: Vec<Option<Disc>>,
     /// Free cells each robot was first to see (a buffer kept from round to round).
     fresh: Vec<u64>,
+    /// The robots whose known map changed this round, in id order (the report's list).
+    known_changed: Vec<RobotId>,
 }
 
 impl ExploredUpdate {
@@ -26,15 +30,21 @@ impl ExploredUpdate {
             explored: std::mem::replace(&mut sim.explored, KnownMap::new(grid)),
             views: std::mem::take(&mut sim.explored_views),
             fresh: std::mem::take(&mut sim.explored_fresh),
+            known_changed: std::mem::take(&mut sim.report.known_changed),
         }
     }
 
     /// Mark every sensing robot's view (from step 2's `turns`), in id order, counting the
-    /// free cells it was first to see.
+    /// free cells it was first to see; and list the robots whose known map changed.
     pub(super) fn run(&mut self, obstacles: &ObstacleMap, turns: &[Turn]) {
         self.fresh.clear();
         self.fresh.resize(turns.len(), 0);
+        self.known_changed.clear();
         for (i, turn) in turns.iter().enumerate() {
+            if turn.known_changed {
+                self.known_changed
+                    .push(RobotId::new(u32::try_from(i).expect("robot ids are u32")));
+            }
             let Some(radius) = turn.sensed_m else {
                 continue;
             };
@@ -69,6 +79,7 @@ impl ExploredUpdate {
         let before = sim.explored_free_cells;
         sim.explored = self.explored;
         sim.explored_views = self.views;
+        sim.report.known_changed = self.known_changed;
         for (robot, &fresh) in sim.robots.iter_mut().zip(&self.fresh) {
             if fresh > 0 {
                 sim.explored_free_cells += fresh;

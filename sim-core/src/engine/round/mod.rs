@@ -47,11 +47,11 @@ impl Simulation {
         // 1 + 2: perceive and decide, in parallel.
         self.deliver_messages();
         let t = Instant::now();
-        self.perceive_and_decide(round);
+        let any_news = self.perceive_and_decide(round);
         let took = t.elapsed();
         self.phase_times.perceive_decide += took;
         apart += took;
-        self.record_discoveries(round);
+        self.record_discoveries(round, any_news);
         // 3: resolve, in id order, while another thread marks the collective explored map
         // (it reads only the start of the round).
         let mut explored = ExploredUpdate::take(self);

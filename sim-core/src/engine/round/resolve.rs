@@ -12,7 +12,7 @@ use crate::agent::Needs;
 use crate::agent::StrategyOutput;
 use crate::cache::prefetch;
 use crate::engine::simulation::{Agent, Fanout, Outgoing, Simulation, Turn};
-use crate::spatial::{ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
+use crate::spatial::{IndexEntry, ObstacleMap, RobotId, RobotIndex, TreasureId, point_segment_distance_squared};
 use crate::world::{
     Action, Event, HomeBase, Message, Outcome, Payload, REACH_M, Recipient, Robot, RobotType, TreasureState,
 };
@@ -71,7 +71,13 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            let mut outbox = self.agents[i].mind.output.take_outbox();
+            // Most turns send nothing: their outbox is left alone (taking and giving it back
+            // was a tenth of a dense random walk's step 3).
+            let mut outbox = if self.agents[i].mind.output.outbox().is_empty() {
+                Vec::new()
+            } else {
+                self.agents[i].mind.output.take_outbox()
+            };
             for (to, payload) in outbox.drain(..) {
                 if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
                     break;
@@ -84,7 +90,9 @@ impl Simulation {
                 self.robots[i].stats.messages_sent += 1;
                 self.robots[i].stats.message_bytes += size;
             }
-            self.agents[i].mind.output.give_back_outbox(outbox);
+            if outbox.capacity() > 0 {
+                self.agents[i].mind.output.give_back_outbox(outbox);
+            }
             end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
         self.fan_out();
@@ -746,37 +754,76 @@ impl<'a> Bodies<'a> {
         let r = reach + 0.5 * d.length();
         let r2 = r * r;
         let i = u32::try_from(i).expect("robot indices are u32");
-        // The robots for_each_within would visit, tested without a branch per robot: in a
-        // crowd each test goes either way (issue 11: mispredicted, they made this query an
-        // eighth of the moonshot's round). Two passes over each run of up to 64 robots: the
-        // cheap disc test first, into a bit per robot, then the segment test (a division)
-        // on the robots kept, written to a buffer and counted (issue 11: a run holds the
-        // rows of cells around the disc, four times its area; testing all of them against
-        // the segment was a sixth of a dense random walker's round).
-        self.index.for_each_run_near(mid, r, |_, run, cell| {
-            for chunk in run.chunks(64) {
-                let mut in_disc = 0u64;
-                for (k, e) in chunk.iter().enumerate() {
-                    // Bitwise on purpose: every test is made, none is a branch.
-                    #[allow(clippy::needless_bitwise_bool)]
-                    let keep =
-                        cell.is_none_or(|c| e.cell == c) & (e.position.distance_squared(mid) <= r2) & (e.id.get() != i);
-                    in_disc |= u64::from(keep) << k;
-                }
-                let mut kept = [0u32; 64];
-                let mut count = 0;
-                while in_disc != 0 {
-                    let e = &chunk[in_disc.trailing_zeros() as usize];
-                    in_disc &= in_disc - 1;
-                    let id = e.id.get();
-                    let within = if id < i { moved } else { standing };
-                    // `count` is below the bits set so far, at most 63 here.
-                    kept[count % 64] = id;
-                    count += usize::from(point_segment_distance_squared(e.position, from, to) <= within);
-                }
-                near.extend_from_slice(&kept[..count]);
+        let sift = Sift {
+            i,
+            mid,
+            r2,
+            from,
+            to,
+            moved,
+            standing,
+        };
+        // At most three rows when the index's cells are as wide as its queries (see
+        // `rebuild_robot_indexes`); a fourth for rounding.
+        let mut runs = [(0, 0); 4];
+        if let Some(n) = self.index.dense_runs_near(mid, r, &mut runs) {
+            let entries = self.index.entries();
+            for &(a, b) in &runs[..n] {
+                sift.run(&entries[a as usize..b as usize], None, near);
             }
-        });
+        } else {
+            self.index
+                .for_each_run_near(mid, r, |_, run, cell| sift.run(run, cell, near));
+        }
+    }
+}
+
+/// The tests of [`Bodies::near_move`] for robot `i`'s move from `from` to `to`.
+struct Sift {
+    i: u32,
+    /// The move's middle and the squared radius around it of the first, cheap test.
+    mid: DVec2,
+    r2: f64,
+    from: DVec2,
+    to: DVec2,
+    /// Squared reach from the move of robots before `i` (which may have moved) and after it.
+    moved: f64,
+    standing: f64,
+}
+
+impl Sift {
+    /// Append to `near` the robots of `run` (of `cell`, see
+    /// [`RobotIndex::for_each_run_near`]) that could touch the move.
+    ///
+    /// The robots are tested without a branch per robot: in a crowd each test goes either
+    /// way (issue 11: mispredicted, they made this query an eighth of the moonshot's
+    /// round). Two passes over each chunk of up to 64 robots: the cheap disc test first,
+    /// into a bit per robot, then the segment test (a division) on the robots kept, each
+    /// appended and kept or not by its length (issue 11: a run holds the rows of cells
+    /// around the disc, four times its area; testing all of them against the segment was a
+    /// sixth of a dense random walker's round).
+    #[inline]
+    fn run(&self, run: &[IndexEntry], cell: Option<(i32, i32)>, near: &mut Vec<u32>) {
+        for chunk in run.chunks(64) {
+            let mut in_disc = 0u64;
+            for (k, e) in chunk.iter().enumerate() {
+                // Bitwise on purpose: every test is made, none is a branch.
+                #[allow(clippy::needless_bitwise_bool)]
+                let keep = cell.is_none_or(|c| e.cell == c)
+                    & (e.position.distance_squared(self.mid) <= self.r2)
+                    & (e.id.get() != self.i);
+                in_disc |= u64::from(keep) << k;
+            }
+            while in_disc != 0 {
+                let e = &chunk[in_disc.trailing_zeros() as usize];
+                in_disc &= in_disc - 1;
+                let id = e.id.get();
+                let within = if id < self.i { self.moved } else { self.standing };
+                let touches = point_segment_distance_squared(e.position, self.from, self.to) <= within;
+                near.push(id);
+                near.truncate(near.len() - usize::from(!touches));
+            }
+        }
     }
 }
 
