@@ -2,7 +2,7 @@
 
 use glam::DVec2;
 
-use crate::spatial::geometry::{Aabb, floor};
+use crate::spatial::geometry::Aabb;
 use crate::{Error, Result};
 
 /// Deepest quadtree supported: 2^24 cells a side (16,777 km at 1 m cells).
@@ -156,8 +156,12 @@ impl Grid {
         if !(hi.x >= 0.0 && hi.y >= 0.0 && lo.x < f64::from(side) && lo.y < f64::from(side)) {
             return None;
         }
-        // Saturating casts clamp to the covering square.
-        let cell = |v: f64| (floor(v).max(0.0) as u32).min(side - 1);
+        // No coordinate is NaN past the test above. Clamped to the covering square first,
+        // a coordinate is at least 0, where the cast's truncation is the floor (issue 11:
+        // a floor, a clamp and a saturating cast on each made this a twentieth of a dense
+        // random walker's round).
+        let last = f64::from(side - 1);
+        let cell = |v: f64| v.clamp(0.0, last) as u32;
         Some(((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y))))
     }
 
@@ -214,5 +218,54 @@ mod tests {
         assert_eq!(g.cell_of(DVec2::new(-9.5, 5.49)), Some((1, 0)));
         assert_eq!(g.cell_of(DVec2::new(-10.01, 5.0)), None);
         assert_eq!(g.cell_of(DVec2::new(-6.0, 5.0)), None);
+    }
+
+    /// Issue 11: the cells a box touches (clamped without a floor) are those a scan of the
+    /// covering square finds: from the cell holding the box's low corner to the one holding
+    /// its high corner (cells half-open), clamped to the square, or none if it misses.
+    /// Coordinates on the half-cell lattice, where every product is exact, half of them on
+    /// cell edges, and some infinite.
+    #[test]
+    fn issue11_cells_touching_matches_a_scan() {
+        use rand::{Rng, SeedableRng};
+        let grid = Grid::new(DVec2::new(-3.5, 7.0), 0.5, 20, 12).unwrap();
+        let side = grid.side_cells();
+        let edge = |k: u32, o: f64| o + 0.5 * f64::from(k);
+        // The last cell whose low edge is at or below `v`, if any.
+        let holding = |v: f64, o: f64| (0..side).filter(|&k| edge(k, o) <= v).max();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut coordinate = |o: f64| match rng.random_range(0..10) {
+            0 => f64::NEG_INFINITY,
+            1 => f64::INFINITY,
+            2..=5 => o + 0.5 * f64::from(rng.random_range(-8i32..24)),
+            _ => o + rng.random_range(-4.0..12.0),
+        };
+        let mut some = 0;
+        for _ in 0..20_000 {
+            let (x, y) = ((coordinate(-3.5), coordinate(-3.5)), (coordinate(7.0), coordinate(7.0)));
+            let area = Aabb {
+                min: DVec2::new(x.0.min(x.1), y.0.min(y.1)),
+                max: DVec2::new(x.0.max(x.1), y.0.max(y.1)),
+            };
+            let square_end = |o: f64| edge(side, o);
+            let misses = area.max.x < -3.5
+                || area.max.y < 7.0
+                || area.min.x >= square_end(-3.5)
+                || area.min.y >= square_end(7.0);
+            let want = (!misses).then(|| {
+                let lo = (
+                    holding(area.min.x, -3.5).unwrap_or(0),
+                    holding(area.min.y, 7.0).unwrap_or(0),
+                );
+                let hi = (
+                    holding(area.max.x, -3.5).unwrap_or(0),
+                    holding(area.max.y, 7.0).unwrap_or(0),
+                );
+                (lo, hi)
+            });
+            some += usize::from(want.is_some());
+            assert_eq!(grid.cells_touching(&area), want, "{area:?}");
+        }
+        assert!(some > 5_000, "{some} boxes touch the square");
     }
 }
