@@ -13,7 +13,8 @@ use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, RobotRng, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
-    CellSet, Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId, TreasureIndex,
+    BlockMemo, CellSet, Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
+    TreasureIndex,
 };
 use crate::world::{Action, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
 
@@ -64,6 +65,10 @@ pub(super) struct Agent {
 pub(super) struct Turn {
     /// Where it stood at the start of the round.
     pub(super) start: DVec2,
+    /// It was alive at the start of the round, and so when step 3 began (step 2 disables
+    /// nobody): a send reaches a robot alive at send time, so this for robots after the
+    /// sender in id order.
+    pub(super) alive: bool,
     /// Its view radius, if it perceived this round (alive and sensing): its view then
     /// counts for the collective explored map.
     pub(super) sensed_m: Option<f64>,
@@ -93,10 +98,11 @@ pub(super) struct Turn {
 }
 
 impl Turn {
-    /// A fresh turn for a robot standing at `start` (`has_known` and the buffer of squares'
-    /// capacity are kept).
-    pub(super) fn begin(&mut self, start: DVec2) {
+    /// A fresh turn for a robot standing at `start`, `alive` or not (`has_known` and the
+    /// buffer of squares' capacity are kept).
+    pub(super) fn begin(&mut self, start: DVec2, alive: bool) {
         self.start = start;
+        self.alive = alive;
         self.sensed_m = None;
         self.known_changed = false;
         self.news = false;
@@ -187,9 +193,9 @@ pub struct Simulation {
     /// This round's unbudgeted sends, to put in the inboxes after step 3 (see
     /// [`Fanout`]).
     pub(super) fanout: Vec<Fanout>,
-    /// Which robots were alive when step 3 began (a send reaches a robot alive at send
-    /// time: so, for robots after the sender in id order).
-    pub(super) alive_at_resolve: Vec<bool>,
+    /// The robots whose turn step 3 resolves this round, in id order (kept to reuse its
+    /// allocation).
+    pub(super) step3_robots: Vec<u32>,
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
@@ -197,6 +203,8 @@ pub struct Simulation {
     pub(super) explored_views: Vec<Option<Disc>>,
     /// Free cells each robot was first to see this round (kept to reuse its allocation).
     pub(super) explored_fresh: Vec<u64>,
+    /// Blocks of `explored` known to be explored (see [`BlockMemo`]).
+    pub(super) explored_memo: BlockMemo,
     pub(super) total_free_cells: u64,
     pub(super) report: RoundReport,
     pub(super) max_radius_m: f64,
@@ -329,11 +337,12 @@ impl Simulation {
             mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
             fanout: Vec::new(),
-            alive_at_resolve: Vec::new(),
+            step3_robots: Vec::new(),
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
             explored_views: vec![None; n],
             explored_fresh: Vec::new(),
+            explored_memo: BlockMemo::default(),
             total_free_cells,
             report: RoundReport::default(),
             max_radius_m,

@@ -240,21 +240,22 @@ impl KnownMap {
     /// Mark the cells of `set` known, reporting those that became known: what
     /// [`mark_reporting`](Self::mark_reporting) does with them, by one descent along the
     /// square's coordinates (the square must lie inside the map; whole squares that do not
-    /// take the general path).
-    pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) {
+    /// take the general path). Returns the block's known cells after (Z order) for a set of
+    /// some of a block's cells (see [`BlockMemo`](crate::spatial::BlockMemo)).
+    pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) -> Option<u64> {
         self.forget_blocks();
         let sq = set.square();
         let square = self.grid().square(sq.x, sq.y, sq.level);
         if set.is_whole() && !self.grid().extent().contains_box(&square) {
             self.mark_reporting(&square, |sq| newly_known(CellSet::whole(sq)));
-            return;
+            return None;
         }
         let mut added = 0;
         let log = &mut self.log;
         if let Some(log) = log {
             log.begin();
         }
-        self.tree.fill_cells_reporting(set, true, |set| {
+        let after = self.tree.fill_cells_reporting(set, true, |set| {
             added += set.cells();
             if let Some(log) = log {
                 log.stamp(set.square());
@@ -262,6 +263,7 @@ impl KnownMap {
             newly_known(set);
         });
         self.known_cells += added;
+        after
     }
 
     /// [`mark`](Self::mark), calling `newly_known` with the squares that became known.

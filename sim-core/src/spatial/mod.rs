@@ -26,7 +26,9 @@ pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
 pub use nav::{Frontier, LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
 pub use obstacle_map::ObstacleMap;
-pub use quadtree::{BitGrid, BlockCache, CellSet, Components, Finger, PartialCells, Region, RegionQuadtree, Square};
+pub use quadtree::{
+    BitGrid, BlockCache, BlockMemo, CellSet, Components, Finger, PartialCells, Region, RegionQuadtree, Square,
+};
 pub(crate) use robot_index::Entry as IndexEntry;
 pub use robot_index::RobotIndex;
 pub use tile_log::{LogMark, TILE_LEVEL, TileLog};

@@ -58,7 +58,7 @@ impl Simulation {
             .zip(self.bodies_now.par_iter_mut())
             .with_max_len(ROBOTS_PER_TASK)
             .for_each(|(((agent, robot), turn), body)| {
-                turn.begin(robot.position);
+                turn.begin(robot.position, robot.alive);
                 agent.mind.output.begin_round();
                 agent.planned_move = None;
                 if robot.alive {

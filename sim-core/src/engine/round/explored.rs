@@ -9,7 +9,7 @@
 //! of its own over the turns, 5 µs of a dense random walk's round).
 
 use crate::engine::simulation::{Simulation, Turn};
-use crate::spatial::{CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap, RobotId};
+use crate::spatial::{BlockMemo, CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap, RobotId};
 use crate::world::Event;
 
 /// The explored-map update of one round, detached from the simulation.
@@ -20,6 +20,8 @@ pub(super) struct ExploredUpdate {
     fresh: Vec<u64>,
     /// The robots whose known map changed this round, in id order (the report's list).
     known_changed: Vec<RobotId>,
+    /// Blocks of `explored` known to be explored, to skip the squares that add nothing.
+    memo: BlockMemo,
 }
 
 impl ExploredUpdate {
@@ -31,6 +33,7 @@ impl ExploredUpdate {
             views: std::mem::take(&mut sim.explored_views),
             fresh: std::mem::take(&mut sim.explored_fresh),
             known_changed: std::mem::take(&mut sim.report.known_changed),
+            memo: std::mem::take(&mut sim.explored_memo),
         }
     }
 
@@ -58,7 +61,12 @@ impl ExploredUpdate {
                 // Only what its own map gained can be new to everyone (a descent per square
                 // instead of a walk along the view's rim).
                 for &set in &turn.new_squares {
-                    self.explored.mark_cells_reporting(set, &mut count_free);
+                    if self.memo.holds(set) {
+                        continue;
+                    }
+                    if let Some(after) = self.explored.mark_cells_reporting(set, &mut count_free) {
+                        self.memo.put(set.square(), after);
+                    }
                 }
             } else {
                 // What lay wholly inside this robot's last view is explored already.
@@ -80,6 +88,7 @@ impl ExploredUpdate {
         sim.explored = self.explored;
         sim.explored_views = self.views;
         sim.report.known_changed = self.known_changed;
+        sim.explored_memo = self.memo;
         for (robot, &fresh) in sim.robots.iter_mut().zip(&self.fresh) {
             if fresh > 0 {
                 sim.explored_free_cells += fresh;

@@ -35,28 +35,42 @@ impl Simulation {
         // part).
         let types = Arc::clone(&self.types);
         let home = self.map.home;
-        self.alive_at_resolve.clear();
-        self.alive_at_resolve.extend(self.robots.iter().map(|r| r.alive));
-        for i in 0..self.robots.len() {
-            // Prefetch what the turns ahead read of their agents (spread over an agent of
-            // about a kilobyte), then, once that has arrived, their contact lists (issue 11:
-            // in the moonshot's crowd each was a miss; a plain load of the list ahead stalled
-            // the loop as long, a third of this step's samples).
-            if let Some(ahead) = self.agents.get(i + 2 * TURNS_READ_AHEAD) {
-                prefetch(&ahead.planned_near);
-                prefetch(&ahead.planned_move);
-                prefetch(&ahead.action);
-                prefetch(&ahead.failure);
-                prefetch(&ahead.mind.output);
+        // The robots left for this step, from the turns alone: the loop below then reads
+        // (and prefetches) only their robots and agents (issue 11: a pass over every robot,
+        // with prefetches for the agents of robots resolved in step 2, made this step as
+        // long as a dense random walk's parallel marking of the explored map beside it).
+        let mut pending = std::mem::take(&mut self.step3_robots);
+        pending.clear();
+        pending.extend(
+            turns
+                .iter()
+                .enumerate()
+                .filter(|(_, t)| t.alive && !t.alone)
+                .map(|(i, _)| u32::try_from(i).expect("robot ids are u32")),
+        );
+        for (k, &i) in pending.iter().enumerate() {
+            let i = i as usize;
+            // Prefetch what the turns ahead read of their robots and agents (spread over an
+            // agent of about a kilobyte), then, once that has arrived, their contact lists
+            // (issue 11: in the moonshot's crowd each was a miss; a plain load of the list
+            // ahead stalled the loop as long, a third of this step's samples).
+            if let Some(&ahead) = pending.get(k + 2 * TURNS_READ_AHEAD) {
+                let ahead = ahead as usize;
+                prefetch(&self.robots[ahead]);
+                let agent = &self.agents[ahead];
+                prefetch(&agent.planned_near);
+                prefetch(&agent.planned_move);
+                prefetch(&agent.action);
+                prefetch(&agent.failure);
+                prefetch(&agent.mind.output);
             }
-            if let Some(first) = self
-                .agents
-                .get(i + TURNS_READ_AHEAD)
-                .and_then(|a| a.planned_near.first())
+            if let Some(first) = pending
+                .get(k + TURNS_READ_AHEAD)
+                .and_then(|&a| self.agents[a as usize].planned_near.first())
             {
                 prefetch(first);
             }
-            if !self.robots[i].alive || turns[i].alone {
+            if !self.robots[i].alive {
                 continue;
             }
             if let Some(reason) = self.agents[i].failure.take() {
@@ -95,7 +109,8 @@ impl Simulation {
             }
             end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
-        self.fan_out();
+        self.step3_robots = pending;
+        self.fan_out(turns);
         (messages, bytes)
     }
 
@@ -103,12 +118,12 @@ impl Simulation {
     /// receiver. A receiver takes a message if it was alive when the message was sent: a
     /// robot changes only in its own turn, so one before the sender in id order as it is
     /// now, one after it as it was when step 3 began.
-    fn fan_out(&mut self) {
+    fn fan_out(&mut self, turns: &[Turn]) {
         if self.fanout.is_empty() {
             return;
         }
-        let (fanout, alive_then, robots) = (&self.fanout, &self.alive_at_resolve, &self.robots);
-        let alive = |to: usize, from: usize| if to < from { robots[to].alive } else { alive_then[to] };
+        let (fanout, robots) = (&self.fanout, &self.robots);
+        let alive = |to: usize, from: usize| if to < from { robots[to].alive } else { turns[to].alive };
         // Each broadcast's hearers (listed in step 2, in id order).
         let hearers: Vec<&[RobotId]> = fanout
             .iter()

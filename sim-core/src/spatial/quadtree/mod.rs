@@ -24,6 +24,7 @@
 
 pub(crate) mod block;
 mod block_cache;
+mod block_memo;
 mod build;
 mod codec;
 mod components;
@@ -37,6 +38,7 @@ mod update;
 mod validate;
 
 pub use block_cache::BlockCache;
+pub use block_memo::BlockMemo;
 pub use build::{BitGrid, Region};
 pub use components::Components;
 pub(crate) use directory::Directory;
@@ -161,6 +163,11 @@ impl CellSet {
     /// The square the cells lie in.
     pub fn square(&self) -> Square {
         self.square
+    }
+
+    /// The set's cells in its block (Z order; all of them for a whole square).
+    pub(crate) fn bits(&self) -> u64 {
+        self.bits
     }
 
     /// Whether the set is its whole square.

@@ -59,13 +59,14 @@ impl RegionQuadtree {
     /// Set the cells of `set` to `value`, calling `changed` with the cells that switched (a
     /// whole square's as whole squares, a block's as one set), by one descent along the
     /// square's coordinates (see [`fill_square_reporting`](Self::fill_square_reporting)).
-    pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) {
+    /// Returns the block's cells after (Z order) for a set of some of a block's cells.
+    pub fn fill_cells_reporting(&mut self, set: CellSet, value: bool, mut changed: impl FnMut(CellSet)) -> Option<u64> {
         if !set.is_whole() {
             // A block's cells: there are blocks only in packed trees.
-            let _ = self.fill_block_cells(set.square(), set.bits, value, &mut changed);
-            return;
+            return Some(self.fill_block_cells(set.square(), set.bits, value, &mut changed));
         }
         self.fill_square_reporting(set.square(), value, |sq| changed(CellSet::whole(sq)));
+        None
     }
 
     /// Set the cells `cover` (Z order) of the block at `sq` to `value`: a loop down the
