@@ -85,32 +85,38 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            // Most turns send nothing: their outbox is left alone (taking and giving it back
-            // was a tenth of a dense random walk's step 3).
-            let mut outbox = if self.agents[i].mind.output.outbox().is_empty() {
-                Vec::new()
-            } else {
-                self.agents[i].mind.output.take_outbox()
-            };
-            for (to, payload) in outbox.drain(..) {
-                if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
-                    break;
-                }
-                self.spend(i, kind.energy_per_message);
-                let size = payload.size_bytes();
-                self.send(i, kind, round, to, payload, turns);
-                messages += 1;
+            // Most turns send nothing: their outbox is left alone (taking, draining and
+            // giving it back was a seventh of a dense random walk's step 3).
+            if !self.agents[i].mind.output.outbox().is_empty() {
+                let (sent, size) = self.send_outbox(i, kind, round, turns);
+                messages += sent;
                 bytes += size;
-                self.robots[i].stats.messages_sent += 1;
-                self.robots[i].stats.message_bytes += size;
-            }
-            if outbox.capacity() > 0 {
-                self.agents[i].mind.output.give_back_outbox(outbox);
             }
             end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
         self.step3_robots = pending;
         self.fan_out(turns);
+        (messages, bytes)
+    }
+
+    /// Send what robot `i` queued this round, in order, while it lives and can pay for
+    /// each message. Returns messages and bytes sent.
+    fn send_outbox(&mut self, i: usize, kind: &RobotType, round: u64, turns: &[Turn]) -> (u64, u64) {
+        let (mut messages, mut bytes) = (0, 0);
+        let mut outbox = self.agents[i].mind.output.take_outbox();
+        for (to, payload) in outbox.drain(..) {
+            if !self.robots[i].alive || self.robots[i].energy < kind.energy_per_message {
+                break;
+            }
+            self.spend(i, kind.energy_per_message);
+            let size = payload.size_bytes();
+            self.send(i, kind, round, to, payload, turns);
+            messages += 1;
+            bytes += size;
+            self.robots[i].stats.messages_sent += 1;
+            self.robots[i].stats.message_bytes += size;
+        }
+        self.agents[i].mind.output.give_back_outbox(outbox);
         (messages, bytes)
     }
 
