@@ -400,8 +400,18 @@ pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measur
         let mut sim = Simulation::new(scenario)?.with_time_planning(true);
         let setup_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        for _ in 0..rounds {
-            sim.step();
+        // The bench has the cores to itself: the workers poll between parallel steps
+        // instead of sleeping (see `with_hot_workers`; SMARTTEAMS_COLD_WORKERS=1 lets them
+        // sleep, to measure the difference).
+        let mut rounds_loop = || {
+            for _ in 0..rounds {
+                sim.step();
+            }
+        };
+        if std::env::var_os("SMARTTEAMS_COLD_WORKERS").is_some() {
+            rounds_loop();
+        } else {
+            sim_core::engine::with_hot_workers(rounds_loop);
         }
         let rounds_s = t1.elapsed().as_secs_f64();
         let digest = sim.robots().iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, r| {

@@ -3,10 +3,12 @@
 //! layers below.
 
 mod checkpoint;
+mod hot_workers;
 mod round;
 mod scenario;
 mod simulation;
 
+pub use hot_workers::with_hot_workers;
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
 pub use simulation::{DEFAULT_DECIDE_LIMIT, PhaseTimes, Simulation};

@@ -1,0 +1,125 @@
+//! Worker threads kept awake between a round's parallel steps.
+//!
+//! A round alternates parallel steps (perceive and decide, the explored map beside step 3)
+//! with sequential ones (step 3, the robot index). Between parallel steps rayon's idle
+//! workers go to sleep, and the next step wakes them: on the 2-core VM the benchmarks run
+//! on, the second worker started on a round's robots 27 µs after the first, about a tenth
+//! of a dense random walker's round (issue 11, measured with the time-stamp counter).
+//! [`with_hot_workers`] keeps them polling for work instead, at the price of a busy core
+//! during the sequential steps.
+
+use std::cell::Cell;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+thread_local! {
+    /// This thread is polling for work in [`with_hot_workers`] already.
+    static POLLING: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Run `f` with the current rayon pool's other workers kept awake: each polls for work
+/// (executing any it finds, as an idle worker would after waking) until `f` returns or
+/// panics. Results do not change: the same jobs run, only sooner.
+///
+/// For loops of rounds that have the cores to themselves (benchmarks, headless runs): the
+/// polling workers keep their cores busy between parallel steps, which slows anything else
+/// that wants them (another run, a viewer).
+///
+/// ```
+/// use rayon::prelude::*;
+/// let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+/// let sum: u64 = pool.install(|| {
+///     sim_core::engine::with_hot_workers(|| (0..1000u64).into_par_iter().sum())
+/// });
+/// assert_eq!(sum, 499_500);
+/// ```
+pub fn with_hot_workers<R>(f: impl FnOnce() -> R) -> R {
+    let pollers = rayon::current_num_threads().saturating_sub(1);
+    if pollers == 0 {
+        return f();
+    }
+    let caller = rayon::current_thread_index();
+    let stop = AtomicBool::new(false);
+    rayon::in_place_scope(|scope| {
+        for _ in 0..pollers {
+            scope.spawn(|_| poll(&stop, caller));
+        }
+        // Stops the pollers however `f` ends (the scope waits for them).
+        let _stop = StopOnDrop(&stop);
+        f()
+    })
+}
+
+/// Sets the flag when dropped.
+struct StopOnDrop<'a>(&'a AtomicBool);
+
+impl Drop for StopOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
+    }
+}
+
+/// Execute pool work as it appears until `stop`. Returns at once on the thread that runs
+/// `f` (`caller`: it would wait here for itself) and on a thread polling already (one
+/// poller a thread is enough), so that no thread can end up waiting on work it holds up.
+fn poll(stop: &AtomicBool, caller: Option<usize>) {
+    if rayon::current_thread_index() == caller || POLLING.with(Cell::get) {
+        return;
+    }
+    POLLING.with(|p| p.set(true));
+    while !stop.load(Ordering::Acquire) {
+        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+            std::hint::spin_loop();
+        }
+    }
+    POLLING.with(|p| p.set(false));
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicU64, Ordering};
+
+    use rayon::prelude::*;
+
+    use super::with_hot_workers;
+
+    /// Issue 11: nested parallel work inside `with_hot_workers` gives what it gives without
+    /// it, on pools of one to four threads, many times over (a lost job would hang or
+    /// change the sum); and a panic in `f` reaches the caller, the pollers stopped.
+    #[test]
+    fn issue11_hot_workers_run_every_job_and_stop() {
+        for threads in 1..=4 {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let (want, got) = pool.install(|| {
+                let work = |k: u32| -> u64 {
+                    (0..2000u32)
+                        .into_par_iter()
+                        .with_max_len(16)
+                        .map(|i| {
+                            (0..50u32)
+                                .into_par_iter()
+                                .map(|j| u64::from((i ^ j ^ k) % 7))
+                                .sum::<u64>()
+                        })
+                        .sum()
+                };
+                let want: Vec<u64> = (0..50).map(work).collect();
+                let got = with_hot_workers(|| (0..50).map(work).collect::<Vec<u64>>());
+                (want, got)
+            });
+            assert_eq!(got, want, "{threads} threads");
+            let ran = AtomicU64::new(0);
+            let caught = pool.install(|| {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    with_hot_workers(|| {
+                        (0..100u32).into_par_iter().for_each(|_| {
+                            ran.fetch_add(1, Ordering::Relaxed);
+                        });
+                        panic!("stop here");
+                    })
+                }))
+            });
+            assert!(caught.is_err(), "{threads} threads");
+            assert_eq!(ran.load(Ordering::Relaxed), 100);
+        }
+    }
+}
