@@ -9,7 +9,29 @@ use crate::spatial::quadtree::{RegionQuadtree, Square};
 const SLOTS: usize = 16;
 
 /// A slot that holds no block.
-const NO_BLOCK: u64 = u64::MAX;
+pub(super) const NO_BLOCK: u64 = u64::MAX;
+
+/// The key of the block whose south-west cell is `(x, y)`: `bx << 32 | by` in block
+/// coordinates.
+#[inline]
+pub(super) fn block_key(x: u32, y: u32) -> u64 {
+    (u64::from(x >> BLOCK_LEVEL) << 32) | u64::from(y >> BLOCK_LEVEL)
+}
+
+/// The blocks that slots of `keys` (and `bits` beside them) hold, with their bits.
+pub(super) fn held_blocks<'a>(keys: &'a [u64], bits: &'a [u64]) -> impl Iterator<Item = (Square, u64)> + 'a {
+    keys.iter()
+        .zip(bits)
+        .filter(|(key, _)| **key != NO_BLOCK)
+        .map(|(&key, &bits)| {
+            let sq = Square {
+                x: ((key >> 32) as u32) << BLOCK_LEVEL,
+                y: (key as u32) << BLOCK_LEVEL,
+                level: BLOCK_LEVEL,
+            };
+            (sq, bits)
+        })
+}
 
 /// The cells (Z-order bits, as the tree stores a block) of up to 16 blocks of a tree,
 /// exactly as the tree holds them: [`RegionQuadtree::fill_new_rows_cached`] keeps it up
@@ -40,10 +62,7 @@ impl BlockCache {
     #[inline]
     fn slot(x: u32, y: u32) -> (usize, u64) {
         let (bx, by) = (x >> BLOCK_LEVEL, y >> BLOCK_LEVEL);
-        (
-            ((bx & 3) | ((by & 3) << 2)) as usize,
-            (u64::from(bx) << 32) | u64::from(by),
-        )
+        (((bx & 3) | ((by & 3) << 2)) as usize, block_key(x, y))
     }
 
     /// The cells of the block at `sq` (a square at [`BLOCK_LEVEL`]), if held.
@@ -77,15 +96,7 @@ impl BlockCache {
     /// Whether every block held has the cells `tree` has there (a description of the first
     /// that does not, otherwise).
     pub fn check(&self, tree: &RegionQuadtree) -> Result<(), String> {
-        for (&key, &bits) in self.keys.iter().zip(&self.bits) {
-            if key == NO_BLOCK {
-                continue;
-            }
-            let sq = Square {
-                x: ((key >> 32) as u32) << BLOCK_LEVEL,
-                y: (key as u32) << BLOCK_LEVEL,
-                level: BLOCK_LEVEL,
-            };
+        for (sq, bits) in held_blocks(&self.keys, &self.bits) {
             let actual = tree.block_bits_at(sq);
             if actual != bits {
                 return Err(format!(

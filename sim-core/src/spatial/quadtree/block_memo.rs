@@ -2,14 +2,12 @@
 //! change nothing.
 
 use crate::spatial::quadtree::block::BLOCK_LEVEL;
+use crate::spatial::quadtree::block_cache::{NO_BLOCK, block_key, held_blocks};
 use crate::spatial::quadtree::{CellSet, RegionQuadtree, Square};
 
 /// Blocks a side of the window of blocks the memo maps one to one (64 × 64 blocks: 512 ×
 /// 512 cells).
 const SIDE_BITS: u32 = 6;
-
-/// A slot that holds no block.
-const NO_BLOCK: u64 = u64::MAX;
 
 /// Some of the cells set in a tree whose cells are only ever set (a collective explored
 /// map), for 4,096 of its blocks: each slot holds the block at its block coordinates
@@ -37,7 +35,7 @@ impl BlockMemo {
         let mask = (1 << SIDE_BITS) - 1;
         (
             ((bx & mask) | ((by & mask) << SIDE_BITS)) as usize,
-            (u64::from(bx) << 32) | u64::from(by),
+            block_key(sq.x, sq.y),
         )
     }
 
@@ -74,15 +72,7 @@ impl BlockMemo {
     /// Whether every cell held is set in `tree` (a description of the first block where
     /// one is not, otherwise).
     pub fn check(&self, tree: &RegionQuadtree) -> Result<(), String> {
-        for (&key, &bits) in self.keys.iter().zip(self.bits.iter()) {
-            if key == NO_BLOCK {
-                continue;
-            }
-            let sq = Square {
-                x: ((key >> 32) as u32) << BLOCK_LEVEL,
-                y: (key as u32) << BLOCK_LEVEL,
-                level: BLOCK_LEVEL,
-            };
+        for (sq, bits) in held_blocks(&self.keys, &self.bits) {
             let actual = tree.block_bits_at(sq);
             if bits & !actual != 0 {
                 return Err(format!(
