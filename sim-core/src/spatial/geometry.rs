@@ -835,7 +835,15 @@ pub fn segment_enters_box_interior(a: DVec2, b: DVec2, bx: &Aabb) -> bool {
 
 /// Squared distance between the segment `ab` and the closed box (0 when they meet).
 pub fn segment_box_distance_squared(a: DVec2, b: DVec2, bx: &Aabb) -> f64 {
-    if clip_segment(a, b, bx).is_some() {
+    // A segment whose box lies off the box by more than any rounding of the clip's (a part
+    // in 10⁹ of the coordinates) cannot meet it: the clip, two divisions, is skipped (issue
+    // 11: a move's blocked neighbour cells nearly always lie so).
+    let (lo, hi) = (a.min(b), a.max(b));
+    let scale = lo.abs().max(hi.abs()).max(bx.min.abs()).max(bx.max.abs()).max_element();
+    let margin = 1e-9 * (1.0 + scale);
+    let apart =
+        hi.x < bx.min.x - margin || lo.x > bx.max.x + margin || hi.y < bx.min.y - margin || lo.y > bx.max.y + margin;
+    if !apart && clip_segment(a, b, bx).is_some() {
         return 0.0;
     }
     // Two disjoint convex sets in the plane are closest at a vertex of one of them.
@@ -869,6 +877,42 @@ mod tests {
         // Near a corner: distance to (1,1) from (1.6,1.8) is 1.0.
         assert_eq!(d(1.6, 1.8, 1.0).classify(&unit()), Overlap::Disjoint);
         assert_eq!(d(1.6, 1.8, 1.01).classify(&unit()), Overlap::Partial);
+    }
+
+    /// Issue 11: the segment-to-box distance that skips the clip for segments well off the
+    /// box is the one that always clips, bit for bit: random segments and boxes, segments
+    /// ending on or a few units in the last place off a box's edges, far from the origin.
+    #[test]
+    fn issue11_segment_box_distance_skips_only_clips_that_miss() {
+        use rand::{Rng, SeedableRng};
+        let always_clip = |a: DVec2, b: DVec2, bx: &Aabb| {
+            if clip_segment(a, b, bx).is_some() {
+                return 0.0;
+            }
+            let from_ends = bx.distance_squared_to(a).min(bx.distance_squared_to(b));
+            bx.corners()
+                .iter()
+                .map(|&c| point_segment_distance_squared(c, a, b))
+                .fold(from_ends, f64::min)
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let (mut met, mut missed) = (0, 0);
+        for _ in 0..200_000 {
+            let offset = [0.0, 1e3, 1e5][rng.random_range(0..3)];
+            let lo = DVec2::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0)).round() + offset;
+            let bx = Aabb { min: lo, max: lo + 1.0 };
+            let a = lo + DVec2::new(rng.random_range(-2.0..3.0), rng.random_range(-2.0..3.0));
+            let mut b = a + DVec2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+            if rng.random_bool(0.3) {
+                // End on an edge, or a few ulps off it.
+                let ulps = f64::from(rng.random_range(-4i32..=4)) * f64::EPSILON * bx.max.x.abs().max(1.0);
+                b.x = bx.max.x + ulps;
+            }
+            let (got, want) = (segment_box_distance_squared(a, b, &bx), always_clip(a, b, &bx));
+            assert_eq!(got.to_bits(), want.to_bits(), "{a} {b} {bx:?}");
+            if want == 0.0 { met += 1 } else { missed += 1 }
+        }
+        assert!(met > 10_000 && missed > 10_000, "{met} met, {missed} missed");
     }
 
     #[test]
