@@ -22,7 +22,8 @@ thread_local! {
 ///
 /// For loops of rounds that have the cores to themselves (benchmarks, headless runs): the
 /// polling workers keep their cores busy between parallel steps, which slows anything else
-/// that wants them (another run, a viewer).
+/// that wants them (another run, a viewer). No more workers poll than there are cores
+/// besides the caller's; the rest sleep as before.
 ///
 /// ```
 /// use rayon::prelude::*;
@@ -33,7 +34,10 @@ thread_local! {
 /// assert_eq!(sum, 499_500);
 /// ```
 pub fn with_hot_workers<R>(f: impl FnOnce() -> R) -> R {
-    let pollers = rayon::current_num_threads().saturating_sub(1);
+    // At most one core each besides the caller's: on a pool with more threads than cores,
+    // pollers would take turns on the cores with the caller's sequential steps.
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let pollers = rayon::current_num_threads().min(cores).saturating_sub(1);
     if pollers == 0 {
         return f();
     }
