@@ -846,6 +846,11 @@ pub fn segment_box_distance_squared(a: DVec2, b: DVec2, bx: &Aabb) -> f64 {
     if !apart && clip_segment(a, b, bx).is_some() {
         return 0.0;
     }
+    disjoint_segment_box_distance_squared(a, b, bx)
+}
+
+/// Squared distance between the segment `ab` and a closed box it does not meet.
+fn disjoint_segment_box_distance_squared(a: DVec2, b: DVec2, bx: &Aabb) -> f64 {
     // Two disjoint convex sets in the plane are closest at a vertex of one of them.
     let from_ends = bx.distance_squared_to(a).min(bx.distance_squared_to(b));
     bx.corners()
@@ -889,11 +894,7 @@ mod tests {
             if clip_segment(a, b, bx).is_some() {
                 return 0.0;
             }
-            let from_ends = bx.distance_squared_to(a).min(bx.distance_squared_to(b));
-            bx.corners()
-                .iter()
-                .map(|&c| point_segment_distance_squared(c, a, b))
-                .fold(from_ends, f64::min)
+            disjoint_segment_box_distance_squared(a, b, bx)
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let (mut met, mut missed) = (0, 0);
