@@ -283,32 +283,22 @@ impl RobotIndex {
         radius_m: f64,
         mut visit: impl FnMut(usize, &[Entry], Option<(i32, i32)>) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
-        // The cells of the disc's box, a little wide: a robot on the rim passes a distance
-        // test by rounding, yet may lie an ulp beyond `p + r` as computed.
-        let slack = 1e-9 * (p.abs().max_element() + radius_m + self.cell_m);
-        let (x0, y0) = self.cell_of(p - DVec2::splat(radius_m + slack));
-        let (x1, y1) = self.cell_of(p + DVec2::splat(radius_m + slack));
+        let reach = radius_m + self.query_slack(p, radius_m);
+        let (x0, y0) = self.cell_of(p - DVec2::splat(reach));
+        let (x1, y1) = self.cell_of(p + DVec2::splat(reach));
         let cells = (i64::from(x1) - i64::from(x0) + 1) * (i64::from(y1) - i64::from(y0) + 1);
         if cells > self.entries.len() as i64 {
             // A disc wider than the swarm's spread: a scan is cheaper than the cells.
             return visit(0, &self.entries, None);
         }
-        if let Layout::Dense {
-            x0: bx,
-            y0: by,
-            width,
-            height,
-        } = self.layout
-        {
+        if let Some(((x0, x1), (y0, y1))) = self.dense_span((x0, y0), (x1, y1)) {
             // The rows of cells the disc covers, each one run of entries.
-            let (x0, x1) = (x0.max(bx), x1.min(bx + (width - 1) as i32));
-            let (y0, y1) = (y0.max(by), y1.min(by + (height - 1) as i32));
             if x0 > x1 {
                 return ControlFlow::Continue(());
             }
             for cy in y0..=y1 {
-                let (a, b) = (self.bucket((x0, cy)), self.bucket((x1, cy)));
-                let (a, b) = (self.starts[a] as usize, self.starts[b + 1] as usize);
+                let (a, b) = self.row_run(cy, x0, x1);
+                let (a, b) = (a as usize, b as usize);
                 visit(a, &self.entries[a..b], None)?;
             }
             return ControlFlow::Continue(());
@@ -323,11 +313,12 @@ impl RobotIndex {
         ControlFlow::Continue(())
     }
 
-    /// The runs [`for_each_run_near`](Self::for_each_run_near) visits, as ranges of
-    /// [`entries`](Self::entries) in the same order, when the cells are laid out densely and
-    /// the disc's box spans at most `N` rows of them: how many ranges were written to `out`
-    /// (the first ones), or `None` otherwise. No run is given with a cell: each holds only
-    /// robots of its row's cells. For a query in a loop of its own, without a call per run
+    /// The rows of cells of the disc's box as ranges of [`entries`](Self::entries), in index
+    /// order, when the cells are laid out densely and the box spans at most `N` rows of
+    /// them: how many ranges were written to `out` (the first ones), or `None` otherwise.
+    /// They hold the robots in the disc that [`for_each_run_near`](Self::for_each_run_near)
+    /// gives, in its order (it may scan every robot instead, where the box holds more cells
+    /// than there are robots). Each range holds only robots of its row's cells. For a query in a loop of its own, without a call per run
     /// (issue 11: the contact query's per-run visits and set-up were 890 instructions of a
     /// dense random walker's round).
     #[inline]
@@ -337,28 +328,16 @@ impl RobotIndex {
         radius_m: f64,
         out: &mut [(u32, u32); N],
     ) -> Option<usize> {
-        let Layout::Dense {
-            x0: bx,
-            y0: by,
-            width,
-            height,
-        } = self.layout
-        else {
-            return None;
-        };
         // The box of `try_for_each_run_near`, with the same slack. It dwarfs the rounding of
         // a product by `1 / cell_m` (a few units in the last place), so the box still holds
         // every cell a robot in the disc is filed in, without two divisions to wait for
         // (issue 11: they were a tenth of this query's time).
-        let slack = 1e-9 * (p.abs().max_element() + radius_m + self.cell_m);
+        let reach = radius_m + self.query_slack(p, radius_m);
         let cell = |q: DVec2| {
             let c = q * self.cells_per_m;
             (floor(c.x) as i32, floor(c.y) as i32)
         };
-        let (x0, y0) = cell(p - DVec2::splat(radius_m + slack));
-        let (x1, y1) = cell(p + DVec2::splat(radius_m + slack));
-        let (x0, x1) = (x0.max(bx), x1.min(bx + (width - 1) as i32));
-        let (y0, y1) = (y0.max(by), y1.min(by + (height - 1) as i32));
+        let ((x0, x1), (y0, y1)) = self.dense_span(cell(p - DVec2::splat(reach)), cell(p + DVec2::splat(reach)))?;
         if x0 > x1 || y0 > y1 {
             return Some(0);
         }
@@ -366,12 +345,46 @@ impl RobotIndex {
         if rows > N {
             return None;
         }
+        // Row by row from the first: each a layout's width further on.
+        let Layout::Dense { width, .. } = self.layout else {
+            unreachable!("a dense span is a dense layout's")
+        };
         let (first, last) = (self.bucket((x0, y0)), self.bucket((x1, y0)) + 1);
         for (k, run) in out.iter_mut().take(rows).enumerate() {
             let step = k * width as usize;
             *run = (self.starts[first + step], self.starts[last + step]);
         }
         Some(rows)
+    }
+
+    /// How much wider than its radius a query's box is taken: a robot on the rim passes a
+    /// distance test by rounding, yet may lie an ulp beyond `p + r` as computed.
+    #[inline]
+    fn query_slack(&self, p: DVec2, radius_m: f64) -> f64 {
+        1e-9 * (p.abs().max_element() + radius_m + self.cell_m)
+    }
+
+    /// The cells `lo ..= hi` clipped to a dense layout's, as column and row ranges (empty
+    /// where they miss it), or `None` for a hashed layout.
+    #[inline]
+    fn dense_span(&self, lo: (i32, i32), hi: (i32, i32)) -> Option<((i32, i32), (i32, i32))> {
+        let Layout::Dense { x0, y0, width, height } = self.layout else {
+            return None;
+        };
+        Some((
+            (lo.0.max(x0), hi.0.min(x0 + (width - 1) as i32)),
+            (lo.1.max(y0), hi.1.min(y0 + (height - 1) as i32)),
+        ))
+    }
+
+    /// Where in [`entries`](Self::entries) the robots of cells `x0 ..= x1` of row `cy` (of a
+    /// dense layout, all inside it) start and end: one run.
+    #[inline]
+    fn row_run(&self, cy: i32, x0: i32, x1: i32) -> (u32, u32) {
+        (
+            self.starts[self.bucket((x0, cy))],
+            self.starts[self.bucket((x1, cy)) + 1],
+        )
     }
 
     /// The robots in the order the index keeps them (see

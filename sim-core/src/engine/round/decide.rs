@@ -207,6 +207,11 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 /// in the sequential step 3: with the energy step 3 will leave the robot before it moves
 /// (upkeep is charged first), the same trim to speed and energy, the same bisection; and
 /// the robots that could be in its way (into `agent.planned_near`).
+// Inlined into step 2's per-robot closure, its only caller: left to itself the compiler
+// flips between inlining it or not as the queries under it change size (the call cost 29 M
+// instructions over 1,000 rounds of the dense random walk; perceive + decide on 1 thread
+// read 3 % slower in one series).
+#[inline]
 fn plan_move(
     agent: &mut Agent,
     robot: &Robot,
