@@ -24,6 +24,22 @@ if [ -z "${SMARTTEAMS_RERUN_PYTHON:-}" ]; then
   export SMARTTEAMS_RERUN_PYTHON SMARTTEAMS_RERUN_BIN
 fi
 echo "SMARTTEAMS_RERUN_PYTHON=$SMARTTEAMS_RERUN_PYTHON"
+# What this script set up must be used: a test that would skip for want of it fails instead
+# (tests/src/skip.rs). Other skips are noted in the log and listed at the end.
+require=rerun
+if [ -n "${SMARTTEAMS_DATA:-}" ]; then require="$require,data"; fi
+export SMARTTEAMS_REQUIRE="${SMARTTEAMS_REQUIRE:-$require}"
+mkdir -p target
+export SMARTTEAMS_SKIP_LOG="$(pwd)/target/test-skips.log"
+: > "$SMARTTEAMS_SKIP_LOG"
+report_skips() {
+  local n
+  n=$(wc -l < "$SMARTTEAMS_SKIP_LOG")
+  echo "== skipped tests: $n (required to run: $SMARTTEAMS_REQUIRE)"
+  if [ "$n" -gt 0 ]; then sed 's/^/   /' "$SMARTTEAMS_SKIP_LOG"; fi
+}
+trap report_skips EXIT
+echo "SMARTTEAMS_REQUIRE=$SMARTTEAMS_REQUIRE"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== cargo clippy (ci profile, all targets, -D warnings)"

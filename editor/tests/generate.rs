@@ -89,32 +89,48 @@ fn rooms_are_all_connected_through_doors() {
     }
 }
 
-#[test]
-fn generators_are_deterministic() {
-    for kind in [
-        Kind::Noise,
-        Kind::Fractal,
-        Kind::Caves,
-        Kind::Maze,
-        Kind::Rooms,
-        Kind::Mesas,
-    ] {
-        let a = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
-        let b = generate(kind, &opts(100.0, 80.0, 9, None)).unwrap();
-        let ma = sim_core::world::MapData {
-            obstacles: a,
-            home: sim_core::world::HomeBase::Disc {
-                center: sim_core::glam::DVec2::new(1.0, 1.0),
-                radius_m: 1.0,
-            },
-            treasures: vec![],
-        };
-        let mb = sim_core::world::MapData {
-            obstacles: b,
-            ..ma.clone()
-        };
-        assert_eq!(ma.to_bytes(), mb.to_bytes(), "{kind:?}");
+/// The map file of one 100 m × 80 m map of `kind` from `seed`.
+fn map_bytes(kind: Kind, seed: u64) -> Vec<u8> {
+    sim_core::world::MapData {
+        obstacles: generate(kind, &opts(100.0, 80.0, seed, None)).unwrap(),
+        home: sim_core::world::HomeBase::Disc {
+            center: sim_core::glam::DVec2::new(1.0, 1.0),
+            radius_m: 1.0,
+        },
+        treasures: vec![],
     }
+    .to_bytes()
+}
+
+/// CRC-32 of each generator's 100 m × 80 m map from seed 9. These change only when a
+/// generator's output changes, in a commit that says why.
+const PINNED_MAPS: [(Kind, u32); 6] = [
+    (Kind::Noise, 0x85b0_6613),
+    (Kind::Fractal, 0x8bb9_29f9),
+    (Kind::Caves, 0xb299_99c7),
+    (Kind::Maze, 0x2f7e_af30),
+    (Kind::Rooms, 0xa852_a8d2),
+    (Kind::Mesas, 0x2e7d_1343),
+];
+
+#[test]
+fn generators_give_their_pinned_maps_and_other_seeds_other_maps() {
+    let mut wrong = Vec::new();
+    for (kind, crc) in PINNED_MAPS {
+        let map = map_bytes(kind, 9);
+        assert_eq!(map, map_bytes(kind, 9), "{kind:?} twice from one seed");
+        assert_ne!(map, map_bytes(kind, 10), "{kind:?} from seeds 9 and 10");
+        // The file ends with a CRC-32 of the rest (the CRC of the whole is a constant).
+        let got = crc32fast::hash(&map[..map.len() - 4]);
+        if got != crc {
+            wrong.push(format!("(Kind::{kind:?}, 0x{got:08x}),"));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "maps differ from the pinned ones:\n{}",
+        wrong.join("\n")
+    );
 }
 
 #[test]

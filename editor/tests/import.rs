@@ -360,6 +360,51 @@ fn real_stage_bitmap() {
     assert_matches(&map, &img, |v| v < 128);
 }
 
+/// CRC-32 of the map file of each real map's import with default options (the Stage cave
+/// at its 16 m width). These change only when an importer's output changes, in a commit
+/// that says why.
+const PINNED_IMPORTS: [(&str, u32); 5] = [
+    ("movingai/arena.map", 0xfe92_c769),
+    ("movingai/street/Berlin_0_256.map", 0x6c3d_803e),
+    ("ros/turtlebot3/map.yaml", 0xc66b_6bb1),
+    ("ros/nav2/depot.yaml", 0x734a_2280),
+    ("images/stage/cave.png", 0x72fc_a7cc),
+];
+
+#[test]
+fn real_maps_import_to_their_pinned_maps() {
+    let Some(data) = common::data_dir("real_maps_import_to_their_pinned_maps") else {
+        return;
+    };
+    let mut wrong = Vec::new();
+    for (file, crc) in PINNED_IMPORTS {
+        let options = ImportOptions {
+            resolution_m: file.starts_with("images/").then_some(16.0 / 500.0),
+            ..ImportOptions::default()
+        };
+        let obstacles = import(&data.join(file), &options).unwrap();
+        let bytes = sim_core::world::MapData {
+            obstacles,
+            home: sim_core::world::HomeBase::Disc {
+                center: DVec2::ZERO,
+                radius_m: 1.0,
+            },
+            treasures: vec![],
+        }
+        .to_bytes();
+        // The file ends with a CRC-32 of the rest (the CRC of the whole is a constant).
+        let got = crc32fast::hash(&bytes[..bytes.len() - 4]);
+        if got != crc {
+            wrong.push(format!("(\"{file}\", 0x{got:08x}),"));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "imports differ from the pinned ones:\n{}",
+        wrong.join("\n")
+    );
+}
+
 /// Found by `tests/tests/fuzz.rs`: a ROS YAML whose `image:` names a missing file was refused
 /// with an error naming only the image, not the YAML that asked for it.
 #[test]

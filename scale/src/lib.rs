@@ -414,10 +414,7 @@ pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measur
             sim_core::engine::with_hot_workers(rounds_loop);
         }
         let rounds_s = t1.elapsed().as_secs_f64();
-        let digest = sim.robots().iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, r| {
-            let h = (h ^ r.position.x.to_bits()).wrapping_mul(0x0100_0000_01b3);
-            (h ^ r.position.y.to_bits()).wrapping_mul(0x0100_0000_01b3)
-        });
+        let digest = sim.positions_digest();
         Ok(Measurement {
             robots: sim.robots().len(),
             leaves: sim.obstacles().leaf_count(),

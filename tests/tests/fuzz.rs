@@ -264,7 +264,7 @@ fn fuzz_movingai_import() {
 /// at two rounds. Half the mutations get their body length and checksum mended, so that
 /// they reach the decoders and the checks of the state against the scenario instead of
 /// stopping at the framing; every accepted one is restored into a simulation of the
-/// scenario.
+/// scenario, which then plays three rounds from it.
 #[test]
 fn fuzz_checkpoint_reader() {
     use sim_core::io::{Checkpoint, RunSource, SimConfig, write_checkpoint};
@@ -309,6 +309,13 @@ fn fuzz_checkpoint_reader() {
             let crc = crc32fast::hash(&bytes[..end]);
             bytes[end..].copy_from_slice(&crc.to_le_bytes());
         }
-        verdict(Checkpoint::from_bytes(&bytes, &file).and_then(|c| c.restore(&mut target)))
+        let restored = Checkpoint::from_bytes(&bytes, &file).and_then(|c| c.restore(&mut target));
+        if restored.is_ok() {
+            // An accepted state must also play on: a few rounds of it, without a panic.
+            for _ in 0..3 {
+                target.step();
+            }
+        }
+        verdict(restored)
     });
 }

@@ -106,9 +106,17 @@ pub struct ViewerArgs {
         conflicts_with_all = ["spawn", "no_viewer"]
     )]
     pub connect: Option<String>,
-    /// Start a local Rerun viewer (`rerun` on PATH) and stream to it.
-    #[arg(long, conflicts_with = "no_viewer")]
-    pub spawn: bool,
+    /// Start a local Rerun viewer (`rerun` on PATH) and stream to it (`--spawn` alone: the
+    /// default port 9876; `--spawn=PORT` another).
+    #[arg(
+        long,
+        value_name = "PORT",
+        num_args = 0..=1,
+        require_equals = true,
+        default_missing_value = "9876",
+        conflicts_with = "no_viewer"
+    )]
+    pub spawn: Option<u16>,
     /// Log nothing to Rerun.
     #[arg(long)]
     pub no_viewer: bool,
@@ -122,8 +130,8 @@ impl ViewerArgs {
             None
         } else if let Some(url) = &self.connect {
             Some(ViewerTarget::Connect(connect_url(url)?))
-        } else if self.spawn {
-            Some(ViewerTarget::Spawn)
+        } else if let Some(port) = self.spawn {
+            Some(ViewerTarget::Spawn { port })
         } else {
             Some(ViewerTarget::Rrd(self.rrd.clone().unwrap_or(default_rrd)))
         })

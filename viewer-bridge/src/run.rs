@@ -69,6 +69,8 @@ pub struct Summary {
     pub robots: usize,
     /// Final metrics.
     pub metrics: sim_core::world::RoundMetrics,
+    /// [`Simulation::positions_digest`] at the end: equal digests, identical final positions.
+    pub digest: u64,
     /// Wall time of the rounds (set-up excluded).
     pub elapsed: Duration,
     /// Wall time of loading and set-up.
@@ -127,7 +129,8 @@ impl std::fmt::Display for Summary {
             "  robots alive      {} (mean energy {:.1})",
             m.robots_alive, m.mean_energy
         )?;
-        write!(f, "  distance          {:.1} m in all", m.distance_m)?;
+        writeln!(f, "  distance          {:.1} m in all", m.distance_m)?;
+        write!(f, "  digest            {:016x} (final positions)", self.digest)?;
         if m.strategies_failed > 0 {
             write!(
                 f,
@@ -196,7 +199,7 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
             // A file writer always catches up; a live viewer may be slow or paused.
             .with_when_behind(match target {
                 ViewerTarget::Rrd(_) => WhenBehind::Wait,
-                ViewerTarget::Connect(_) | ViewerTarget::Spawn => WhenBehind::SkipWorld,
+                ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => WhenBehind::SkipWorld,
             }),
         ),
         None => None,
@@ -243,10 +246,11 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
         resumed_at: resumed.map(Checkpoint::round),
         robots: sim.robots().len(),
         metrics: sim.report().metrics,
+        digest: sim.positions_digest(),
         elapsed,
         setup,
-        recording: rerun.map(|r| RecordingSummary {
-            target: run.viewer.clone().unwrap_or(ViewerTarget::Spawn),
+        recording: rerun.zip(run.viewer.clone()).map(|(r, target)| RecordingSummary {
+            target,
             logged_rounds: r.logged_rounds(),
             skipped_rounds: r.skipped_rounds(),
             sim_thread: r.busy(),

@@ -10,6 +10,9 @@ use anyhow::{Context, Result, bail};
 /// share blueprints in the viewer).
 pub const APPLICATION_ID: &str = "smartteams";
 
+/// The port a spawned viewer listens on unless `--spawn=PORT` says otherwise.
+pub const DEFAULT_VIEWER_PORT: u16 = rerun::DEFAULT_SERVER_PORT;
+
 /// The URL `--connect` uses without a value: a viewer on this machine, default port.
 pub const DEFAULT_CONNECT_URL: &str = rerun::DEFAULT_CONNECT_URL;
 
@@ -20,8 +23,12 @@ pub enum ViewerTarget {
     Rrd(PathBuf),
     /// Stream to a running viewer (`rerun+http://host:port/proxy`).
     Connect(String),
-    /// Start a local viewer (the `rerun` executable on `PATH`) and stream to it.
-    Spawn,
+    /// Start a local viewer (the `rerun` executable on `PATH`) listening on `port` and
+    /// stream to it; a viewer already listening there is used instead.
+    Spawn {
+        /// The viewer's port ([`DEFAULT_VIEWER_PORT`] unless asked otherwise).
+        port: u16,
+    },
 }
 
 impl std::fmt::Display for ViewerTarget {
@@ -29,7 +36,7 @@ impl std::fmt::Display for ViewerTarget {
         match self {
             ViewerTarget::Rrd(p) => write!(f, "{}", p.display()),
             ViewerTarget::Connect(url) => write!(f, "{url}"),
-            ViewerTarget::Spawn => write!(f, "a spawned viewer"),
+            ViewerTarget::Spawn { port } => write!(f, "a spawned viewer on port {port}"),
         }
     }
 }
@@ -118,8 +125,11 @@ pub fn open(
                 .connect_grpc_opts(url.clone())
                 .with_context(|| format!("cannot connect to {url}"))?
         }
-        ViewerTarget::Spawn => builder
-            .spawn()
+        ViewerTarget::Spawn { port } => builder
+            .spawn_opts(&rerun::SpawnOptions {
+                port: *port,
+                ..rerun::SpawnOptions::default()
+            })
             .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?,
     };
     // Wall-clock times would make two recordings of the same run differ; rounds are the time.

@@ -107,3 +107,75 @@ fn issue13_plot_refuses_bad_input_naming_the_file_and_line() {
         assert!(err.contains(want), "{args:?}: wanted '{want}', got: {err}");
     }
 }
+
+/// The points of every `<polyline>` of an SVG, in document order, with its stroke colour.
+fn polylines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
+    let attr = |tag: &str, name: &str| -> Option<String> {
+        let start = tag.find(&format!(" {name}=\""))? + name.len() + 3;
+        Some(tag[start..].split('"').next()?.to_owned())
+    };
+    svg.split("<polyline")
+        .skip(1)
+        .map(|rest| {
+            let tag = rest.split("/>").next().unwrap();
+            let points = attr(tag, "points")
+                .unwrap_or_default()
+                .split_whitespace()
+                .map(|p| {
+                    let (x, y) = p.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            (attr(tag, "stroke").unwrap_or_default().to_uppercase(), points)
+        })
+        .collect()
+}
+
+/// The drawn lines carry the data: each group's mean over its seeds, worked out by hand from
+/// `SWEEP`, read back from the SVG's polylines (pixel y grows downwards, linearly in the value).
+#[test]
+fn plot_lines_are_the_means_of_each_group() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
+    let out = smartteams(d, &["plot", "sweep.csv", "-o", "fig.svg"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let svg = std::fs::read_to_string(d.join("fig.svg")).unwrap();
+    // The groups' lines in the first two colours (axes and ticks are black; the legend's
+    // samples are 20 px level strokes), a point per round: four charts, g.count=4 then
+    // g.count=8 in each.
+    let (first, second) = ("#1F77B4", "#D62728");
+    let legend =
+        |p: &[(f64, f64)]| p.len() == 2 && (p[0].1 - p[1].1).abs() < 0.5 && (p[1].0 - p[0].0 - 20.0).abs() < 0.5;
+    let lines: Vec<_> = polylines(&svg)
+        .into_iter()
+        .filter(|(colour, p)| (colour == first || colour == second) && !legend(p))
+        .collect();
+    assert_eq!(lines.len(), 8, "{lines:?}");
+    assert!(lines.iter().all(|(_, p)| p.len() == 2), "{lines:?}");
+    // Means at rounds 1 and 2: explored 0.2→0.4 and 0.2→0.6, delivered 0→2 and 0→2,
+    // energy 10→7 and 10→8.
+    for (chart, (a, b)) in [
+        ((0.2, 0.4), (0.2, 0.6)),
+        ((0.0, 2.0), (0.0, 2.0)),
+        ((10.0, 7.0), (10.0, 8.0)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let (g4, g8) = (&lines[2 * chart], &lines[2 * chart + 1]);
+        assert_eq!((g4.0.as_str(), g8.0.as_str()), (first, second), "chart {chart}");
+        let (p, q) = (&g4.1, &g8.1);
+        assert_eq!((p[0].0, p[1].0), (q[0].0, q[1].0), "chart {chart}: same rounds");
+        assert!(p[1].0 > p[0].0, "chart {chart}: round 2 right of round 1");
+        // Equal values at round 1 sit at the same height.
+        assert!((p[0].1 - q[0].1).abs() <= 1.0, "chart {chart}: {p:?} {q:?}");
+        // The rises are in the ratio of the values' (pixels rounded: within 3 %).
+        let (rise_p, rise_q) = (p[0].1 - p[1].1, q[0].1 - q[1].1);
+        let want = (a.1 - a.0) / (b.1 - b.0);
+        assert!(
+            (rise_p / rise_q - want).abs() < 0.03 * want.abs().max(1.0),
+            "chart {chart}: rises {rise_p} and {rise_q}, want ratio {want}"
+        );
+    }
+}

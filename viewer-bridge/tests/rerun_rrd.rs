@@ -20,10 +20,18 @@ fn workspace() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
 }
 
-fn python() -> Option<PathBuf> {
+#[path = "../../tests/src/skip.rs"]
+mod skip;
+
+/// The Python with `rerun-sdk`, or `None` (the caller returns) after recording the skip.
+fn python(test: &str) -> Option<PathBuf> {
     let p = std::env::var_os("SMARTTEAMS_RERUN_PYTHON");
     if p.is_none() {
-        eprintln!("note: SMARTTEAMS_RERUN_PYTHON is unset; skipping (scripts/test.sh sets it up)");
+        skip::skip(
+            "rerun",
+            test,
+            "SMARTTEAMS_RERUN_PYTHON is unset (scripts/test.sh makes the venv and sets it)",
+        );
     }
     p.map(PathBuf::from)
 }
@@ -76,17 +84,60 @@ fn run_demo(dir: &Path, rounds: u64, extra: &[&str]) -> PathBuf {
 }
 
 fn summarise(python: &Path, rrd: &Path) -> Value {
+    try_summarise(python, rrd).unwrap_or_else(|e| panic!("rrd_summary.py failed: {e}"))
+}
+
+fn try_summarise(python: &Path, rrd: &Path) -> Result<Value, String> {
     let out = Command::new(python)
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/rrd_summary.py"))
         .arg(rrd)
         .output()
         .unwrap();
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())
+}
+
+/// Polls the recording a receiver is saving until it holds the robots of `last_round`,
+/// for at most a minute; returns its summary.
+fn wait_for_round(python: &Path, rrd: &Path, last_round: u64) -> Value {
+    let t0 = Instant::now();
+    loop {
+        if let Ok(s) = try_summarise(python, rrd)
+            && s["rounds"]["/world/robots"]
+                .as_array()
+                .is_some_and(|r| r.iter().any(|v| v.as_u64() == Some(last_round)))
+        {
+            return s;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_mins(1),
+            "{} never held round {last_round}",
+            rrd.display()
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+/// Waits (at most a minute) until `run` has written rounds to its metrics CSV, and asserts
+/// that it is still going: it is streaming, and what happens to its viewer next happens
+/// mid-run.
+fn wait_for_rounds(metrics: &Path, run: &mut Child) {
+    let t0 = Instant::now();
+    let rows = || std::fs::read_to_string(metrics).map_or(0, |s| s.lines().count().saturating_sub(1));
+    while rows() == 0 {
+        assert!(
+            run.try_wait().unwrap().is_none(),
+            "the run ended before writing a round"
+        );
+        assert!(t0.elapsed() < Duration::from_mins(1), "the run wrote no round");
+        std::thread::sleep(Duration::from_millis(20));
+    }
     assert!(
-        out.status.success(),
-        "rrd_summary.py failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+        run.try_wait().unwrap().is_none(),
+        "the run ended before its viewer could be stopped: give it more rounds"
     );
-    serde_json::from_slice(&out.stdout).unwrap()
 }
 
 fn rounds_of(summary: &Value, entity: &str) -> Vec<u64> {
@@ -126,7 +177,9 @@ fn read_metrics(path: &Path) -> BTreeMap<String, BTreeMap<u64, f64>> {
 
 #[test]
 fn rrd_reads_back_with_the_python_sdk_and_verifies() {
-    let Some(python) = python() else { return };
+    let Some(python) = python("rrd_reads_back_with_the_python_sdk_and_verifies") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let rrd = dir.path().join("demo.rrd");
     let rounds = 40;
@@ -153,7 +206,9 @@ fn rrd_reads_back_with_the_python_sdk_and_verifies() {
 /// box tagged with its robot: the demo's 12 scouts (ids 0–11), 4 excavators, 4 transporters.
 #[test]
 fn known_regions_of_a_large_swarm_are_one_entity_per_type() {
-    let Some(python) = python() else { return };
+    let Some(python) = python("known_regions_of_a_large_swarm_are_one_entity_per_type") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let rrd = dir.path().join("demo.rrd");
     let rounds = 20;
@@ -323,14 +378,19 @@ fn rrd_verify(python: &Path, rrd: &Path) {
     );
 }
 
+/// `view` logs the map: every layer, and a raster whose pixels are the map's cells (the maze
+/// is small enough for a pixel a cell), rock where a cell is blocked, row 0 at the north edge.
 #[test]
-fn view_writes_a_map_recording() {
-    let Some(python) = python() else { return };
+fn view_logs_the_maps_cells() {
+    let Some(python) = python("view_logs_the_maps_cells") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let rrd = dir.path().join("maze.rrd");
+    let map_path = workspace().join("maps/maze.stmap");
     let out = smartteams()
         .arg("view")
-        .arg(workspace().join("maps/maze.stmap"))
+        .arg(&map_path)
         .arg("--rrd")
         .arg(&rrd)
         .output()
@@ -349,6 +409,40 @@ fn view_writes_a_map_recording() {
             s["rows"]
         );
     }
+    let map = sim_core::world::MapData::load(&map_path).unwrap();
+    let grid = map.obstacles.grid();
+    let (w, h) = (grid.width_cells(), grid.height_cells());
+    let image = &s["images"]["/world/obstacles/raster"];
+    assert_eq!(
+        image["format"]["width"].as_u64(),
+        Some(u64::from(w)),
+        "{}",
+        image["format"]
+    );
+    assert_eq!(image["format"]["height"].as_u64(), Some(u64::from(h)));
+    let pixels: Vec<u8> = image["buffer"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| u8::try_from(v.as_u64().unwrap()).unwrap())
+        .collect();
+    assert_eq!(pixels.len(), (w * h * 3) as usize, "RGB, a pixel a cell");
+    let (rock, ground) = (viewer_bridge::layers::ROCK_RGB, viewer_bridge::layers::GROUND_RGB);
+    let mut blocked = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let row = h - 1 - y;
+            let at = ((row * w + x) * 3) as usize;
+            let want = if map.obstacles.tree().cell_value(x, y) {
+                rock
+            } else {
+                ground
+            };
+            blocked += u32::from(want == rock);
+            assert_eq!(pixels[at..at + 3], want, "cell ({x}, {y})");
+        }
+    }
+    assert!(blocked > w * h / 4, "a maze is mostly walls: {blocked} blocked cells");
 }
 
 /// A headless `rerun` that receives on a free port and saves what arrives to `save`; returns
@@ -379,7 +473,9 @@ fn receiver(python: &Path, save: &Path) -> (Child, u16) {
 
 #[test]
 fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
-    let Some(python) = python() else { return };
+    let Some(python) = python("live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
 
     // 1. A short run streamed to a receiver arrives whole.
@@ -387,11 +483,10 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     let (mut rx, port) = receiver(&python, &saved);
     let url = format!("--connect=127.0.0.1:{port}");
     run_demo(dir.path(), 20, &[url.as_str()]);
-    // The receiver writes as data arrives; give it a moment, then stop it.
-    std::thread::sleep(Duration::from_secs(2));
+    // The receiver writes as data arrives: read until the last round is there.
+    let s = wait_for_round(&python, &saved, 20);
     rx.kill().unwrap();
     rx.wait().unwrap();
-    let s = summarise(&python, &saved);
     assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
     assert_eq!(
         s["scalars"]["/metrics/exploration/explored_fraction"]
@@ -403,7 +498,8 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
 
     // 2. The receiver is killed mid-run: the run still completes.
     let (mut rx, port) = receiver(&python, &dir.path().join("killed.rrd"));
-    let mut run = demo_run(400)
+    let rounds = 20_000;
+    let mut run = demo_run(rounds)
         .arg("-q")
         .arg(format!("--connect=127.0.0.1:{port}"))
         .arg("--metrics")
@@ -413,7 +509,7 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(700));
+    wait_for_rounds(&dir.path().join("m2.csv"), &mut run);
     rx.kill().unwrap();
     rx.wait().unwrap();
     let t0 = Instant::now();
@@ -421,23 +517,27 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
         if let Some(status) = run.try_wait().unwrap() {
             break status;
         }
-        if t0.elapsed() > Duration::from_mins(2) {
+        if t0.elapsed() > Duration::from_mins(5) {
             run.kill().ok();
             panic!("the run hangs after its viewer vanished");
         }
         std::thread::sleep(Duration::from_millis(100));
     };
-    assert!(status.success(), "the run failed after its viewer vanished");
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut run.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert!(status.success(), "the run failed after its viewer vanished: {stderr}");
     let rows = csv::Reader::from_path(dir.path().join("m2.csv"))
         .unwrap()
         .records()
         .count();
-    assert_eq!(rows, 400, "every round was played");
+    assert_eq!(rows, rounds as usize, "every round was played");
 }
 
 #[test]
 fn same_seed_same_recording_whatever_the_thread_count() {
-    let Some(python) = python() else { return };
+    let Some(python) = python("same_seed_same_recording_whatever_the_thread_count") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let record = |name: &str, extra: &[&str]| {
         let rrd = dir.path().join(name);
@@ -469,10 +569,12 @@ fn same_seed_same_recording_whatever_the_thread_count() {
 #[cfg(unix)]
 #[test]
 fn a_paused_viewer_does_not_hold_up_the_run() {
-    let Some(python) = python() else { return };
+    let Some(python) = python("a_paused_viewer_does_not_hold_up_the_run") else {
+        return;
+    };
     let dir = tempfile::tempdir().unwrap();
     let (mut rx, port) = receiver(&python, &dir.path().join("paused.rrd"));
-    let rounds = 3000;
+    let rounds = 10_000;
     let mut run = demo_run(rounds as u64)
         .arg(format!("--connect=127.0.0.1:{port}"))
         .arg("--metrics")
@@ -481,7 +583,7 @@ fn a_paused_viewer_does_not_hold_up_the_run() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_millis(500));
+    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
     let stop = |signal: &str| {
         Command::new("kill")
             .args([signal, &rx.id().to_string()])
@@ -518,31 +620,23 @@ fn a_paused_viewer_does_not_hold_up_the_run() {
     );
 }
 
-/// Rerun spawns its viewer on the default port and, when something already listens there,
-/// streams to that instead: the `--spawn` tests take turns and need the port free.
-fn spawn_port() -> Option<std::sync::MutexGuard<'static, ()>> {
-    static PORT: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let guard = PORT.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if std::net::TcpStream::connect(("127.0.0.1", RERUN_DEFAULT_PORT)).is_ok() {
-        eprintln!("note: port {RERUN_DEFAULT_PORT} is in use; skipping a --spawn test");
-        return None;
-    }
-    Some(guard)
+/// A port nobody listens on now. Rerun streams to whatever already listens on a spawned
+/// viewer's port, so each `--spawn` test asks for a port of its own.
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
-/// `smartteams run … --spawn` of the demo for `rounds` rounds, with `path` as its `PATH`.
-fn run_spawned(dir: &Path, rounds: u64, path: &std::ffi::OsStr) -> std::process::Output {
+/// `smartteams run … --spawn=PORT` of the demo for `rounds` rounds, with `path` as its `PATH`.
+fn run_spawned(dir: &Path, rounds: u64, port: u16, path: &std::ffi::OsStr) -> std::process::Output {
     demo_run(rounds)
-        .args(["-q", "--spawn"])
+        .arg("-q")
+        .arg(format!("--spawn={port}"))
         .arg("--metrics")
         .arg(dir.join("metrics.csv"))
         .env("PATH", path)
         .output()
         .unwrap()
 }
-
-/// Rerun's default viewer port (what `--spawn` uses).
-const RERUN_DEFAULT_PORT: u16 = 9876;
 
 /// `--spawn` starts the `rerun` found on `PATH` and streams the run to it. The `rerun` put on
 /// `PATH` here wraps the real binary and adds `--save` (there is no display for a window), so
@@ -552,8 +646,10 @@ const RERUN_DEFAULT_PORT: u16 = 9876;
 fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     use std::os::unix::fs::PermissionsExt;
 
-    let Some(python) = python() else { return };
-    let Some(_port) = spawn_port() else { return };
+    let Some(python) = python("spawn_starts_the_rerun_on_path_and_streams_to_it") else {
+        return;
+    };
+    let port = free_port();
     let dir = tempfile::tempdir().unwrap();
     let bin = dir.path().join("bin");
     std::fs::create_dir(&bin).unwrap();
@@ -581,20 +677,15 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     )
     .unwrap();
 
-    let out = run_spawned(dir.path(), 20, &path);
-    // The spawned viewer outlives the run (as a real one would): stop it before asserting.
-    std::thread::sleep(Duration::from_secs(2));
-    let pid = std::fs::read_to_string(&pid_file).unwrap_or_default();
-    if !pid.trim().is_empty() {
-        Command::new("kill").arg(pid.trim()).status().unwrap();
-    }
+    let out = run_spawned(dir.path(), 20, port, &path);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let args = std::fs::read_to_string(&args_file).expect("the run did not start `rerun` from PATH");
-    assert!(
-        args.contains(&format!("--port={RERUN_DEFAULT_PORT}")),
-        "viewer started with {args}"
-    );
-    let s = summarise(&python, &saved);
+    assert!(args.contains(&format!("--port={port}")), "viewer started with {args}");
+    // The spawned viewer outlives the run (as a real one would): read what it saved until
+    // the last round is there, then stop it.
+    let s = wait_for_round(&python, &saved, 20);
+    let pid = std::fs::read_to_string(&pid_file).unwrap();
+    Command::new("kill").arg(pid.trim()).status().unwrap();
     assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
     assert_eq!(
         s["rows"]["/world/obstacles/raster|1"].as_u64(),
@@ -605,9 +696,8 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
 
 #[test]
 fn spawn_without_a_viewer_on_path_says_how_to_get_one() {
-    let Some(_port) = spawn_port() else { return };
     let dir = tempfile::tempdir().unwrap();
-    let out = run_spawned(dir.path(), 2, dir.path().as_os_str());
+    let out = run_spawned(dir.path(), 2, free_port(), dir.path().as_os_str());
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(

@@ -10,6 +10,8 @@ Used by viewer-bridge/tests/rerun_rrd.rs. Output:
                                                         each at its latest value)
   owners:  {"<entity>": sorted distinct `robot` values}  (entities with a `robot` column)
   robot_column_rows: {"<column>": rows of /world/robots that log it}
+  images:  {"<entity>": {"format": the Image format struct, "buffer": [bytes]}}
+                                                       (static images, their last row)
 """
 
 import json
@@ -28,14 +30,22 @@ def main(path: str) -> None:
     owners: dict[str, set[int]] = defaultdict(set)
     latest: dict[str, tuple[int, object]] = {}
     logged_rows: dict[str, int] = defaultdict(int)
+    images: dict[str, dict] = {}
     for chunk in RrdReader(path).stream():
         entity = str(chunk.entity_path)
         static = bool(chunk.is_static)
         rows[f"{entity}|{int(static)}"] += chunk.num_rows
-        if static:
-            continue
         batch = chunk.to_record_batch()
         names = batch.schema.names
+        if static:
+            buffers = [n for n in names if n.endswith("Image:buffer")]
+            formats = [n for n in names if n.endswith("Image:format")]
+            if buffers and formats:
+                buffer = batch.column(names.index(buffers[0])).to_pylist()[-1]
+                fmt = batch.column(names.index(formats[0])).to_pylist()[-1]
+                images[entity] = {"format": fmt[0] if isinstance(fmt, list) else fmt,
+                                  "buffer": list(buffer[0] if buffer and isinstance(buffer[0], (bytes, list)) else buffer)}
+            continue
         if "round" not in names:
             continue
         rs = batch.column(names.index("round")).to_pylist()
@@ -74,6 +84,7 @@ def main(path: str) -> None:
             "robots": robots,
             "owners": {e: sorted(o) for e, o in owners.items()},
             "robot_column_rows": logged_rows,
+            "images": images,
         },
         sys.stdout,
     )

@@ -3,24 +3,29 @@
 
 use std::path::PathBuf;
 
-/// The real-data folder from `SMARTTEAMS_DATA`, or `None` (the caller skips) when unset.
+#[path = "../../../tests/src/skip.rs"]
+mod skip;
+
+/// The real-data folder from `SMARTTEAMS_DATA`, or `None` (the caller returns) after
+/// recording the skip; a `SMARTTEAMS_DATA` that names no folder fails the test.
 pub fn data_dir(test: &str) -> Option<PathBuf> {
-    if let Some(d) = std::env::var_os("SMARTTEAMS_DATA") {
-        let d = PathBuf::from(d);
-        let d = if d.is_relative() {
-            // Relative to the workspace root (where CI runs from).
-            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(d)
-        } else {
-            d
-        };
-        if d.is_dir() {
-            return Some(d);
-        }
-        println!("skipped {test}: SMARTTEAMS_DATA={} is not a folder", d.display());
+    let Some(d) = std::env::var_os("SMARTTEAMS_DATA") else {
+        skip::skip(
+            "data",
+            test,
+            "SMARTTEAMS_DATA is not set (the real maps of ../shared/data)",
+        );
         return None;
-    }
-    println!("skipped {test}: SMARTTEAMS_DATA is not set");
-    None
+    };
+    let d = PathBuf::from(d);
+    let d = if d.is_relative() {
+        // Relative to the workspace root (where CI runs from).
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..").join(d)
+    } else {
+        d
+    };
+    assert!(d.is_dir(), "{test}: SMARTTEAMS_DATA={} is not a folder", d.display());
+    Some(d)
 }
 
 /// Parse a binary PGM (P5, 8-bit) independently of the editor: (width, height, pixels).

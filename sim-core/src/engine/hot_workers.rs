@@ -16,6 +16,10 @@ thread_local! {
     static POLLING: Cell<bool> = const { Cell::new(false) };
 }
 
+/// Jobs the pollers ran, for the tests to see that they took part.
+#[cfg(test)]
+static POLLED_JOBS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
 /// Run `f` with the current rayon pool's other workers kept awake: each polls for work
 /// (executing any it finds, as an idle worker would after waking) until `f` returns or
 /// panics. Results do not change: the same jobs run, only sooner.
@@ -71,7 +75,10 @@ fn poll(stop: &AtomicBool, caller: Option<usize>) {
     }
     POLLING.with(|p| p.set(true));
     while !stop.load(Ordering::Acquire) {
-        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+            #[cfg(test)]
+            POLLED_JOBS.fetch_add(1, Ordering::Relaxed);
+        } else {
             std::hint::spin_loop();
         }
     }
@@ -81,49 +88,85 @@ fn poll(stop: &AtomicBool, caller: Option<usize>) {
 #[cfg(test)]
 mod tests {
     use std::sync::atomic::{AtomicU64, Ordering};
+    use std::time::Duration;
 
     use rayon::prelude::*;
 
-    use super::with_hot_workers;
+    use super::{POLLED_JOBS, with_hot_workers};
 
-    /// Issue 11: nested parallel work inside `with_hot_workers` gives what it gives without
-    /// it, on pools of one to four threads, many times over (a lost job would hang or
-    /// change the sum); and a panic in `f` reaches the caller, the pollers stopped.
-    #[test]
-    fn issue11_hot_workers_run_every_job_and_stop() {
-        for threads in 1..=4 {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            let (want, got) = pool.install(|| {
-                let work = |k: u32| -> u64 {
-                    (0..2000u32)
-                        .into_par_iter()
-                        .with_max_len(16)
-                        .map(|i| {
-                            (0..50u32)
-                                .into_par_iter()
-                                .map(|j| u64::from((i ^ j ^ k) % 7))
-                                .sum::<u64>()
-                        })
-                        .sum()
-                };
-                let want: Vec<u64> = (0..50).map(work).collect();
-                let got = with_hot_workers(|| (0..50).map(work).collect::<Vec<u64>>());
-                (want, got)
-            });
-            assert_eq!(got, want, "{threads} threads");
-            let ran = AtomicU64::new(0);
-            let caught = pool.install(|| {
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    with_hot_workers(|| {
-                        (0..100u32).into_par_iter().for_each(|_| {
-                            ran.fetch_add(1, Ordering::Relaxed);
-                        });
-                        panic!("stop here");
-                    })
-                }))
-            });
-            assert!(caught.is_err(), "{threads} threads");
-            assert_eq!(ran.load(Ordering::Relaxed), 100);
+    /// Runs `f` on its own thread and fails if it has not returned within `limit`: a job
+    /// lost between the pollers would otherwise hang the test run.
+    fn within(limit: Duration, f: impl FnOnce() + Send + 'static) {
+        let (done, finished) = std::sync::mpsc::channel();
+        let worker = std::thread::spawn(move || {
+            f();
+            done.send(()).ok();
+        });
+        match finished.recv_timeout(limit) {
+            Ok(()) => worker.join().unwrap(),
+            // The sender is gone without a message: `f` panicked; show its panic.
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                std::panic::resume_unwind(worker.join().unwrap_err())
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => panic!("still running after {limit:?}"),
         }
+    }
+
+    /// Nested parallel sums, the same with and without hot workers.
+    fn nested_sums() -> Vec<u64> {
+        let work = |k: u32| -> u64 {
+            (0..2000u32)
+                .into_par_iter()
+                .with_max_len(16)
+                .map(|i| {
+                    (0..50u32)
+                        .into_par_iter()
+                        .map(|j| u64::from((i ^ j ^ k) % 7))
+                        .sum::<u64>()
+                })
+                .sum()
+        };
+        (0..50).map(work).collect()
+    }
+
+    /// A panic in `f` reaches the caller after every job ran, the pollers stopped.
+    fn a_panic_reaches_the_caller(threads: usize) {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let ran = AtomicU64::new(0);
+        let caught = pool.install(|| {
+            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                with_hot_workers(|| {
+                    (0..100u32).into_par_iter().for_each(|_| {
+                        ran.fetch_add(1, Ordering::Relaxed);
+                    });
+                    panic!("stop here");
+                })
+            }))
+        });
+        assert!(caught.is_err(), "{threads} threads");
+        assert_eq!(ran.load(Ordering::Relaxed), 100);
+    }
+
+    /// Nested parallel work inside `with_hot_workers` gives what it gives without it, on
+    /// pools of one to four threads (a lost job would hang or change the sums); where a
+    /// core is free for one, the poller runs some of the jobs; a panic stops the pollers.
+    /// One test, so that no other test's pollers add to the count of polled jobs.
+    #[test]
+    fn hot_workers_run_every_job_take_part_and_stop_after_a_panic() {
+        within(Duration::from_mins(2), || {
+            let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+            for threads in 1..=4 {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let want = pool.install(nested_sums);
+                let polled_before = POLLED_JOBS.load(Ordering::Relaxed);
+                let got = pool.install(|| with_hot_workers(nested_sums));
+                let polled = POLLED_JOBS.load(Ordering::Relaxed) - polled_before;
+                assert_eq!(got, want, "{threads} threads");
+                if threads > 1 && cores > 1 {
+                    assert!(polled > 0, "{threads} threads: the poller ran no job");
+                }
+                a_panic_reaches_the_caller(threads);
+            }
+        });
     }
 }

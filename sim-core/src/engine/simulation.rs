@@ -434,6 +434,14 @@ impl Simulation {
     pub fn robots(&self) -> &[Robot] {
         &self.robots
     }
+    /// A 64-bit FNV-1a digest of every robot's position bits, in id order: equal digests
+    /// mean the runs ended with every robot in the same place, to the last bit. O(robots).
+    pub fn positions_digest(&self) -> u64 {
+        self.robots.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, r| {
+            let h = (h ^ r.position.x.to_bits()).wrapping_mul(0x0100_0000_01b3);
+            (h ^ r.position.y.to_bits()).wrapping_mul(0x0100_0000_01b3)
+        })
+    }
     /// Treasures, by id.
     pub fn treasures(&self) -> &[TreasureState] {
         &self.treasures

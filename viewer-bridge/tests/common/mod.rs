@@ -1,4 +1,5 @@
 //! Helpers of the command-line tests: run `smartteams` as a user types it.
+#![allow(dead_code)] // each test file uses a part of these helpers
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -1,0 +1,168 @@
+//! Golden results of the example configs: the digest of the final positions and the CRC-32
+//! of the metrics and robot-stats CSVs, pinned. Each config runs through the library (the
+//! calls `smartteams run` makes) and through the `smartteams` binary, on 1 and 2 threads.
+//!
+//! These values change only when behaviour changes. A commit that changes one says why; a
+//! failure prints every config's new values as table rows, to paste once the change is meant.
+
+mod common;
+
+use std::path::Path;
+
+use clap::Parser;
+use sim_core::agent::StrategyRegistry;
+use viewer_bridge::cli::{Cli, Command};
+use viewer_bridge::run::execute;
+
+/// One pinned run: `smartteams run configs/CONFIG --rounds ROUNDS`.
+struct Golden {
+    config: &'static str,
+    rounds: u64,
+    digest: u64,
+    metrics_crc: u32,
+    robots_crc: u32,
+}
+
+/// What a run gave.
+#[derive(Debug, PartialEq)]
+struct Outcome {
+    digest: u64,
+    metrics_crc: u32,
+    robots_crc: u32,
+}
+
+const GOLDEN: &[Golden] = &[
+    Golden {
+        config: "demo.xml",
+        rounds: 600,
+        digest: 0x8ab1_89e4_c1cf_a9d0,
+        metrics_crc: 0x7e62_f6f1,
+        robots_crc: 0x7a64_b7f0,
+    },
+    Golden {
+        config: "teams.xml",
+        rounds: 800,
+        digest: 0xfb74_7744_dd19_d453,
+        metrics_crc: 0x7f6e_8d8f,
+        robots_crc: 0x97a1_00a1,
+    },
+    Golden {
+        config: "tactics.xml",
+        rounds: 600,
+        digest: 0x88a5_c226_49a7_6240,
+        metrics_crc: 0x0e82_119f,
+        robots_crc: 0x3c79_8b6e,
+    },
+    Golden {
+        config: "bench-1000.xml",
+        rounds: 50,
+        digest: 0x3c9e_ed76_48e5_2033,
+        metrics_crc: 0x60ed_fe16,
+        robots_crc: 0x20ec_b09d,
+    },
+    Golden {
+        config: "bench-10000.xml",
+        rounds: 5,
+        digest: 0x1d5d_aecb_6485_ba22,
+        metrics_crc: 0x755a_aa5b,
+        robots_crc: 0x87f3_ee7c,
+    },
+];
+
+fn crc_of(path: &Path) -> u32 {
+    crc32fast::hash(&std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
+}
+
+/// The arguments of one golden run, writing its CSVs into `dir`.
+fn run_args(g: &Golden, threads: usize, dir: &Path) -> Vec<String> {
+    let config = common::workspace().join("configs").join(g.config);
+    [
+        "run",
+        config.to_str().unwrap(),
+        "--no-viewer",
+        "--rounds",
+        &g.rounds.to_string(),
+        "--threads",
+        &threads.to_string(),
+        "--metrics",
+        dir.join("metrics.csv").to_str().unwrap(),
+        "--robot-stats",
+        dir.join("robots.csv").to_str().unwrap(),
+    ]
+    .map(str::to_owned)
+    .to_vec()
+}
+
+fn csv_crcs(dir: &Path, digest: u64) -> Outcome {
+    Outcome {
+        digest,
+        metrics_crc: crc_of(&dir.join("metrics.csv")),
+        robots_crc: crc_of(&dir.join("robots.csv")),
+    }
+}
+
+/// Through the library, as `smartteams run` parses and executes it.
+fn through_library(g: &Golden, threads: usize) -> Outcome {
+    let dir = tempfile::tempdir().unwrap();
+    let mut argv = vec!["smartteams".to_owned()];
+    argv.extend(run_args(g, threads, dir.path()));
+    argv.push("--quiet".into());
+    let Command::Run(args) = Cli::try_parse_from(argv).unwrap().command else {
+        unreachable!("a run command")
+    };
+    let run = args.resolve().unwrap();
+    let summary = execute(&run, &StrategyRegistry::with_builtins(), &mut []).unwrap();
+    assert_eq!(summary.rounds, g.rounds, "{}", g.config);
+    csv_crcs(dir.path(), summary.digest)
+}
+
+/// Through the binary, reading the digest from its summary.
+fn through_binary(g: &Golden, threads: usize) -> Outcome {
+    let dir = tempfile::tempdir().unwrap();
+    let args = run_args(g, threads, dir.path());
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = common::ok(&common::smartteams(dir.path(), &args));
+    let digest = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("digest"))
+        .and_then(|rest| rest.split_whitespace().next())
+        .and_then(|hex| u64::from_str_radix(hex, 16).ok())
+        .unwrap_or_else(|| panic!("no digest in the summary of {}:\n{out}", g.config));
+    csv_crcs(dir.path(), digest)
+}
+
+/// Runs every golden config by `play` on 1 and 2 threads; fails listing every difference.
+fn check_all(play: fn(&Golden, usize) -> Outcome) {
+    let mut wrong = Vec::new();
+    for g in GOLDEN {
+        for threads in [1, 2] {
+            let got = play(g, threads);
+            let want = Outcome {
+                digest: g.digest,
+                metrics_crc: g.metrics_crc,
+                robots_crc: g.robots_crc,
+            };
+            if got != want {
+                wrong.push(format!(
+                    "{} on {threads} thread(s): digest: 0x{:016x}, metrics_crc: 0x{:08x}, robots_crc: 0x{:08x}",
+                    g.config, got.digest, got.metrics_crc, got.robots_crc
+                ));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "results differ from the pinned ones:\n{}",
+        wrong.join("\n")
+    );
+}
+
+#[test]
+fn example_configs_give_their_pinned_results_through_the_library() {
+    check_all(through_library);
+}
+
+#[test]
+fn example_configs_give_their_pinned_results_through_the_binary() {
+    check_all(through_binary);
+}
