@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The Rerun logging benchmark of BENCHMARKS.md: 1,000 robots for 200 rounds
-# (configs/bench-1000.xml; CONFIG=configs/bench-10000.xml for 10,000 robots), `--no-viewer` against `--rrd`, alternating so that a machine's
-# drift hits both alike. Prints each pair, then the medians and the median ratio.
+# (configs/bench-1000.xml; CONFIG=configs/bench-10000.xml for 10,000 robots), `--no-viewer`
+# against `--rrd`, alternating so that a machine's drift hits both alike. Prints each pair,
+# then the medians and the median ratio.
 # LIVE=1 streams the logged runs to a `rerun --save` receiver on this machine (`--connect`)
 # instead of writing a file (the native rerun of SMARTTEAMS_RERUN_BIN, else of the venv that
 # scripts/test.sh makes).

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # A/B timing of the moonshot's crowd: 10,000 robots crowded at home on the paper-scale map
-# (the moonshot's first 20 rounds, same digest, 2 s of set-up instead of 16), one thread.
+# (the moonshot's first 20 rounds, with the same digest, on a map far quicker to set up),
+# one thread.
 # Runs the given `smartteams-bench` binaries alternately, RUNS times each, and prints the
 # minimum and median of each step's time (perceive + decide, resolve, deliver, the rest) and
 # their sum.

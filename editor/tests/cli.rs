@@ -148,16 +148,16 @@ fn run_ok(cmd: &mut Command) -> std::process::Output {
     out
 }
 
-/// Issue 10: `import` of a ROS map at 5 cm per pixel panicked in the automatic home placement
-/// (`clamp: expected min <= max`). A square quadtree leaf's world box is not exactly square in
-/// floating point (its x and y sides come from different corners), and the leaf's half width
-/// along x was used as the inset along y too: for some 5 cm leaves `min.y + half > max.y -
-/// half` by an ulp. Here every free leaf is a single 5 cm cell (a blocked pixel in every 2 × 2
-/// block; the free cells are all connected) and the cell nearest the centre, (10, 6), is one
-/// with the inverted range; the cell below it is blocked, so a disc shifted down by that ulp
-/// (what the clamp gave where glam's assertions are off) overlaps it.
+/// `import` of a ROS map at 5 cm per pixel does not panic in the automatic home placement
+/// (`clamp: expected min <= max`). A square quadtree leaf's world box is not exactly square
+/// in floating point (its x and y sides come from different corners), so the leaf's half
+/// width along x, used as the inset along y too, can give `min.y + half > max.y - half` by
+/// an ulp for some 5 cm leaves. Here every free leaf is a single 5 cm cell (a blocked pixel
+/// in every 2 × 2 block; the free cells are all connected) and the cell nearest the centre,
+/// (10, 6), is one with the inverted range; the cell below it is blocked, so a disc shifted
+/// down by that ulp (what the clamp gave where glam's assertions are off) overlaps it.
 #[test]
-fn issue10_ros_import_at_5cm_does_not_panic() {
+fn ros_import_at_5cm_does_not_panic() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (21u32, 13u32);
     let blocked = |x: u32, y: u32| x.is_multiple_of(2) && !y.is_multiple_of(2);
@@ -257,8 +257,8 @@ fn import_refuses_grids_it_cannot_compute_with() {
     );
 }
 
-/// Issue 12: `path` prints the length and waypoints (text and JSON), exits with status 1 and
-/// a message when the goal is unreachable or inside an obstacle, and refuses a nonsense
+/// `path` prints the length and waypoints (text and JSON), exits with status 1 and a
+/// message when the goal is unreachable or inside an obstacle, and refuses a nonsense
 /// radius. The map: 6 × 4 cells of 1 m, a wall at column 2 from the bottom up to y = 2, and
 /// a closed pocket at the top right.
 #[test]

@@ -608,9 +608,9 @@ fn import_to(raw: &Raw, dir: &Path) -> PathBuf {
     map
 }
 
-/// Issue 12: `path` through the binary on all 160 legacy arena queries equals the any-angle
-/// optimum the Polyanya reference implementation published (six significant digits), and
-/// every leg is legal by the reference's cell-by-cell test on the raw file.
+/// `path` through the binary on all 160 legacy arena queries equals the any-angle optimum
+/// the Polyanya reference implementation published (six significant digits), and every leg
+/// is legal by the reference's cell-by-cell test on the raw file.
 #[test]
 fn real_cli_path_arena_equals_published_anyangle_optima() {
     let Some(data) = common::data_dir("real_cli_path_arena_equals_published_anyangle_optima") else {
@@ -635,10 +635,10 @@ fn real_cli_path_arena_equals_published_anyangle_optima() {
     }
 }
 
-/// Issue 12: on the Berlin street map's 930 octile queries (no any-angle optima published),
-/// every path is legal, no shorter than the straight line and no longer than the octile
-/// optimum, and a query is unreachable exactly when its octile length says so. All through
-/// the library; every 93rd query also through the binary, which must print the same path.
+/// On the Berlin street map's 930 octile queries (no any-angle optima published), every
+/// path is legal, no shorter than the straight line and no longer than the octile optimum,
+/// and a query is unreachable exactly when its octile length says so. All through the
+/// library; every 93rd query also through the binary, which must print the same path.
 #[test]
 fn real_path_berlin_between_straight_line_and_octile() {
     let Some(data) = common::data_dir("real_path_berlin_between_straight_line_and_octile") else {

@@ -405,8 +405,8 @@ fn real_maps_import_to_their_pinned_maps() {
     );
 }
 
-/// Found by `tests/tests/fuzz.rs`: a ROS YAML whose `image:` names a missing file was refused
-/// with an error naming only the image, not the YAML that asked for it.
+/// A ROS YAML whose `image:` names a missing file is refused with an error naming the YAML
+/// that asked for it, not only the image.
 #[test]
 fn fuzz_found_a_ros_yaml_naming_a_missing_image_is_named_in_the_error() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,5 +1,5 @@
-//! `smartteams-bench curves`: runs `smartteams-bench swarm --csv-row` once per point, each in
-//! its own process, and writes the curves as CSV and PNG.
+//! `smartteams-bench curves`: runs `smartteams-bench swarm --csv-row` once per point, each
+//! in its own process, and writes the curves as CSV and PNG.
 
 use std::path::Path;
 use std::process::Command;

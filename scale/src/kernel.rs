@@ -1,5 +1,5 @@
-//! The kernel scenario (issue 12's target for navigation, and the kernel's criterion
-//! bench): cooperative explorers on a generated map of clustered rocks, about 2.1 M leaves.
+//! The kernel scenario (the navigation benchmark, and the kernel's criterion bench):
+//! cooperative explorers on a generated map of clustered rocks, about 2.1 M leaves.
 
 use std::sync::Arc;
 

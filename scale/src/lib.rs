@@ -1,6 +1,6 @@
-//! The scale suite (issue 11): each scenario generates its own map with the editor's
-//! library (nothing large is committed), builds a [`Scenario`], and [`measure`] plays it,
-//! reporting set-up time, rounds per second after set-up, and peak memory.
+//! The scale suite: each scenario generates its own map with the editor's library (nothing
+//! large is committed), builds a [`Scenario`], and [`measure`] plays it, reporting set-up
+//! time, rounds per second after set-up, and peak memory.
 //!
 //! ```
 //! use scale::{RandomWalk, measure};
@@ -69,10 +69,10 @@ pub enum Error {
 /// This crate's result.
 pub type Result<T> = std::result::Result<T, Error>;
 
-/// The dense random walk of issue 11: `robots` random walkers (turn probability 0.1,
-/// 0.5 m steps, 5 m view, no energy use) on a white-noise map of `side_m` × `side_m` at
-/// `density`, all starting in a home disc of `home_radius_m` at the centre (cleared of
-/// obstacles). Each walker keeps its own known map and obeys collisions.
+/// The dense random walk: `robots` random walkers (turn probability 0.1, 0.5 m steps, 5 m
+/// view, no energy use) on a white-noise map of `side_m` × `side_m` at `density`, all
+/// starting in a home disc of `home_radius_m` at the centre (cleared of obstacles). Each
+/// walker keeps its own known map and obeys collisions.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RandomWalk {
     /// Walkers (default 1,000).
@@ -334,7 +334,7 @@ impl Measurement {
     }
 
     /// Planning time ([`PhaseTimes::planning`], CPU time over all threads) per robot-round,
-    /// in µs: issue 12's "navigation and frontier choice per robot per round".
+    /// in µs: navigation and frontier choice per robot per round.
     pub fn planning_us_per_robot_round(&self) -> f64 {
         let robot_rounds = self.rounds as f64 * self.robots as f64;
         if robot_rounds == 0.0 {

@@ -27,7 +27,7 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Scenario {
-    /// Random walkers on a white-noise map (issue 11's dense random walk).
+    /// Dense random walkers on a white-noise map.
     RandomWalk {
         /// Walkers.
         #[arg(long, default_value_t = 1_000)]
@@ -68,10 +68,10 @@ enum Scenario {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
-    /// The kernel scenario (issue 12's navigation target): cooperative explorers on a
-    /// 2,048 m map of clustered rocks (about 2.1 M leaves). Prints the time strategies spent
-    /// planning routes and frontiers, per robot-round (issue 12: at most 2 µs with 1,000
-    /// robots over 1,500 rounds).
+    /// The kernel scenario: cooperative explorers on a 2,048 m map of clustered rocks
+    /// (about 2.1 M leaves). Prints the time strategies spent planning routes and
+    /// frontiers, per robot-round (the target: at most 2 µs with 1,000 robots over 1,500
+    /// rounds).
     Kernel {
         /// Explorers.
         #[arg(long, default_value_t = 1_000)]
@@ -98,8 +98,8 @@ enum Scenario {
         #[arg(long)]
         no_plots: bool,
     },
-    /// Any-angle paths (issue 12): the visibility graph's size and build time on a map, then
-    /// the mean query time and, against published optima, the mean and worst excess.
+    /// Any-angle paths: the visibility graph's size and build time on a map, then the mean
+    /// query time and, against published optima, the mean and worst excess.
     AnyAngle {
         /// A Moving AI `.map` or a Smart Teams map file.
         #[arg(long)]
@@ -118,9 +118,9 @@ enum Scenario {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
-    /// The kernel's navigation graph (issue 12): pieces of free space, edges and build time
-    /// on a map, then route queries for a robot that knows the whole map, with their lengths
-    /// against the exact any-angle planner's on maps small enough for it.
+    /// The kernel's navigation graph: pieces of free space, edges and build time on a map,
+    /// then route queries for a robot that knows the whole map, with their lengths against
+    /// the exact any-angle planner's on maps small enough for it.
     NavGraph {
         /// A Moving AI `.map` or a Smart Teams map file.
         #[arg(long)]

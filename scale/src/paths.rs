@@ -1,6 +1,6 @@
-//! The any-angle path bench (issue 12): a map's corners and the planner's build time (and,
-//! for robots with a radius, the visibility graph's size and linking time), then query times
-//! and, where the queries carry published optima, how far the paths are from them.
+//! The any-angle path bench: a map's corners and the planner's build time (and, for robots
+//! with a radius, the visibility graph's size and linking time), then query times and,
+//! where the queries carry published optima, how far the paths are from them.
 
 use std::time::Instant;
 
@@ -97,7 +97,7 @@ pub fn bench(map: &ObstacleMap, queries: &[PathQuery], radius_m: f64) -> Result<
     })
 }
 
-/// What the navigation-graph bench measured (issue 12, item 1).
+/// What the navigation-graph bench measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NavBench {
     /// Free leaves of the map's quadtree.

@@ -30,8 +30,8 @@ fn random_walk_prints_its_measurement() {
     );
 }
 
-/// Issue 12: the kernel scenario reports the explorers' planning time per robot-round (the
-/// navigation target's measure); 30 explorers for 30 rounds plan a few frontier routes.
+/// The kernel scenario reports the explorers' planning time per robot-round (the navigation
+/// target's measure); 30 explorers for 30 rounds plan a few frontier routes.
 #[test]
 fn kernel_prints_its_planning_time_per_robot_round() {
     let out = bench(&["kernel", "--robots", "30", "--rounds", "30", "--threads", "2"]);

@@ -1,6 +1,6 @@
 //! Golden results of the scale suite's scenarios at reduced sizes: the digest of the final
-//! positions and the CRC-32 of the metrics CSV, pinned. Each scenario runs through the library
-//! on 1 and 2 threads, and through `smartteams-bench` (which prints the digest).
+//! positions and the CRC-32 of the metrics CSV, pinned. Each scenario runs through the
+//! library on 1 and 2 threads, and through `smartteams-bench` (which prints the digest).
 //!
 //! These values change only when behaviour changes. A commit that changes one says why; a
 //! failure prints every scenario's new values, to paste once the change is meant.

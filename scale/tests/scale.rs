@@ -25,7 +25,7 @@ fn random_walk_gives_the_same_result_on_one_and_two_threads() {
 }
 
 #[test]
-fn issue11_walkers_build_no_navigation_graph() {
+fn walkers_build_no_navigation_graph() {
     let mut sim = Simulation::new(small_walk().scenario().unwrap()).unwrap();
     for _ in 0..20 {
         sim.step();

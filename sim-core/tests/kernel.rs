@@ -248,12 +248,12 @@ fn results_do_not_depend_on_the_thread_count() {
     assert_ne!(a.0, b.0);
 }
 
-/// Issue 11: turns that depend on nobody, resolved in step 2 in parallel, give exactly the
-/// run that resolving every turn in id order gives: a crowd of random walkers that bump into
-/// each other, explorers that talk, and workers that dig and carry (every round's metrics,
+/// Turns that depend on nobody, resolved in step 2 in parallel, give exactly the run that
+/// resolving every turn in id order gives: a crowd of random walkers that bump into each
+/// other, explorers that talk, and workers that dig and carry (every round's metrics,
 /// events and robot bits), on 2 threads.
 #[test]
-fn issue11_turns_resolved_alone_give_the_id_order_run() {
+fn turns_resolved_alone_give_the_id_order_run() {
     let groups = || {
         vec![
             (30, RobotType::explorer(), "random_walk"),
@@ -267,11 +267,11 @@ fn issue11_turns_resolved_alone_give_the_id_order_run() {
     assert_same_rounds(&alone, &in_order, 200);
 }
 
-/// Issue 12: planning is timed only when asked, into `PhaseTimes::planning`, and timing it
-/// changes nothing in the run. Explorers plan frontier routes and workers routes to
-/// treasures on the rooms map.
+/// Planning is timed only when asked, into `PhaseTimes::planning`, and timing it changes
+/// nothing in the run. Explorers plan frontier routes and workers routes to treasures on
+/// the rooms map.
 #[test]
-fn issue12_planning_time_is_measured_when_asked_and_changes_nothing() {
+fn planning_time_is_measured_when_asked_and_changes_nothing() {
     let groups = || {
         vec![
             (6, RobotType::explorer(), "cooperative"),
@@ -493,11 +493,11 @@ fn team_groups_form_and_follow_their_leader() {
     assert!(sim.report().metrics.explored_fraction > 0.1);
 }
 
-/// Issue 11: the collective explored map is marked on another thread while step 3 runs.
-/// The round that completes the map still reports `MapExplored` once, and the free area
-/// the robots are credited with adds up to the map's (every free cell credited once).
+/// The collective explored map is marked on another thread while step 3 runs. The round
+/// that completes the map still reports `MapExplored` once, and the free area the robots
+/// are credited with adds up to the map's (every free cell credited once).
 #[test]
-fn issue11_map_explored_once_and_every_free_cell_credited_once() {
+fn map_explored_once_and_every_free_cell_credited_once() {
     let grid = Grid::new(DVec2::ZERO, 1.0, 24, 24).unwrap();
     let obstacles = ObstacleMap::from_fn(grid, |x, y| x == 12 && y < 18);
     let free_m2 = f64::from(24 * 24 - 18);
@@ -547,12 +547,12 @@ fn issue11_map_explored_once_and_every_free_cell_credited_once() {
     assert!((credited - free_m2).abs() < 1e-6, "credited {credited} m² of {free_m2}");
 }
 
-/// Issue 11: the robots whose known map changed are listed on the explored map's thread,
-/// and the first sightings only in rounds that step 2 found news in. Each round's report
-/// still lists exactly the robots whose known cells grew (maps only grow), in id order,
-/// and a `TreasureFound` for each treasure in the round its `found_round` names, once.
+/// The robots whose known map changed are listed on the explored map's thread, and the
+/// first sightings only in rounds that step 2 found news in. Each round's report still
+/// lists exactly the robots whose known cells grew (maps only grow), in id order, and a
+/// `TreasureFound` for each treasure in the round its `found_round` names, once.
 #[test]
-fn issue11_reports_list_changed_maps_and_first_sightings() {
+fn reports_list_changed_maps_and_first_sightings() {
     let treasures = vec![
         TreasureSpec {
             position: DVec2::new(12.5, 30.5),
@@ -640,7 +640,7 @@ impl Strategy for Fragile {
 }
 
 #[test]
-fn issue13_a_panicking_strategy_disables_only_its_robot() {
+fn a_panicking_strategy_disables_only_its_robot() {
     let mut registry = StrategyRegistry::with_builtins();
     registry.register("fragile", "", |_| Ok(Box::new(Fragile)));
     let run = |threads: usize| {
@@ -715,7 +715,7 @@ impl Strategy for Ponderer {
 }
 
 #[test]
-fn issue13_a_slow_decision_is_reported_with_its_robot_and_time() {
+fn a_slow_decision_is_reported_with_its_robot_and_time() {
     let mut registry = StrategyRegistry::empty();
     registry.register("ponder", "", |_| Ok(Box::new(Ponderer)));
     let run = |limit: Option<std::time::Duration>| {
@@ -745,13 +745,13 @@ fn state_bytes(sim: &Simulation) -> Vec<u8> {
     out
 }
 
-/// Issue 13: a run saved after k rounds and restored into a simulation set up afresh from
-/// the same scenario plays on exactly as the run that was never stopped (every round's
-/// metrics, events and robot bits, and the final state byte for byte), for every built-in
-/// strategy at once (`cooperative` with and without `max_detour_m`), with known maps and
-/// sightings in flight and a finite radio budget, on one thread and on two.
+/// A run saved after k rounds and restored into a simulation set up afresh from the same
+/// scenario plays on exactly as the run that was never stopped (every round's metrics,
+/// events and robot bits, and the final state byte for byte), for every built-in strategy
+/// at once (`cooperative` with and without `max_detour_m`), with known maps and sightings
+/// in flight and a finite radio budget, on one thread and on two.
 #[test]
-fn issue13_a_restored_run_plays_on_bit_for_bit() {
+fn a_restored_run_plays_on_bit_for_bit() {
     const ROUNDS: u64 = 160;
     let registry = StrategyRegistry::with_builtins();
     let setup = || {
@@ -836,10 +836,10 @@ fn issue13_a_restored_run_plays_on_bit_for_bit() {
     }
 }
 
-/// Issue 13: a state that does not fit the scenario is refused with a reason, and a
-/// strategy that cannot save its state makes the run refuse to checkpoint, naming its group.
+/// A state that does not fit the scenario is refused with a reason, and a strategy that
+/// cannot save its state makes the run refuse to checkpoint, naming its group.
 #[test]
-fn issue13_states_that_do_not_fit_are_refused() {
+fn states_that_do_not_fit_are_refused() {
     let registry = StrategyRegistry::with_builtins();
     let mut sim = new_sim(
         scenario(

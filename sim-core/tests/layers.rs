@@ -1,6 +1,6 @@
-//! Regression test for issue 10 (sim-core in layers): every source file imports only from
-//! its own layer or the layers below it (spatial → world → agent → engine → io), and
-//! names other layers only through their curated `crate::<layer>::Item` paths.
+//! sim-core in layers: every source file imports only from its own layer or the layers
+//! below it (spatial → world → agent → engine → io), and names other layers only through
+//! their curated `crate::<layer>::Item` paths.
 
 use std::path::{Path, PathBuf};
 
@@ -37,7 +37,7 @@ fn crate_references(text: &str) -> Vec<(usize, String)> {
 }
 
 #[test]
-fn issue10_no_file_imports_from_a_layer_above_its_own() {
+fn no_file_imports_from_a_layer_above_its_own() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);

@@ -1,8 +1,7 @@
-//! Radio budgets (issue 11): a receiver takes messages addressed to it first, then
-//! broadcasts, until the next would overflow `radio_bytes_per_round`. And who receives at
-//! all: robots alive when a message is sent. Expected inboxes are
-//! worked out by hand from the payload sizes (a position is 33 bytes, a custom message its
-//! tag plus its data).
+//! Radio budgets: a receiver takes messages addressed to it first, then broadcasts, until
+//! the next would overflow `radio_bytes_per_round`. And who receives at all: robots alive
+//! when a message is sent. Expected inboxes are worked out by hand from the payload sizes
+//! (a position is 33 bytes, a custom message its tag plus its data).
 
 use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
@@ -79,7 +78,7 @@ fn inboxes(sim: &Simulation) -> Vec<Vec<(u32, bool)>> {
 }
 
 #[test]
-fn issue11_a_budget_that_never_fills_delivers_exactly_what_no_budget_does() {
+fn a_budget_that_never_fills_delivers_exactly_what_no_budget_does() {
     let mut free = chatters(u64::MAX);
     let mut roomy = chatters(u64::MAX - 1);
     for _ in 0..3 {
@@ -93,7 +92,7 @@ fn issue11_a_budget_that_never_fills_delivers_exactly_what_no_budget_does() {
 }
 
 #[test]
-fn issue11_a_full_radio_drops_the_rest() {
+fn a_full_radio_drops_the_rest() {
     let mut sim = chatters(70);
     sim.step();
     let got = inboxes(&sim);
@@ -110,11 +109,11 @@ fn issue11_a_full_radio_drops_the_rest() {
     assert_eq!(sim.report().metrics.messages, 23);
 }
 
-/// Issue 11: the round's links, worked out from the inboxes when asked (no longer gathered
-/// into the report), are every pending delivery (sender → receiver), receiver by receiver,
-/// with or without radio budgets; counted by hand for the chatters.
+/// The round's links, worked out from the inboxes when asked, are every pending delivery
+/// (sender → receiver), receiver by receiver, with or without radio budgets; counted by
+/// hand for the chatters.
 #[test]
-fn issue11_links_are_the_pending_deliveries() {
+fn links_are_the_pending_deliveries() {
     for budget in [u64::MAX, 70] {
         let mut sim = chatters(budget);
         sim.step();
@@ -134,12 +133,12 @@ fn issue11_links_are_the_pending_deliveries() {
     }
 }
 
-/// Issue 11: messages without budgets are put in the inboxes after step 3, yet a receiver
-/// takes a message only if it was alive when the message was sent. Robot 5 runs dry in its
-/// own turn of round 1 (its upkeep is all its energy), before it sends: it hears robots 0
-/// to 4, whose turns came first, and not 6 to 11; nobody hears it.
+/// Messages without budgets are put in the inboxes after step 3, yet a receiver takes a
+/// message only if it was alive when the message was sent. Robot 5 runs dry in its own turn
+/// of round 1 (its upkeep is all its energy), before it sends: it hears robots 0 to 4,
+/// whose turns came first, and not 6 to 11; nobody hears it.
 #[test]
-fn issue11_a_robot_that_runs_dry_hears_only_who_sent_before_its_turn() {
+fn a_robot_that_runs_dry_hears_only_who_sent_before_its_turn() {
     let normal = RobotType::explorer();
     let frail = RobotType::explorer().with_energy_capacity(normal.energy_idle);
     let groups = vec![

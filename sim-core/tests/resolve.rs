@@ -210,11 +210,11 @@ fn two_robots_asking_for_the_same_spot_lower_id_wins() {
     assert!((sim.robots()[0].position - m).length() < EPS);
 }
 
-/// Issue 11: step 2 lists who could be in a move's way by the id order (those before a
-/// robot within the radii plus the top speed of its move, those after it within the radii),
-/// and step 3 meets each where the order leaves it.
+/// Step 2 lists who could be in a move's way by the id order (those before a robot within
+/// the radii plus the top speed of its move, those after it within the radii), and step 3
+/// meets each where the order leaves it.
 #[test]
-fn issue11_a_move_meets_robots_before_it_where_they_moved_and_after_it_where_they_stand() {
+fn a_move_meets_robots_before_it_where_they_moved_and_after_it_where_they_stand() {
     // Starts on the placement lattice (spacing 2 · 0.125 + 0.05 = 0.3 m), so they are
     // kept as given.
     let at = |kx: u32, ky: u32| DVec2::new(f64::from(kx) * 0.3, f64::from(ky) * 0.3);
@@ -358,10 +358,8 @@ fn load_beyond_capacity_is_trimmed_to_capacity() {
 }
 
 /// A load limited by capacity is a load carried out in part: [`Outcome::Trimmed`] says so.
-/// (It reported `Done`: the kernel tested `amount < t.loose && amount < room`, which can
-/// never hold, as `amount = room.min(t.loose)`.)
 #[test]
-fn issue10_load_limited_by_capacity_reports_trimmed() {
+fn load_limited_by_capacity_reports_trimmed() {
     let mut sim = digger_carrier_sim(DVec2::new(3.3, 5.1), Start::At(DVec2::new(3.0, 5.1)));
     sim.step();
     sim.step();
@@ -465,11 +463,11 @@ impl Strategy for Planner {
     }
 }
 
-/// Issue 11: the goal and path a strategy publishes reach the robot (what viewers draw)
-/// whether its turn was resolved in step 2 (alone) or in step 3 (it talks), and a robot
-/// whose strategy fails keeps the last ones it published.
+/// The goal and path a strategy publishes reach the robot (what viewers draw) whether its
+/// turn was resolved in step 2 (alone) or in step 3 (it talks), and a robot whose strategy
+/// fails keeps the last ones it published.
 #[test]
-fn issue11_published_goals_and_paths_reach_every_robot_that_decided() {
+fn published_goals_and_paths_reach_every_robot_that_decided() {
     let mut registry = StrategyRegistry::with_builtins();
     for (name, talk, panic_in_round) in [
         ("quiet", false, None),

@@ -235,13 +235,13 @@ proptest! {
         }
     }
 
-    /// Issue 12: reading the cells near a capsule (routes' legs, corner cuts over the known
-    /// map) answers as the tree walk does whenever it answers, for either value, for moves
-    /// of a few cells and legs across the map, with any budget of blocks; with budget
-    /// enough it answers every capsule but those passing within a part in 10⁷ of the radius
-    /// of a cell of the value.
+    /// Reading the cells near a capsule (routes' legs, corner cuts over the known map)
+    /// answers as the tree walk does whenever it answers, for either value, for moves of a
+    /// few cells and legs across the map, with any budget of blocks; with budget enough it
+    /// answers every capsule but those passing within a part in 10⁷ of the radius of a cell
+    /// of the value.
     #[test]
-    fn issue12_capsule_meets_cells_is_the_walks(w in world_strategy(), seed in any::<u64>()) {
+    fn capsule_meets_cells_is_the_walks(w in world_strategy(), seed in any::<u64>()) {
         let map = w.map();
         let tree = map.tree();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -281,8 +281,8 @@ proptest! {
         }
     }
 
-    /// Issue 11: the free fraction of a blocked move is exactly what a 24-step bisection on
-    /// the swept-disc test finds (robots' moves are trimmed with it).
+    /// The free fraction of a blocked move is exactly what a 24-step bisection on the
+    /// swept-disc test finds (robots' moves are trimmed with it).
     #[test]
     fn swept_disc_free_fraction_is_the_bisections(w in world_strategy(), seed in any::<u64>()) {
         let map = w.map();
@@ -304,8 +304,8 @@ proptest! {
         }
     }
 
-    /// Issue 11: setting a grid square by a descent along its coordinates is the fill of
-    /// its box: the same cells, the same canonical tree, the same changed cells reported.
+    /// Setting a grid square by a descent along its coordinates is the fill of its box: the
+    /// same cells, the same canonical tree, the same changed cells reported.
     #[test]
     fn filling_a_square_is_filling_its_box(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -363,9 +363,9 @@ proptest! {
         }
     }
 
-    /// A view that moves (issue 11: only what lies outside the last view is visited) marks
-    /// exactly the cells that marking each whole disc would, on a walk that also jumps,
-    /// changes radius and stays put, with merges from another map in between.
+    /// A view that moves (only what lies outside the last view is visited) marks exactly
+    /// the cells that marking each whole disc would, on a walk that also jumps, changes
+    /// radius and stays put, with merges from another map in between.
     #[test]
     fn moving_views_mark_exactly_what_whole_discs_mark(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -399,14 +399,14 @@ proptest! {
         }
     }
 
-    /// Views marked from their cells worked out at once (issue 11: one walk that goes only
-    /// where the cells are, no shape tests) hold exactly the cells the general walk marks,
-    /// and report exactly the cells that changed, each once; the collective map fed those
-    /// reports holds the same cells; obstacle counts over the reported sets match brute
-    /// force. `validate` also checks the blocks each map caches beside its tree (issue 11)
-    /// against the tree, after every mark and merge.
+    /// Views marked from their cells worked out at once (one walk that goes only where the
+    /// cells are, no shape tests) hold exactly the cells the general walk marks, and report
+    /// exactly the cells that changed, each once; the collective map fed those reports
+    /// holds the same cells; obstacle counts over the reported sets match brute force.
+    /// `validate` also checks the blocks each map caches beside its tree against the tree,
+    /// after every mark and merge.
     #[test]
-    fn issue11_views_marked_by_blocks_are_the_walks_cells(w in world_strategy(), seed in any::<u64>()) {
+    fn views_marked_by_blocks_are_the_walks_cells(w in world_strategy(), seed in any::<u64>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let obstacles = w.map();
         let mut by_view = KnownMap::new(w.grid);
@@ -430,9 +430,9 @@ proptest! {
                 explored.merge(&other);
             }
             if step % 4 == 1 {
-                // Content hashes kept from here on (issue 11): each mark and merge below
-                // must forget those it changes (`validate` checks them). A hashed copy of
-                // the same cells, merged in, adds nothing (equal subtrees are skipped).
+                // Content hashes kept from here on: each mark and merge below must forget
+                // those it changes (`validate` checks them). A hashed copy of the same
+                // cells, merged in, adds nothing (equal subtrees are skipped).
                 by_view.complete_hashes();
                 explored.complete_hashes();
                 let mut copy = by_view.clone();
@@ -477,7 +477,7 @@ proptest! {
     /// a brute-force test over every cell finds wholly inside the disc and the clip, and
     /// taking one view's rows out of another's leaves exactly the set difference.
     #[test]
-    fn issue11_view_rows_are_the_cells_wholly_inside(
+    fn view_rows_are_the_cells_wholly_inside(
         cell in prop_oneof![Just(1.0), 0.05f64..4.0], seed in any::<u64>()
     ) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -533,7 +533,7 @@ proptest! {
     /// Views wider than 64 cells take the walk that skips the last view; views jumping
     /// between both paths on a map of a few hundred cells mark what whole discs mark.
     #[test]
-    fn issue11_wide_and_narrow_views_mark_what_whole_discs_mark(
+    fn wide_and_narrow_views_mark_what_whole_discs_mark(
         w in 65u32..300, h in 65u32..300, cell in prop_oneof![Just(1.0), 0.1f64..3.0], seed in any::<u64>()
     ) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -606,8 +606,8 @@ proptest! {
     #[test]
     /// With `lattice`, points and radii on a 2.5 m lattice, which the index's split lines
     /// (halvings of the area) fall on too: treasures and discs exactly on a split line or
-    /// exactly a radius beyond it (issue 11: the disc walk skips children across a split line
-    /// farther than the radius).
+    /// exactly a radius beyond it (the disc walk skips children across a split line farther
+    /// than the radius).
     fn treasure_index_matches_brute_force(seed in any::<u64>(), n in 1usize..300, clustered in any::<bool>(), lattice in any::<bool>()) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let area = Aabb::from_corners(DVec2::new(-20.0, 5.0), DVec2::new(80.0, 45.0));
@@ -729,10 +729,10 @@ fn robot_index_against_brute_force(
     Ok(())
 }
 
-/// Issue 11: a robot exactly on a query's rim (within it by the distance test's rounding)
-/// but an ulp beyond the disc's box as computed was missed (found by the lattice case).
+/// A robot exactly on a query's rim (within it by the distance test's rounding) but an ulp
+/// beyond the disc's box as computed is found.
 #[test]
-fn issue11_a_robot_on_the_rim_is_found() {
+fn a_robot_on_the_rim_is_found() {
     robot_index_against_brute_force(5_754_087_576_751_234_071, 101, 24.885_231_390_557_37, false, true).unwrap();
 }
 
@@ -802,11 +802,11 @@ proptest! {
 proptest! {
     #![proptest_config(config(256))]
 
-    /// Issue 11: the cells of a small rectangle, visited by descents to its blocks (the
-    /// robots' move tests), are exactly the brute-force raster's; rectangles over more
-    /// than 2 × 2 blocks, and trees too small for blocks, are refused without a visit.
+    /// The cells of a small rectangle, visited by descents to its blocks (the robots' move
+    /// tests), are exactly the brute-force raster's; rectangles over more than 2 × 2
+    /// blocks, and trees too small for blocks, are refused without a visit.
     #[test]
-    fn issue11_cells_in_small_rectangles_match_the_raster(
+    fn cells_in_small_rectangles_match_the_raster(
         w in world_strategy(),
         corner in (0u32..64, 0u32..64),
         size in (0u32..20, 0u32..20),
@@ -881,8 +881,8 @@ fn block_cells(origin: DVec2, cell_m: f64) -> sim_core::spatial::BlockCells {
 proptest! {
     #![proptest_config(config(512))]
 
-    /// Issue 11: the packed bottom trusts `classify_cells` to agree with `classify` on
-    /// every cell, for every shape that answers it.
+    /// The packed bottom trusts `classify_cells` to agree with `classify` on every cell,
+    /// for every shape that answers it.
     #[test]
     fn classify_cells_agrees_with_classify_cell_by_cell(
         seed in any::<u64>(),
@@ -908,8 +908,8 @@ proptest! {
             // A robot's move (short, a small radius) and a segment.
             5 => Box::new(Capsule { a: p, b: p + (q - p) * 0.1, radius: r * 0.2 }),
             6 => Box::new(Capsule { a: snapped, b: q, radius: 0.0 }),
-            // Issue 12: a route's shortcut (a long slanting leg), and one nearly level, whose
-            // rows are bounded without dividing by its rise.
+            // A route's shortcut (a long slanting leg), and one nearly level, whose rows
+            // are bounded without dividing by its rise.
             7 => Box::new(Capsule { a: p, b: q, radius: r * 0.3 }),
             8 => Box::new(Capsule { a: snapped, b: DVec2::new(q.x, snapped.y + (q.y - p.y) * 1e-5), radius: r * 0.3 }),
             _ => Box::new(Clipped { shape: disc, clip: Aabb { min: p.min(q), max: p.max(q) } }),
@@ -937,10 +937,10 @@ proptest! {
         prop_assert_eq!(shape.intersects_cells(&cells), Some(want.intersects));
     }
 
-    /// Issue 12: a block's cells whose part in a box lies near a point, at once, are those
-    /// the box and distance tests find cell by cell, to the last bit (the nearest unknown
-    /// point's walk reads a block's cells this way). Boxes on cell edges and points on
-    /// cell corners come up, and limits exactly at a cell's distance.
+    /// A block's cells whose part in a box lies near a point, at once, are those the box
+    /// and distance tests find cell by cell, to the last bit (the nearest unknown point's
+    /// walk reads a block's cells this way). Boxes on cell edges and points on cell corners
+    /// come up, and limits exactly at a cell's distance.
     #[test]
     fn cells_with_part_near_match_the_tests_cell_by_cell(
         seed in any::<u64>(),
@@ -982,13 +982,13 @@ proptest! {
     }
 }
 
-/// Issue 11: views whose rim passes exactly through grid corners (centres on grid corners
-/// or cell centres, whole radii: the 3-4-5 corners of a 5-cell view lie on it) keep the
-/// cells whose farthest corner is on the rim, as the brute-force test does, near the map's
-/// edge as well as away from it (the rows skip the per-line clip tests when the view's
-/// cells all lie inside the map).
+/// Views whose rim passes exactly through grid corners (centres on grid corners or cell
+/// centres, whole radii: the 3-4-5 corners of a 5-cell view lie on it) keep the cells whose
+/// farthest corner is on the rim, as the brute-force test does, near the map's edge as well
+/// as away from it (the rows skip the per-line clip tests when the view's cells all lie
+/// inside the map).
 #[test]
-fn issue11_view_rows_keep_cells_whose_corner_is_on_the_rim() {
+fn view_rows_keep_cells_whose_corner_is_on_the_rim() {
     let grid = Grid::new(DVec2::ZERO, 1.0, 64, 64).unwrap();
     let clip = grid.extent();
     for center in [
@@ -1044,14 +1044,14 @@ fn issue11_view_rows_keep_cells_whose_corner_is_on_the_rim() {
 proptest! {
     #![proptest_config(config(24))]
 
-    /// Issue 11: views marked through the window of known cells around them (maps at least
-    /// 64 cells a side, views at most 32 cells across) hold exactly the cells the general
-    /// walk marks and report exactly the cells that changed; walks that leave the window
-    /// (it is loaded again), views too wide for it, views at the map's edges, and merges
-    /// between views (the window is forgotten) included. `validate` checks the window
-    /// against the tree after every mark and merge.
+    /// Views marked through the window of known cells around them (maps at least 64 cells a
+    /// side, views at most 32 cells across) hold exactly the cells the general walk marks
+    /// and report exactly the cells that changed; walks that leave the window (it is loaded
+    /// again), views too wide for it, views at the map's edges, and merges between views
+    /// (the window is forgotten) included. `validate` checks the window against the tree
+    /// after every mark and merge.
     #[test]
-    fn issue11_views_through_the_known_window_are_the_walks_cells(
+    fn views_through_the_known_window_are_the_walks_cells(
         size in (64u32..200, 64u32..200),
         cell_m in prop_oneof![Just(1.0), Just(0.5), 0.2f64..2.0],
         seed in any::<u64>(),

@@ -43,11 +43,11 @@ fn collision_avoidance_is_quiet_while_moves_succeed() {
     }
 }
 
-/// Regression (issue 12): a robot pressed against the map's edge escaped off the map again
-/// and again (no cell there is ever known, so "not known to be blocked" let every such
-/// heading through), and a follower stood there while its leader walked away.
+/// A robot pressed against the map's edge escapes onto the map, never off it: no cell off
+/// the map is ever known, so "not known to be blocked" alone would let such headings
+/// through again and again.
 #[test]
-fn issue12_escapes_never_head_off_the_map() {
+fn escapes_never_head_off_the_map() {
     for seed in 0..24 {
         let mut w = TestWorld::from_ascii("\n    R...\n    ....\n    ....", 1.0)
             .unwrap()
@@ -212,13 +212,13 @@ fn energy_management_below_the_threshold_heads_home() {
     assert!(e.is_returning());
 }
 
-/// Issue 12: between measures, the way home is bounded by the last measure plus the
-/// distance walked since. Here the robot measured 9 m, then walked 4 m (back and forth, so
-/// it stands where it was): the bound is 13 m, the true way still 9 m. With energy between
-/// the two thresholds, a recent measure lets the bound decide (home, early and safe); once
+/// Between measures, the way home is bounded by the last measure plus the distance walked
+/// since. Here the robot measured 9 m, then walked 4 m (back and forth, so it stands where
+/// it was): the bound is 13 m, the true way still 9 m. With energy between the two
+/// thresholds, a recent measure lets the bound decide (home, early and safe); once
 /// `replan_every` rounds have passed, it measures again and carries on.
 #[test]
-fn issue12_energy_management_bounds_the_way_home_between_measures() {
+fn energy_management_bounds_the_way_home_between_measures() {
     for (round, returns) in [(5, true), (10, false)] {
         let mut w = TestWorld::from_ascii(CORRIDOR, 1.0).unwrap().knowing_all();
         let mut e = EnergyManagement::default();
@@ -423,7 +423,7 @@ fn team_leaves_after_timeout() {
 }
 
 #[test]
-fn issue10_team_timeout_near_u64_max_does_not_overflow() {
+fn team_timeout_near_u64_max_does_not_overflow() {
     let mut w = team_world();
     let mut t = Team::default();
     t.timeout_rounds = u64::MAX;
@@ -464,16 +464,16 @@ fn blocked_means_a_move_held_back() {
     assert!(blocked(&w.ctx()));
 }
 
-/// Issue 12: a frontier search honours a team mate's claim only within `max_detour_m`.
-/// A corridor one cell high and 60 m long, in four pieces of free space (x from 1, 17, 33
-/// and 49). The robot at x = 21.5 knows it from x = 19 to x = 39 (discs of 3 m, whose
-/// cells lie within 2.5 m of their centres on this line). Its nearest frontier is the west
-/// end of what it knows, x = 18.5, 3 m off, in its own piece; a team mate claims it (a
-/// claim at x = 17.5 with a 3 m radius). The nearest clear one is the east end, x = 39.5,
-/// in the next piece east, which the search enters at x = 33: 11.5 m beyond the robot's
-/// own piece. So a detour of 20 m is allowed, one of 5 m is not.
+/// A frontier search honours a team mate's claim only within `max_detour_m`. A corridor one
+/// cell high and 60 m long, in four pieces of free space (x from 1, 17, 33 and 49). The
+/// robot at x = 21.5 knows it from x = 19 to x = 39 (discs of 3 m, whose cells lie within
+/// 2.5 m of their centres on this line). Its nearest frontier is the west end of what it
+/// knows, x = 18.5, 3 m off, in its own piece; a team mate claims it (a claim at x = 17.5
+/// with a 3 m radius). The nearest clear one is the east end, x = 39.5, in the next piece
+/// east, which the search enters at x = 33: 11.5 m beyond the robot's own piece. So a
+/// detour of 20 m is allowed, one of 5 m is not.
 #[test]
-fn issue12_frontier_search_honours_claims_within_max_detour() {
+fn frontier_search_honours_claims_within_max_detour() {
     let inner = format!("{}R{}", ".".repeat(20), ".".repeat(39));
     let art = format!("{w}\n#{inner}#\n{w}", w = "#".repeat(62));
     let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();

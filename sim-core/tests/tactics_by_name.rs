@@ -1,8 +1,8 @@
-//! Tactics by name (issue 12, item 4): strategies composed in the config from registered
-//! tactics (`strategy="tactics"`), a tactic a user registers, and the behaviours the issue
-//! names, each in a whole simulation: energy management never lets a robot run dry away
-//! from home, boundary following gets round a concave obstacle, two groups cross a
-//! one-robot-wide passage without deadlock, and followers keep to their leader.
+//! Tactics by name: strategies composed in the config from registered tactics
+//! (`strategy="tactics"`), a tactic a user registers, and the tactics' behaviours, each in
+//! a whole simulation: energy management never lets a robot run dry away from home,
+//! boundary following gets round a concave obstacle, two groups cross a one-robot-wide
+//! passage without deadlock, and followers keep to their leader.
 
 use std::sync::Arc;
 
@@ -55,7 +55,7 @@ fn rooms() -> Arc<MapData> {
 }
 
 #[test]
-fn issue12_energy_management_never_lets_a_robot_run_dry_away_from_home() {
+fn energy_management_never_lets_a_robot_run_dry_away_from_home() {
     // 130 energy units: the farthest free point of the map is ≈ 60 m from home, so a tank
     // holds a round trip and little more; explorers must turn back in time, again and again.
     let kind = RobotType::explorer().with_energy_capacity(130.0);
@@ -106,7 +106,7 @@ fn issue12_energy_management_never_lets_a_robot_run_dry_away_from_home() {
 }
 
 #[test]
-fn issue12_boundary_following_gets_round_a_concave_obstacle_to_the_goal_behind_it() {
+fn boundary_following_gets_round_a_concave_obstacle_to_the_goal_behind_it() {
     // A U open towards the robot (west), the goal behind its back wall: heading straight
     // for the goal leads into the U's pocket.
     let u = |x: u32, y: u32| {
@@ -156,7 +156,7 @@ fn issue12_boundary_following_gets_round_a_concave_obstacle_to_the_goal_behind_i
 }
 
 #[test]
-fn issue12_two_groups_cross_a_one_robot_wide_passage() {
+fn two_groups_cross_a_one_robot_wide_passage() {
     // 20 m × 10 m, a wall 1 m thick across it at x = 9.5..10.5 with one gap 0.5 m wide:
     // robots 0.3 m across pass one at a time, never two abreast.
     let wall = |x: u32, y: u32| (38..42).contains(&x) && !(20..22).contains(&y);
@@ -197,8 +197,8 @@ fn issue12_two_groups_cross_a_one_robot_wide_passage() {
         while s.round() < 1500 && !across(&s) {
             s.step();
         }
-        // Over 40 seeds this took 150 to 720 rounds: robots meeting head-on in the passage
-        // wait until one backs off (collision avoidance's random escapes).
+        // Robots meeting head-on in the passage wait until one backs off (collision
+        // avoidance's random escapes): crossing takes hundreds of rounds, within 1,500.
         let stuck: Vec<(RobotId, DVec2)> = s
             .robots()
             .iter()
@@ -220,7 +220,7 @@ fn issue12_two_groups_cross_a_one_robot_wide_passage() {
 }
 
 #[test]
-fn issue12_followers_keep_to_their_leader_while_it_walks() {
+fn followers_keep_to_their_leader_while_it_walks() {
     // Four robots of one type: robot 0 leads (lowest id) to a goal 30 m away; the others
     // follow. Each follower heads for its slot `spacing_m` from where it last heard the
     // leader (a round old), so it is never more than the spacing plus the leader's walk of
@@ -284,7 +284,7 @@ impl Tactic for Pause {
 }
 
 #[test]
-fn issue12_tactics_are_composed_by_name_and_users_add_their_own() {
+fn tactics_are_composed_by_name_and_users_add_their_own() {
     let mut registry = StrategyRegistry::with_builtins();
     registry
         .tactics_mut()
@@ -360,7 +360,7 @@ fn issue12_tactics_are_composed_by_name_and_users_add_their_own() {
 }
 
 #[test]
-fn issue12_a_composed_strategy_checkpoints_and_resumes_bit_for_bit() {
+fn a_composed_strategy_checkpoints_and_resumes_bit_for_bit() {
     let make = || {
         sim(
             rooms(),
@@ -394,13 +394,12 @@ fn issue12_a_composed_strategy_checkpoints_and_resumes_bit_for_bit() {
     assert_eq!(state(&resumed), state(&whole));
 }
 
-/// Issue 12, item 1: an optimistic shortest path gets to a goal in terrain the robot has
-/// never seen, behind a wall it only finds on the way (30 × 20, the wall at x = 15 from the
-/// bottom up to y = 17): it walks at the wall, sees it, and plans round its end, also with
-/// collision avoidance before it. Without optimism the tactic has no known route and stays
-/// quiet.
+/// An optimistic shortest path gets to a goal in terrain the robot has never seen, behind a
+/// wall it only finds on the way (30 × 20, the wall at x = 15 from the bottom up to y =
+/// 17): it walks at the wall, sees it, and plans round its end, also with collision
+/// avoidance before it. Without optimism the tactic has no known route and stays quiet.
 #[test]
-fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
+fn optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     let walled = map(1.0, 30, 20, DVec2::new(3.0, 3.5), |x, y| x == 15 && y < 17);
     let kind = RobotType::explorer().with_speed_m_per_round(1.0);
     let goal = DVec2::new(27.0, 3.5);
@@ -434,10 +433,10 @@ fn issue12_optimistic_shortest_path_finds_the_way_round_an_unseen_wall() {
     assert!(at.distance(DVec2::new(3.0, 3.5)) < 0.5, "not optimistic: moved to {at}");
 }
 
-/// Issue 12: `cooperative` takes `max_detour_m` (a distance, unbounded when absent) and
-/// refuses nonsense with the parameter's name.
+/// `cooperative` takes `max_detour_m` (a distance, unbounded when absent) and refuses
+/// nonsense with the parameter's name.
 #[test]
-fn issue12_cooperative_takes_max_detour_m() {
+fn cooperative_takes_max_detour_m() {
     let registry = StrategyRegistry::with_builtins();
     let make = |v: &str| registry.create("cooperative", &Params::default().with("max_detour_m", v));
     assert!(make("5").is_ok());

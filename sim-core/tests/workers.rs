@@ -82,10 +82,10 @@ fn claimed(payloads: &[Payload]) -> Vec<(u32, Task, f32)> {
         .collect()
 }
 
-/// Issue 12 (the workers' crowd, fifteenth session): an excavator leaves a treasure to a
-/// team mate that claimed it from nearer, and claims the next one itself.
+/// An excavator leaves a treasure to a team mate that claimed it from nearer, and claims
+/// the next one itself.
 #[test]
-fn issue12_an_excavator_leaves_a_treasure_claimed_from_nearer_to_its_claimant() {
+fn an_excavator_leaves_a_treasure_claimed_from_nearer_to_its_claimant() {
     let dig = |heard| first_choice("excavator", RobotType::excavator(), false, heard);
     // Nobody claimed anything: the nearer treasure, 5 m away, claimed at 5 m.
     let (goal, said) = dig(vec![]);
@@ -113,10 +113,9 @@ fn issue12_an_excavator_leaves_a_treasure_claimed_from_nearer_to_its_claimant() 
     assert!(said.is_empty());
 }
 
-/// Issue 12 (fifteenth session): transporters share out loose units the same way, among
-/// themselves only.
+/// Transporters share out loose units the same way, among themselves only.
 #[test]
-fn issue12_a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant() {
+fn a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant() {
     let haul = |heard| first_choice("transporter", RobotType::transporter(), true, heard);
     let (goal, said) = haul(vec![]);
     assert_eq!(goal, Some(NEAR));
@@ -128,11 +127,11 @@ fn issue12_a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant(
     assert_eq!(goal, Some(NEAR));
 }
 
-/// Issue 12 (fifteenth session): a transporter carrying a part load delivers it once no
-/// loose units it knows of are left, instead of waiting at a buried treasure until half full
-/// (which kept units off the home for hundreds of rounds in `bench-1000`).
+/// A transporter carrying a part load delivers it once no loose units it knows of are left,
+/// instead of waiting at a buried treasure until half full (which would keep units off the
+/// home for hundreds of rounds).
 #[test]
-fn issue12_a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
+fn a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
     // Home 8 m west of the robot, a treasure with 3 units still buried 4 m east.
     let art = "
         ....................

@@ -172,7 +172,7 @@ fn config_errors_name_file_line_column_and_what_was_expected() {
         "{e}"
     );
 
-    // Issue 12: an unknown tactic in a composed strategy, listing the known ones.
+    // An unknown tactic in a composed strategy, listing the known ones.
     let e = config_error(
         "<simulation>\n  <map file=\"small.stmap\"/>\n  <group count=\"2\" type=\"explorer\" strategy=\"tactics\">\n    <param name=\"tactics\" value=\"collision,jump\"/>\n  </group>\n</simulation>",
         &dir,
@@ -304,7 +304,7 @@ fn rounds_to_explore_rooms(strategy: &str, count: u32, budget: u64) -> Option<u6
 
 #[test]
 fn frontier_exploration_covers_the_example_rooms_map() {
-    // One frontier explorer: ≥ 95 % within 3,000 rounds (measured: 2,500-3,000).
+    // One frontier explorer: ≥ 95 % within 3,000 rounds.
     let one = rounds_to_explore_rooms("frontier", 1, 3000);
     assert!(one.is_some(), "frontier x1 did not reach 95 % in 3000 rounds");
     // Eight cooperative explorers (frontiers + shared maps + claimed goals): within 1,000.

@@ -1,7 +1,7 @@
-//! Bad input, fuzzed (issue 13): every reader of user files is fed mutations of valid files
-//! (bit flips, interesting bytes, cut, doubled and inserted runs, numbers made absurd,
-//! splices of two files) and must answer with a value or an error that names the file,
-//! never a panic.
+//! Bad input, fuzzed: every reader of user files is fed mutations of valid files (bit
+//! flips, interesting bytes, cut, doubled and inserted runs, numbers made absurd, splices
+//! of two files) and must answer with a value or an error that names the file, never a
+//! panic.
 //!
 //! Each target runs `SMARTTEAMS_FUZZ_EXECS` inputs (default 1,500, a few seconds in all);
 //! `SMARTTEAMS_FUZZ_EXECS=1000000 cargo test --profile ci -p tests --test fuzz -- --nocapture`

@@ -15,8 +15,7 @@ use sim_core::world::HomeBase;
 use sim_core::world::MapData;
 
 /// Largest number of blocked leaves logged as exact `Boxes2D`. Above it only the raster is
-/// logged: DESIGN.md measured 1M boxes at ~880 MB of viewer memory and a sluggish viewer,
-/// while 50k stays interactive.
+/// logged: the viewer's memory grows with every box, and far beyond this it turns sluggish.
 pub const MAX_EXACT_BOXES: usize = 50_000;
 /// Longest side in pixels of the obstacle raster (the overview layer).
 pub const MAX_RASTER_PX: u32 = 2048;
@@ -147,7 +146,7 @@ pub fn coarse_known_boxes(tree: &RegionQuadtree) -> Vec<Aabb> {
     let coarse_level = depth.saturating_sub(KNOWN_COARSE_CELLS.trailing_zeros() as u8);
     let n = 1u32 << (depth - coarse_level);
     let mut known = vec![false; (n * n) as usize];
-    // The walk stops at the coarse level: 10,000 robots' maps are read in a few milliseconds.
+    // The walk stops at the coarse level: its cost follows the coarse cells, not the leaves.
     tree.for_each_square_holding(true, coarse_level, |sq| {
         let k = 1u32 << (sq.level - coarse_level);
         let (x0, y0) = (sq.x >> coarse_level, sq.y >> coarse_level);

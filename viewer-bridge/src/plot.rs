@@ -1,7 +1,7 @@
-//! Charts as PNG or SVG (plotters): line charts for the scale suite, and the standard figure
-//! of a study (`smartteams plot`, issue 13): explored fraction, treasures delivered, energy
-//! and known-map memory against rounds, one line per run or per group of runs, the mean over
-//! seeds with a band of one standard deviation.
+//! Charts as PNG or SVG (plotters): line charts for the scale suite, and the standard
+//! figure of a study (`smartteams plot`): explored fraction, treasures delivered, energy
+//! and known-map memory against rounds, one line per run or per group of runs, the mean
+//! over seeds with a band of one standard deviation.
 //!
 //! Labels need a TrueType font: the first of the usual system fonts found is registered once;
 //! with none, charts are drawn without text (and [`FigureSummary::labelled`] says so).

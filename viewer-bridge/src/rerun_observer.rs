@@ -44,13 +44,12 @@ const CHARTED: usize = METRICS_COUNT - 1;
 
 /// Most communication links drawn in one round by default: a dense swarm delivers O(n²)
 /// messages a round, and beyond a few thousand lines the view is a solid blot while the
-/// recording grows by ~20 bytes a line (20,000 links were half of a 1,000-robot recording).
+/// recording grows with every line.
 pub const DEFAULT_MAX_LINKS: usize = 5_000;
 
 /// Default of [`LogOptions::known_per_robot_max`]. Beyond a hundred robots a list of
 /// per-robot entities is no longer something to click through, and each entity costs Rerun a
-/// chunk with its own schema (≈ 2 KB) whenever it is logged: 10,000 per-robot regions made a
-/// recording 2.6 times larger and its writer thread the largest cost of the run.
+/// chunk with its own schema whenever it is logged.
 pub const DEFAULT_KNOWN_PER_ROBOT_MAX: usize = 100;
 
 /// World frames that may wait for the logging thread before the simulation waits (or, for a
@@ -574,8 +573,7 @@ fn log_frames(
 
 /// The robots' columns as the logging thread last logged them. Rerun shows every component
 /// at its latest value, so a column is logged again only when one of its values changed: in
-/// most rounds that leaves positions, energy and actions, and a recording (or a live stream)
-/// of 1,000 robots carries about half the bytes a round.
+/// most rounds that leaves positions, energy and actions.
 #[derive(Default)]
 struct RobotColumns {
     classes: Vec<u16>,
@@ -625,8 +623,8 @@ fn log_robots(
             })
             .collect();
     }
-    // Numbers and static strings only: formatting 1,000 robots' values a round cost more than
-    // the rest of this function.
+    // Numbers and static strings only: formatting every robot's values each round would cost
+    // more than the rest of this function.
     let mut detail = rerun::AnyValues::default();
     if RobotColumns::update(&mut last.types, robots.iter().map(|r| r.type_index)) {
         detail = detail.with_component_from_data(
@@ -753,7 +751,7 @@ fn log_paths(rec: &rerun::RecordingStream, paths: &[(u16, Vec<[f32; 2]>)]) -> re
         "world/paths",
         &rerun::LineStrips2D::new(paths.iter().map(|(_, points)| points.iter().copied()))
             .with_class_ids(paths.iter().map(|(class, _)| *class))
-            // The class (type) name on every path only cluttered the map; robots carry labels.
+            // No class (type) name on paths: it clutters the map, and robots carry labels.
             .with_show_labels(false)
             .with_radii([rerun::Radius::new_ui_points(1.0)])
             .with_draw_order(draw_order::PATHS),

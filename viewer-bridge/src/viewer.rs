@@ -41,8 +41,9 @@ impl std::fmt::Display for ViewerTarget {
     }
 }
 
-/// Turn what a user typed after `--connect` into a proxy URL: a full `rerun+http(s)://…/proxy`
-/// URL is kept, `host:port` or `host` is expanded; any other scheme is refused.
+/// Turn what a user typed after `--connect` into a proxy URL: a full
+/// `rerun+http(s)://…/proxy` URL is kept, `host:port` or `host` is expanded; any other
+/// scheme is refused.
 pub fn connect_url(arg: &str) -> Result<String> {
     let url = if arg.contains("://") {
         arg.to_owned()
@@ -68,10 +69,9 @@ fn authority(url: &str) -> Option<&str> {
 
 /// How Rerun groups rows into chunks for an `.rrd` file: nobody watches a file while it is
 /// written, so rows gather for up to 10 s (the default is 200 ms, for live viewers). Every
-/// chunk carries ~2 KB of schema, and per-robot known regions logged every 20 rounds would
-/// otherwise each be a chunk of their own: with 1,000 robots this cut the benchmark's file
-/// from 46 to 30 MB and its encoding time alike (BENCHMARKS.md). `RERUN_FLUSH_*` environment
-/// variables still override it.
+/// chunk carries its own schema, and per-robot known regions logged every 20 rounds would
+/// otherwise each be a chunk of their own, making the file larger and slower to encode.
+/// `RERUN_FLUSH_*` environment variables still override it.
 fn file_batching() -> rerun::log::ChunkBatcherConfig {
     rerun::log::ChunkBatcherConfig {
         flush_tick: Duration::from_secs(10),

@@ -1,6 +1,6 @@
-//! `smartteams run --checkpoint` and `smartteams resume` as a user types them (issue 13): a
-//! run killed with SIGKILL and resumed ends in the same state, with the same metrics and
-//! robot statistics, byte for byte, as a run that was never stopped; damaged checkpoints,
+//! `smartteams run --checkpoint` and `smartteams resume` as a user types them: a run killed
+//! with SIGKILL and resumed ends in the same state, with the same metrics and robot
+//! statistics, byte for byte, as a run that was never stopped; damaged checkpoints,
 //! checkpoints of another version and checkpoints whose map changed are refused by name.
 
 use std::path::Path;
@@ -45,7 +45,7 @@ fn read(dir: &Path, name: &str) -> Vec<u8> {
 }
 
 #[test]
-fn issue13_a_killed_run_resumes_to_the_same_bytes() {
+fn a_killed_run_resumes_to_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let config = workspace().join("configs/demo.xml");
@@ -101,7 +101,7 @@ fn issue13_a_killed_run_resumes_to_the_same_bytes() {
 }
 
 #[test]
-fn issue13_damaged_and_foreign_checkpoints_are_refused() {
+fn damaged_and_foreign_checkpoints_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     // A config and map of our own, so the map can change under the checkpoint.

@@ -1,5 +1,5 @@
-//! `smartteams run` as a user types it: scenario errors found when tried as a new user
-//! would (issue 10), each refused before the run with the place that caused it.
+//! `smartteams run` as a user types it: scenario errors a new user runs into, each refused
+//! before the run with the place that caused it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -27,7 +27,7 @@ fn run_config(name: &str, xml: &str, extra: &[&str]) -> (bool, String) {
 }
 
 #[test]
-fn issue10_a_crowd_that_cannot_fit_at_home_is_refused_at_once() {
+fn a_crowd_that_cannot_fit_at_home_is_refused_at_once() {
     let started = Instant::now();
     let (ok, err) = run_config(
         "crowd.xml",
@@ -49,7 +49,7 @@ fn issue10_a_crowd_that_cannot_fit_at_home_is_refused_at_once() {
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no 'at most N' in: {err}"));
     assert!(at_most > 0 && at_most <= 333_772, "{err}");
-    // Refused before anything is built for each robot (it used to run on for minutes).
+    // Refused before anything is built for each robot, so at once.
     assert!(
         started.elapsed() < Duration::from_secs(20),
         "took {:?}",
@@ -58,7 +58,7 @@ fn issue10_a_crowd_that_cannot_fit_at_home_is_refused_at_once() {
 }
 
 #[test]
-fn issue10_team_with_a_huge_timeout_is_refused_with_its_range() {
+fn team_with_a_huge_timeout_is_refused_with_its_range() {
     let (ok, err) = run_config(
         "team.xml",
         r#"<simulation rounds="5">
@@ -133,7 +133,7 @@ fn team_with_the_largest_timeout_forms_and_keeps_its_group() {
 }
 
 #[test]
-fn issue10_a_bad_map_argument_is_named_as_the_argument() {
+fn a_bad_map_argument_is_named_as_the_argument() {
     let (ok, err) = run_config(
         "demo.xml",
         r#"<simulation rounds="5">
@@ -147,11 +147,11 @@ fn issue10_a_bad_map_argument_is_named_as_the_argument() {
     assert!(!err.contains("demo.xml:2"), "blamed the XML for the argument: {err}");
 }
 
-/// Issue 12: `smartteams tactics` lists the tactics by name, and the shipped config that
-/// composes strategies of them runs through the binary: the explorers explore and come
-/// home to recharge, the courier gets to its corner and stays there.
+/// `smartteams tactics` lists the tactics by name, and the shipped config that composes
+/// strategies of them runs through the binary: the explorers explore and come home to
+/// recharge, the courier gets to its corner and stays there.
 #[test]
-fn issue12_tactics_listed_and_composed_by_name_in_a_config() {
+fn tactics_listed_and_composed_by_name_in_a_config() {
     let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
         .arg("tactics")
         .output()

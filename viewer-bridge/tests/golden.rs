@@ -3,7 +3,8 @@
 //! calls `smartteams run` makes) and through the `smartteams` binary, on 1 and 2 threads.
 //!
 //! These values change only when behaviour changes. A commit that changes one says why; a
-//! failure prints every config's new values as table rows, to paste once the change is meant.
+//! failure prints every config's new values as table rows, to paste once the change is
+//! meant.
 
 mod common;
 

@@ -1,5 +1,5 @@
-//! `smartteams plot` as a user types it (issue 13): figures of the requested size and
-//! format from known CSVs, a line per group of runs, and clear errors for bad input.
+//! `smartteams plot` as a user types it: figures of the requested size and format from
+//! known CSVs, a line per group of runs, and clear errors for bad input.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -32,7 +32,7 @@ const SWEEP: &str = "run,seed,g.count,round,explored_fraction,treasures_delivere
 ";
 
 #[test]
-fn issue13_plot_draws_a_line_per_group_at_the_requested_size() {
+fn plot_draws_a_line_per_group_at_the_requested_size() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
@@ -71,7 +71,7 @@ fn issue13_plot_draws_a_line_per_group_at_the_requested_size() {
 }
 
 #[test]
-fn issue13_plot_refuses_bad_input_naming_the_file_and_line() {
+fn plot_refuses_bad_input_naming_the_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
@@ -131,8 +131,9 @@ fn polylines(svg: &str) -> Vec<(String, Vec<(f64, f64)>)> {
         .collect()
 }
 
-/// The drawn lines carry the data: each group's mean over its seeds, worked out by hand from
-/// `SWEEP`, read back from the SVG's polylines (pixel y grows downwards, linearly in the value).
+/// The drawn lines carry the data: each group's mean over its seeds, worked out by hand
+/// from `SWEEP`, read back from the SVG's polylines (pixel y grows downwards, linearly in
+/// the value).
 #[test]
 fn plot_lines_are_the_means_of_each_group() {
     let dir = tempfile::tempdir().unwrap();

@@ -1,12 +1,12 @@
-//! Recordings checked with the real Rerun tools: the `.rrd` of a short run is read back with
-//! the official Python SDK (rerun-sdk 0.36.3) and verified with `rerun rrd verify`, and a run
-//! streams live to a `rerun` receiver on loopback, which is killed mid-run.
+//! Recordings checked with the real Rerun tools: the `.rrd` of a short run is read back
+//! with the official Python SDK (rerun-sdk 0.36.3) and verified with `rerun rrd verify`,
+//! and a run streams live to a `rerun` receiver on loopback, which is killed mid-run.
 //!
-//! They need `SMARTTEAMS_RERUN_PYTHON` (a Python with `rerun-sdk==0.36.3`; `scripts/test.sh`
-//! makes a venv and sets it) and skip with a note when it is unset. The native `rerun` binary is
-//! taken from `SMARTTEAMS_RERUN_BIN`, else from that Python's `rerun_cli` package. Not the
-//! `rerun` script of the venv: it runs the binary as a child process, so killing or stopping
-//! the script would leave the real receiver running.
+//! They need `SMARTTEAMS_RERUN_PYTHON` (a Python with `rerun-sdk==0.36.3`;
+//! `scripts/test.sh` makes a venv and sets it) and skip with a note when it is unset. The
+//! native `rerun` binary is taken from `SMARTTEAMS_RERUN_BIN`, else from that Python's
+//! `rerun_cli` package. Not the `rerun` script of the venv: it runs the binary as a child
+//! process, so killing or stopping the script would leave the real receiver running.
 
 use std::collections::BTreeMap;
 use std::net::TcpListener;
@@ -248,8 +248,8 @@ fn known_regions_of_a_large_swarm_are_one_entity_per_type() {
     rrd_verify(&python, &rrd);
 }
 
-/// The static layers once each; the world state at round 0 and every 4th round up to the last;
-/// the explored layer thinned; one known-region entity per robot.
+/// The static layers once each; the world state at round 0 and every 4th round up to the
+/// last; the explored layer thinned; one known-region entity per robot.
 fn check_layers(s: &Value, rounds: u64) {
     // The static layers, once each.
     for entity in [

@@ -1,6 +1,6 @@
-//! `smartteams sweep` and `smartteams merge` as a user types them (issue 13): shards merged
-//! back give the bytes of the whole sweep, an interrupted sweep resumes without redoing
-//! finished runs, and bad sweep files are refused with the place that is wrong.
+//! `smartteams sweep` and `smartteams merge` as a user types them: shards merged back give
+//! the bytes of the whole sweep, an interrupted sweep resumes without redoing finished
+//! runs, and bad sweep files are refused with the place that is wrong.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -29,7 +29,7 @@ fn write_sweep(dir: &Path, seeds: u32, rounds: u32) -> PathBuf {
 }
 
 #[test]
-fn issue13_sharded_sweep_merged_is_the_whole_sweep_byte_for_byte() {
+fn sharded_sweep_merged_is_the_whole_sweep_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let sweep = write_sweep(d, 3, 40);
@@ -94,7 +94,7 @@ fn issue13_sharded_sweep_merged_is_the_whole_sweep_byte_for_byte() {
 }
 
 #[test]
-fn issue13_a_sweep_run_is_the_run_that_smartteams_run_plays() {
+fn a_sweep_run_is_the_run_that_smartteams_run_plays() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let sweep = d.join("s.xml");
@@ -133,7 +133,7 @@ fn issue13_a_sweep_run_is_the_run_that_smartteams_run_plays() {
 }
 
 #[test]
-fn issue13_an_interrupted_sweep_resumes_without_redoing_finished_runs() {
+fn an_interrupted_sweep_resumes_without_redoing_finished_runs() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let sweep = write_sweep(d, 12, 300);
@@ -188,7 +188,7 @@ fn issue13_an_interrupted_sweep_resumes_without_redoing_finished_runs() {
 }
 
 #[test]
-fn issue13_parts_of_another_sweep_are_refused() {
+fn parts_of_another_sweep_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let sweep = write_sweep(d, 1, 5);
@@ -199,7 +199,7 @@ fn issue13_parts_of_another_sweep_are_refused() {
 }
 
 #[test]
-fn issue13_bad_sweep_files_are_refused_with_file_line_and_column() {
+fn bad_sweep_files_are_refused_with_file_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let config = workspace().join("configs/demo.xml");

@@ -163,8 +163,7 @@ pub fn import(path: &Path, opts: &ImportOptions) -> Result<ObstacleMap> {
     let text = String::from_utf8(text).map_err(|_| EditorError::bad_input(path, "ROS map YAML is not UTF-8 text"))?;
     let ros = parse(&text).map_err(|p| EditorError::bad_input(path, p))?;
     let image_path = path.parent().unwrap_or(Path::new("")).join(&ros.image);
-    // The image's own errors name it; say which YAML asked for it too (found by fuzzing:
-    // a YAML naming a missing image gave an error that did not mention the YAML).
+    // The image's own errors name it; say which YAML asked for it too.
     let img = load_image(&image_path)
         .map_err(|e| EditorError::bad_input(path, format!("its image '{}': {e}", ros.image)))?
         .into_rgba8();

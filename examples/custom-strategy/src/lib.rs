@@ -204,7 +204,7 @@ mod tests {
     }
 
     #[test]
-    fn issue12_a_user_tactic_composes_by_name_with_the_builtins() {
+    fn a_user_tactic_composes_by_name_with_the_builtins() {
         let mut registry = StrategyRegistry::with_builtins();
         register(&mut registry);
         // Go north (a goal far up the map) by the built-in shortest-path tactic, but let the
@@ -261,7 +261,7 @@ mod tests {
     }
 
     #[test]
-    fn issue10_random_walk_written_outside_sim_core_gives_the_builtins_results() {
+    fn random_walk_written_outside_sim_core_gives_the_builtins_results() {
         let builtin = walk_on_the_demo_map("random_walk");
         let mine = walk_on_the_demo_map("my_random_walk");
         // The walkers really walked (and bumped into things), so the match is not trivial:

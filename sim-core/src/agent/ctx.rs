@@ -63,8 +63,7 @@ impl StrategyOutput {
         std::mem::take(&mut self.outbox)
     }
     /// Give back the outbox's list, emptied, after [`take_outbox`](Self::take_outbox): the
-    /// next round's messages reuse it (issue 11: a fresh list a round was an allocation and
-    /// a free for every robot that talks, 2 % of the moonshot's crowded rounds).
+    /// next round's messages reuse it instead of allocating a fresh list.
     pub(crate) fn give_back_outbox(&mut self, mut list: Vec<(Recipient, Payload)>) {
         if self.outbox.is_empty() && self.outbox.capacity() < list.capacity() {
             list.clear();
@@ -120,10 +119,9 @@ impl Mind {
 }
 
 /// A robot's random generator for one round (xoshiro256++: seeded and drawn from in a few
-/// nanoseconds; issue 11: seeding and refilling a `ChaCha` generator for every robot and
-/// round was 6 % of the dense random walk). Draw from it with [`rand::Rng`]'s methods, e.g.
-/// `ctx.rng.random_bool(0.1)`; it is seeded from (run seed, robot, round), so a run is the
-/// same on any number of threads.
+/// nanoseconds, as every robot seeds one every round). Draw from it with [`rand::Rng`]'s
+/// methods, e.g. `ctx.rng.random_bool(0.1)`; it is seeded from (run seed, robot, round), so
+/// a run is the same on any number of threads.
 pub type RobotRng = rand_xoshiro::Xoshiro256PlusPlus;
 
 /// Everything a strategy sees and may do in one round.
@@ -179,9 +177,9 @@ impl<'a> Ctx<'a> {
 
     /// Run `plan` (a route or frontier search), adding its wall time to this round's
     /// [`planning_ns`](Self::planning_ns) when the run times planning (the kernel's
-    /// `Simulation::with_time_planning`, a layer up);
-    /// otherwise just run it. The built-in tactics plan through this, so that issue 12's
-    /// "navigation per robot-round" can be measured (`smartteams-bench kernel`).
+    /// `Simulation::with_time_planning`, a layer up); otherwise just run it. The built-in
+    /// tactics plan through this, so that navigation time per robot-round can be measured
+    /// (`smartteams-bench kernel`).
     pub fn timed_planning<T>(&self, plan: impl FnOnce() -> T) -> T {
         if !self.world.time_planning {
             return plan();

@@ -102,8 +102,8 @@ pub trait Strategy: Send {
     /// Choose this round's action (and send messages through `ctx`).
     fn decide(&mut self, ctx: &mut Ctx) -> Action;
 
-    /// This strategy's state, serialized for a checkpoint (issue 13); `None` (the default)
-    /// if it cannot be saved, and then a run using it cannot be checkpointed. With serde,
+    /// This strategy's state, serialized for a checkpoint; `None` (the default) if it
+    /// cannot be saved, and then a run using it cannot be checkpointed. With serde,
     /// `sim_core::agent::save_state(self)` is the whole implementation.
     fn save_state(&self) -> Option<Vec<u8>> {
         None

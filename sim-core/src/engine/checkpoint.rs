@@ -1,10 +1,11 @@
-//! The state of a running simulation, for checkpoints (issue 13): everything a round
-//! changes, so that a simulation set up again from the same scenario and given this state
-//! plays on exactly as the one that was saved. What the scenario fixes (map, types, groups,
-//! treasure positions and index, the navigation graph) is rebuilt, not stored; so are the
-//! robot indexes (from the positions) and the random generators (each is a function of
-//! seed, robot and round). The state is CBOR (`ciborium`), written from references so a
-//! checkpoint never copies a known map; the file around it is `io::checkpoint`'s.
+//! The state of a running simulation, for checkpoints: everything a round changes, so that
+//! a simulation set up again from the same scenario and given this state plays on exactly
+//! as the one that was saved (`a_restored_run_plays_on_bit_for_bit`, tests/kernel.rs). What
+//! the scenario fixes (map, types, groups, treasure positions and index, the navigation
+//! graph) is rebuilt, not stored; so are the robot indexes (from the positions) and the
+//! random generators (each is a function of seed, robot and round). The state is CBOR
+//! (`ciborium`), written from references so a checkpoint never copies a known map; the file
+//! around it is `io::checkpoint`'s.
 
 use std::collections::HashMap;
 use std::sync::Arc;

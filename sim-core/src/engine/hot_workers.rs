@@ -2,11 +2,9 @@
 //!
 //! A round alternates parallel steps (perceive and decide, the explored map beside step 3)
 //! with sequential ones (step 3, the robot index). Between parallel steps rayon's idle
-//! workers go to sleep, and the next step wakes them: on the 2-core VM the benchmarks run
-//! on, the second worker started on a round's robots 27 µs after the first, about a tenth
-//! of a dense random walker's round (issue 11, measured with the time-stamp counter).
-//! [`with_hot_workers`] keeps them polling for work instead, at the price of a busy core
-//! during the sequential steps.
+//! workers go to sleep, and the next step waits for them to wake, which is long against a
+//! short round. [`with_hot_workers`] keeps them polling for work instead, at the price of a
+//! busy core during the sequential steps.
 
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -22,7 +20,8 @@ static POLLED_JOBS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64:
 
 /// Run `f` with the current rayon pool's other workers kept awake: each polls for work
 /// (executing any it finds, as an idle worker would after waking) until `f` returns or
-/// panics. Results do not change: the same jobs run, only sooner.
+/// panics. Results do not change: the same jobs run, only sooner
+/// (`hot_workers_run_every_job_take_part_and_stop_after_a_panic`).
 ///
 /// For loops of rounds that have the cores to themselves (benchmarks, headless runs): the
 /// polling workers keep their cores busy between parallel steps, which slows anything else

@@ -366,9 +366,9 @@ impl<'a> Placer<'a> {
         (((e.max - e.min).max_element() / self.spacing).ceil() as i64 + 2).min(2000)
     }
 
-    /// An upper bound on the robots of radius `radius_m` that [`next_near`](Self::next_near)
-    /// can place around one centre: no more than the lattice points it searches, and no more than
-    /// disjoint discs fit in the map's free area.
+    /// An upper bound on the robots of radius `radius_m` that
+    /// [`next_near`](Self::next_near) can place around one centre: no more than the lattice
+    /// points it searches, and no more than disjoint discs fit in the map's free area.
     fn capacity_bound(&self, radius_m: f64) -> u64 {
         let side = (2 * self.max_ring() + 1) as u64;
         let by_area = (self.obstacles.free_area_m2() / (std::f64::consts::PI * radius_m * radius_m)).floor();

@@ -21,8 +21,7 @@ use crate::world::{Action, Link, MapData, Message, Robot, RobotType, RoundMetric
 /// A message sent in step 3 without radio budgets, for [`Simulation::inboxes`] after it:
 /// bagged as `mailbag[bag]` by robot index `from`, to `to` (a robot index) or, if `None`,
 /// to the sender's hearers. Step 3 only notes it; the receivers' inboxes are filled in
-/// parallel afterwards, receiver by receiver (issue 11: pushing to hundreds of inboxes per
-/// broadcast was most of bench-1000's sequential step 3).
+/// parallel afterwards, receiver by receiver, in sending order.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Fanout {
     pub(super) from: u32,
@@ -58,8 +57,10 @@ pub(super) struct Agent {
 
 /// What step 2 leaves of a robot's turn for the rest of the round, apart from its agent:
 /// the round's sequential parts read a few bytes a robot here instead of a robot's whole
-/// agent (issue 11: those passes over every agent were a fifth of a 2-thread round of
-/// random walkers).
+/// agent. Written in steps 1 and 2, read-only for the rest of the round;
+/// `map_explored_once_and_every_free_cell_credited_once` and
+/// `reports_list_changed_maps_and_first_sightings` (tests/kernel.rs) check the round's
+/// accounting built from it.
 #[derive(Clone, Debug, Default)]
 #[allow(clippy::struct_excessive_bools)] // Independent facts of one round, each read by its own pass.
 pub(super) struct Turn {
@@ -176,8 +177,7 @@ pub struct Simulation {
     /// messages); built only for rounds that need it (see `robot_index_eager`).
     pub(super) robot_index: RobotIndex,
     /// Some strategy perceives robots: the view-sized index is built every round. Otherwise
-    /// only for rounds in which someone broadcasts, after step 2 (issue 11: rebuilding it
-    /// for robots that never look cost a random walk 1.5 %).
+    /// only for rounds in which someone broadcasts, after step 2.
     pub(super) robot_index_eager: bool,
     /// Each robot's turn this round (see [`Turn`]).
     pub(super) turns: Vec<Turn>,
@@ -216,8 +216,7 @@ pub struct Simulation {
     pub(super) near_scratch: Vec<u32>,
     /// Each robot's position and body radius as step 3 meets it, written in step 2 (after
     /// any turn resolved there) and as step 3 moves robots: what a move's contact test
-    /// reads of the robots in its way, 24 bytes each rather than a robot's ~200 (issue 11:
-    /// a move in the moonshot's crowd tests dozens).
+    /// reads of the robots in its way, 24 bytes each rather than a whole [`Robot`].
     pub(super) bodies_now: Vec<(DVec2, f64)>,
     /// Messages sent this round, waiting for budgeted delivery (sender order).
     pub(super) outgoing: Vec<Outgoing>,
@@ -374,8 +373,8 @@ impl Simulation {
     /// Report decisions that take longer than `limit` (in the round report's
     /// `slow_decisions`); `None` does not time them. Default: [`DEFAULT_DECIDE_LIMIT`].
     /// Decisions are timed with the system's coarse monotonic clock (a few milliseconds'
-    /// resolution, at a tenth of the cost of a precise clock read), so limits under about
-    /// ten milliseconds are approximate.
+    /// resolution, cheaper than a precise clock read), so limits under about ten
+    /// milliseconds are approximate.
     pub fn with_decide_limit(mut self, limit: Option<Duration>) -> Self {
         self.decide_limit = limit;
         self
@@ -392,7 +391,8 @@ impl Simulation {
     /// Whether a robot whose turn depends on no other robot (idle, or moving with nobody
     /// within reach; no messages, no treasure, no energy running out) has its turn resolved
     /// in step 2, in parallel, instead of in step 3's pass in id order. Default: `true`.
-    /// Results are the same either way (`false` is there to check that, and to profile).
+    /// Results are the same either way (`false` is there to check that, and to profile):
+    /// `turns_resolved_alone_give_the_id_order_run` (tests/kernel.rs).
     pub fn with_turns_resolved_alone(mut self, enabled: bool) -> Self {
         self.resolve_alone = enabled;
         self
@@ -474,8 +474,7 @@ impl Simulation {
     /// The deliveries of the last round: each message sent in it and each robot that will
     /// read it at the start of the next (sender → receiver), receiver by receiver, each
     /// receiver's in reading order. Worked out from the inboxes when asked: crowds make
-    /// millions a round, and most runs never look (issue 11: gathering them into the
-    /// round's report was a fifth of the moonshot's message delivery).
+    /// millions a round, and most runs never look. O(links).
     pub fn links(&self) -> impl Iterator<Item = Link> + '_ {
         self.inboxes.iter().enumerate().flat_map(move |(r, picks)| {
             let to = RobotId::new(u32::try_from(r).expect("robot ids are u32"));
@@ -515,8 +514,7 @@ impl Simulation {
         message_bytes: u64,
         known_map_bytes: usize,
     ) -> RoundMetrics {
-        // One pass over the robots (issue 11: one a figure was a tenth of the sequential
-        // part of a random walk's round).
+        // One pass over the robots for all the sums.
         let (mut alive, mut energy, mut distance_m, mut units_dug, mut units_delivered) = (0u32, 0.0, 0.0, 0, 0);
         for r in &self.robots {
             if r.alive {
@@ -553,9 +551,8 @@ impl Simulation {
     pub(super) fn rng_for(seed: u64, robot: RobotId, round: u64) -> RobotRng {
         let x = Self::mixed_seed(seed, robot, round);
         // `RobotRng::seed_from_u64(x)`'s state (four outputs of a splitmix64 seeded with
-        // `x`), without its generic byte-by-byte fill (issue 11: that was 3 % of a dense
-        // random walker's round). The test `rng_for_seeds_as_seed_from_u64` holds the two
-        // equal.
+        // `x`), without its generic byte-by-byte fill. The test
+        // `rng_for_seeds_as_seed_from_u64` holds the two equal.
         let mut splitmix = rand_xoshiro::SplitMix64::seed_from_u64(x);
         let mut state = [0u8; 32];
         for word in state.chunks_exact_mut(8) {
@@ -587,14 +584,12 @@ impl Simulation {
         let positions = || robots.iter().map(|r| (r.id, r.position));
         let view_cell_m = index_cell_m(&self.types);
         // Cells about the radius of the widest contact query (`Bodies::near_move`: two radii
-        // and a move around the middle of a move), so that a query covers about 3 × 3 cells
-        // (issue 11: the 9 to 25 cells of each query were 15 % of the dense random walk;
-        // with twice that size, crowds put a hundred robots in the 2 × 2 cells of a query).
+        // and a move around the middle of a move), so that a query covers about 3 × 3
+        // cells: smaller cells mean more cells a query, larger ones more robots a cell.
         let reach = 2.0 * self.max_radius_m + 2.0 * self.max_speed_m;
         let (robot_index, body_index) = (&mut self.robot_index, &mut self.body_index);
         if self.robot_index_eager {
-            // The two are independent: built side by side (issue 11: one after the other they
-            // were a third of the dense random walk's sequential time).
+            // The two are independent: built side by side.
             rayon::join(
                 || robot_index.rebuild(positions(), view_cell_m),
                 || body_index.rebuild(positions(), reach.clamp(0.25, 64.0)),
@@ -635,8 +630,8 @@ mod tests {
     use crate::agent::RobotRng;
     use crate::spatial::RobotId;
 
-    /// Issue 11: the robots' generators, seeded without the generic fill, draw what
-    /// `seed_from_u64` of the same mixed seed draws (so runs kept their digests).
+    /// The robots' generators, seeded without the generic fill, draw what `seed_from_u64`
+    /// of the same mixed seed draws.
     #[test]
     fn rng_for_seeds_as_seed_from_u64() {
         for (seed, robot, round) in [(0, 0, 0), (1, 7, 3), (u64::MAX, 999, 1_000_000), (42, 0, u64::MAX)] {

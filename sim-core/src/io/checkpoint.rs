@@ -1,6 +1,6 @@
-//! Checkpoint files (issue 13): a run's whole state written every K rounds, atomically, so
-//! that a run killed at any moment resumes from its last checkpoint to the bitwise-same
-//! final state and the same complete metrics CSV as a run that was never stopped.
+//! Checkpoint files: a run's whole state written every K rounds, atomically, so that a run
+//! killed at any moment resumes from its last checkpoint to the bitwise-same final state
+//! and the same complete metrics CSV as a run that was never stopped.
 //!
 //! A checkpoint holds how the run was set up (the config text as parsed, the `--map`,
 //! `--seed` and `--rounds` overrides, and a CRC-32 of the map file, which must be unchanged

@@ -1,6 +1,7 @@
 //! Layer 5, input and output: the [`Observer`] trait through which viewers watch a run (and
 //! [`Simulation::run`](crate::engine::Simulation::run), which drives it), the CSV writers,
-//! the XML config, checkpoints and the invariant checker. The top layer: it may import from all below.
+//! the XML config, checkpoints and the invariant checker. The top layer: it may import from
+//! all below.
 
 mod checkpoint;
 mod config;

@@ -1,5 +1,5 @@
-//! Parameter sweeps (issue 13): the full grid of runs a sweep file describes, run headless,
-//! written as one tidy CSV; shards of it for a cluster, and the merge of their outputs.
+//! Parameter sweeps: the full grid of runs a sweep file describes, run headless, written as
+//! one tidy CSV; shards of it for a cluster, and the merge of their outputs.
 //!
 //! ```xml
 //! <sweep name="demo-sweep" config="demo.xml" rounds="200">  <!-- config: relative to this file -->

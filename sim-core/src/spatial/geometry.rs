@@ -46,8 +46,8 @@ impl Aabb {
     /// [`overlaps_open`](Self::overlaps_open)) and whose part in it lies within squared
     /// distance `max_d2` of `p`, the part's [`distance_squared_to`](Self::distance_squared_to)
     /// worked out with the same operations, so to the last bit; bit `8 j + i` is cell
-    /// `(i, j)`. Per column and row once, then combined (issue 12: a frontier search's
-    /// nearest unknown point tested each block's cells one square at a time).
+    /// `(i, j)`. Per column and row once, then combined. Checked by
+    /// `cells_with_part_near_match_the_tests_cell_by_cell`.
     pub fn cells_with_part_near(&self, cells: &BlockCells, p: DVec2, max_d2: f64) -> u64 {
         // Along an axis: the cell's part in the box, `p` clamped into it, the gap squared.
         let gaps = |edges: &[f64; 9], c: f64, min: f64, max: f64| -> [f64; 8] {
@@ -132,7 +132,8 @@ pub trait Shape {
     fn bounds(&self) -> Aabb;
     /// [`classify`](Self::classify) for each of the 64 cells of an 8 × 8 block at once, or
     /// `None` (the default) to have them classified one square at a time. The quadtree's
-    /// packed bottom asks this; an answer must agree with `classify` cell by cell.
+    /// packed bottom asks this; an answer must agree with `classify` cell by cell (checked
+    /// by `classify_cells_agrees_with_classify_cell_by_cell`).
     #[inline]
     fn classify_cells(&self, _cells: &BlockCells) -> Option<CellMasks> {
         None
@@ -227,9 +228,8 @@ pub(crate) fn cell_within(far: f64, near: f64, r2: f64) -> bool {
 }
 
 /// The larger of two numbers, by one comparison, as glam's vector `max` selects: `f64::max`
-/// for numbers (zeros aside, whose sign the squares taken here drop) without the NaN
-/// handling that made it five instructions (issue 11: a walker's view marking computes
-/// these for every row and column of its view).
+/// for numbers (zeros aside, whose sign the squares taken here drop) without its NaN
+/// handling, for the per-row and per-column sums of view marking.
 #[inline]
 fn above(a: f64, b: f64) -> f64 {
     if a > b { a } else { b }
@@ -370,9 +370,9 @@ impl Disc {
     /// if the disc's bounds span at most 64 cells a side of the covering square (else
     /// `None`). Exactly the cells that [`Shape::classify_cells`] of the disc (clipped by
     /// `clip`) reports contained, worked out once for the whole disc: each row's run of
-    /// contained cells found from the last row's by a few tests of its ends (issue 11: a
-    /// robot's view, classified block by block, repeated that work for every block it
-    /// touched).
+    /// contained cells found from the last row's by a few tests of its ends. O(rows).
+    /// Checked by `view_rows_are_the_cells_wholly_inside` and
+    /// `view_rows_keep_cells_whose_corner_is_on_the_rim`.
     pub fn contained_rows(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb) -> Option<CellRows> {
         let mut out = CellRows::empty();
         self.contained_rows_into(grid, clip, &mut out).then_some(out)
@@ -380,16 +380,15 @@ impl Disc {
 
     /// [`contained_rows`](Self::contained_rows) into `out` (its rows past the new length
     /// cleared), returning `false` for a disc too wide (then `out` holds no rows). Nothing
-    /// is allocated and only the rows in use are written (issue 11: zeroing and copying
-    /// 64-row buffers, and per-column tables, were a third of marking a robot's view).
+    /// is allocated and only the rows in use are written.
     pub fn contained_rows_into(&self, grid: &crate::spatial::grid::Grid, clip: &Aabb, out: &mut CellRows) -> bool {
         let old_len = out.len;
         (out.x0, out.y0, out.len) = (0, 0, 0);
         let fits = match grid.cells_touching(&self.bounds()) {
             None => true,
             Some((lo, hi)) if hi.0 - lo.0 >= 64 || hi.1 - lo.1 >= 64 => false,
-            // Column tables as wide as the disc needs (issue 11: zeroing two 64-wide tables
-            // for a view of 11 columns was a call to memset, 3 % of a random walker's round).
+            // Column tables as wide as the disc needs, so that a narrow view does not
+            // zero 64-wide ones.
             Some((lo, hi)) if hi.0 - lo.0 < 16 => {
                 self.contained_rows_unclean::<16>(grid, clip, lo, hi, out);
                 true
@@ -421,8 +420,7 @@ impl Disc {
         // edge, as `edge_distances` gives them for `classify_cells`, from the squared
         // distances to the grid lines, each worked out once (a column shares its lines with
         // its neighbours): the nearest point is on the line before the centre, the line
-        // after it, or level with it (0); the farthest edge is the farther line (issue 11:
-        // working out both lines of each column and row was a fifth of this function).
+        // after it, or level with it (0); the farthest edge is the farther line.
         let (mut near_x, mut far_x) = ([0.0; N], [0.0; N]);
         // Grid lines grow with their index, so when the outer lines lie within `clip`, every
         // column and row does (the usual case, a view away from the map's edges), and the
@@ -446,8 +444,7 @@ impl Disc {
         // Along a row both distances fall to the column of the centre and rise after it,
         // so a row's contained cells are a run through that column, whose ends move a
         // little from row to row: a few tests per row find them, each the sums and
-        // comparisons of `classify_cells` (issue 11: testing every cell of the square
-        // around the view was a fifth of a walker's round).
+        // comparisons of `classify_cells`, instead of a test of every cell.
         let mid = (1..width).fold(0, |m, i| if far_x[i] < far_x[m] { i } else { m });
         let (mut lo, mut hi) = (mid, mid);
         (out.x0, out.y0, out.len) = (x0, y0, len);
@@ -607,7 +604,7 @@ impl Shape for Capsule {
 
     /// Cell by cell with [`classify`](Shape::classify), but only the cells near the
     /// capsule's bounds: a robot's move covers a few cells of a block, and each test is a
-    /// segment-to-box distance (issue 11: the swept-disc test of every move walked all 64).
+    /// segment-to-box distance. Checked by `classify_cells_agrees_with_classify_cell_by_cell`.
     fn classify_cells(&self, cells: &BlockCells) -> Option<CellMasks> {
         let b = self.bounds();
         // A cell this far outside the bounds is farther than the radius from the axis
@@ -642,9 +639,9 @@ impl Shape for Capsule {
 
     /// [`classify_cells`](Shape::classify_cells)' `intersects` alone, from fewer tests: a
     /// row's cells are tested only between the x the axis reaches within the radius of the
-    /// row (a bound with room for rounding), and only for the distance (issue 12: routes'
-    /// shortcuts test long slanting legs over known maps, where the bounds held most of a
-    /// block and every cell in them took five distances).
+    /// row (a bound with room for rounding), and only for the distance: a long slanting leg
+    /// skips most of the block its bounds hold. Checked by
+    /// `classify_cells_agrees_with_classify_cell_by_cell`.
     fn intersects_cells(&self, cells: &BlockCells) -> Option<u64> {
         if self.radius <= 0.0 {
             return self.classify_cells(cells).map(|m| m.intersects);
@@ -692,8 +689,8 @@ impl Shape for Capsule {
 
 /// The part of `disc` not wholly inside `seen`, for marking a view that moved: squares
 /// lying wholly inside the disc seen last time were marked then (known maps only grow), so
-/// they count as disjoint and the quadtree descent skips them (issue 11: half the disc's
-/// rim need not be walked again each round).
+/// they count as disjoint and the quadtree descent skips them. Checked by
+/// `moving_views_mark_exactly_what_whole_discs_mark`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiscBeyond {
     /// The view now.
@@ -775,9 +772,8 @@ impl<S: Shape> Shape for Clipped<S> {
 }
 
 /// `v.floor()` for the cell arithmetic of hot paths, without the libm call that the
-/// baseline x86-64 target makes of it (issue 11: `floor` was 2 % of the dense random
-/// walk). Exact for |v| < 2⁶³; beyond that (and for NaN) the callers' saturating casts
-/// clamp anyway.
+/// baseline x86-64 target makes of it. Exact for |v| < 2⁶³; beyond that (and for NaN) the
+/// callers' saturating casts clamp anyway.
 #[inline]
 pub(crate) fn floor(v: f64) -> f64 {
     let t = v as i64 as f64;
@@ -836,8 +832,8 @@ pub fn segment_enters_box_interior(a: DVec2, b: DVec2, bx: &Aabb) -> bool {
 /// Squared distance between the segment `ab` and the closed box (0 when they meet).
 pub fn segment_box_distance_squared(a: DVec2, b: DVec2, bx: &Aabb) -> f64 {
     // A segment whose box lies off the box by more than any rounding of the clip's (a part
-    // in 10⁹ of the coordinates) cannot meet it: the clip, two divisions, is skipped (issue
-    // 11: a move's blocked neighbour cells nearly always lie so).
+    // in 10⁹ of the coordinates) cannot meet it: the clip, two divisions, is skipped.
+    // Checked by `segment_box_distance_skips_only_clips_that_miss`.
     let (lo, hi) = (a.min(b), a.max(b));
     let scale = lo.abs().max(hi.abs()).max(bx.min.abs()).max(bx.max.abs()).max_element();
     let margin = 1e-9 * (1.0 + scale);
@@ -884,11 +880,11 @@ mod tests {
         assert_eq!(d(1.6, 1.8, 1.01).classify(&unit()), Overlap::Partial);
     }
 
-    /// Issue 11: the segment-to-box distance that skips the clip for segments well off the
-    /// box is the one that always clips, bit for bit: random segments and boxes, segments
-    /// ending on or a few units in the last place off a box's edges, far from the origin.
+    /// The segment-to-box distance that skips the clip for segments well off the box is the
+    /// one that always clips, bit for bit: random segments and boxes, segments ending on or
+    /// a few units in the last place off a box's edges, far from the origin.
     #[test]
-    fn issue11_segment_box_distance_skips_only_clips_that_miss() {
+    fn segment_box_distance_skips_only_clips_that_miss() {
         use rand::{Rng, SeedableRng};
         let always_clip = |a: DVec2, b: DVec2, bx: &Aabb| {
             if clip_segment(a, b, bx).is_some() {

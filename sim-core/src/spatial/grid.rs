@@ -157,9 +157,8 @@ impl Grid {
             return None;
         }
         // No coordinate is NaN past the test above. Clamped to the covering square first,
-        // a coordinate is at least 0, where the cast's truncation is the floor (issue 11:
-        // a floor, a clamp and a saturating cast on each made this a twentieth of a dense
-        // random walker's round).
+        // a coordinate is at least 0, where the cast's truncation is the floor, so no floor
+        // is taken. Checked by `cells_touching_matches_a_scan`.
         let last = f64::from(side - 1);
         let cell = |v: f64| v.clamp(0.0, last) as u32;
         Some(((cell(lo.x), cell(lo.y)), (cell(hi.x), cell(hi.y))))
@@ -220,13 +219,13 @@ mod tests {
         assert_eq!(g.cell_of(DVec2::new(-6.0, 5.0)), None);
     }
 
-    /// Issue 11: the cells a box touches (clamped without a floor) are those a scan of the
-    /// covering square finds: from the cell holding the box's low corner to the one holding
-    /// its high corner (cells half-open), clamped to the square, or none if it misses.
-    /// Coordinates on the half-cell lattice, where every product is exact, half of them on
-    /// cell edges, and some infinite.
+    /// The cells a box touches (clamped without a floor) are those a scan of the covering
+    /// square finds: from the cell holding the box's low corner to the one holding its high
+    /// corner (cells half-open), clamped to the square, or none if it misses. Coordinates
+    /// on the half-cell lattice, where every product is exact, half of them on cell edges,
+    /// and some infinite.
     #[test]
-    fn issue11_cells_touching_matches_a_scan() {
+    fn cells_touching_matches_a_scan() {
         use rand::{Rng, SeedableRng};
         let grid = Grid::new(DVec2::new(-3.5, 7.0), 0.5, 20, 12).unwrap();
         let side = grid.side_cells();

@@ -18,9 +18,8 @@ use crate::spatial::tile_log::TileLog;
 use crate::spatial::view_stencil::Stencils;
 
 thread_local! {
-    /// The rows of a view being marked, in a buffer kept from call to call (issue 11:
-    /// zeroing a fresh one was a call to memset, 3 % of a random walker's round), and the
-    /// stencils of the views this thread marks.
+    /// The rows of a view being marked, in a buffer kept from call to call so that none is
+    /// zeroed per view, and the stencils of the views this thread marks.
     static VIEW: RefCell<(CellRows, Stencils)> = RefCell::new((CellRows::empty(), Stencils::default()));
 }
 
@@ -35,11 +34,12 @@ pub struct KnownMap {
     /// That view's cells, when it was marked by its rows: all known.
     last_rows: Option<Box<CellRows>>,
     /// The cells of the blocks around the views marked by their rows, as the tree holds
-    /// them; cleared by every other change. Not saved: a restored map starts without.
+    /// them (checked by [`validate`](Self::validate)); cleared by every other change. Not
+    /// saved: a restored map starts without.
     #[serde(skip)]
     blocks: Option<Box<BlockCache>>,
     /// Known cells around the views marked through it (a part of the tree's: see
-    /// [`KnownWindow`]). Not saved, like `blocks`.
+    /// [`KnownWindow`]; checked by [`validate`](Self::validate)). Not saved, like `blocks`.
     #[serde(skip)]
     window: Option<Box<KnownWindow>>,
     /// Which tiles changed when, once a reader asked for it ([`track_changes`](Self::track_changes));
@@ -114,7 +114,8 @@ impl KnownMap {
 
     /// [`mark_disc`](Self::mark_disc) for a robot's view, which moves a little each round:
     /// squares wholly inside the view this map marked last time are skipped, as they are
-    /// known already (maps only grow). Same result as `mark_disc`, less work.
+    /// known already (maps only grow). Same result as `mark_disc`, less work; checked by
+    /// `moving_views_mark_exactly_what_whole_discs_mark`.
     pub fn mark_view(&mut self, center: DVec2, radius_m: f64) -> bool {
         self.mark_view_reporting(center, radius_m, |_| {})
     }
@@ -136,8 +137,7 @@ impl KnownMap {
         }
         // Each map's caches sit in allocations of their own, most likely out of the
         // processor's caches by the time a robot's turn comes round again: their lines are
-        // fetched while the view's rows are worked out (issue 11: the first reads of each
-        // were a fifth of marking a random walker's view).
+        // fetched while the view's rows are worked out. A hint only: it changes no result.
         if let Some(window) = &self.window {
             window.prefetch();
         } else {
@@ -163,9 +163,9 @@ impl KnownMap {
                 }
                 newly_known(set);
             };
-            // A view of at most 32 cells a side, with its stencil: its cells not known yet,
-            // left out through the window of known cells around it as its rows are made
-            // (issue 11: see `known_window`); two times in three there are none.
+            // A view of at most 32 cells a side, with its stencil: only its cells not known
+            // yet, the known ones left out through the window around it (see
+            // `known_window`) as its rows are made.
             if let Some(stencil) = stencil
                 && KnownWindow::fits(&self.tree)
                 && let Some(view) = stencil.place(&disc, grid, &clip)
@@ -190,11 +190,10 @@ impl KnownMap {
                 return true;
             }
             // Otherwise a view up to 64 cells across: its cells worked out at once, then set
-            // by one walk that goes only where they are (issue 11: the walk from the root
-            // along the view's rim, with shape tests at every node, was half of a random
-            // walker's round). Bigger views take that walk, which skips what the last view
-            // marked. Only the cells the last view did not hold: a walker's view moves a
-            // fraction of itself a round, so most rounds that is a thin crescent, or nothing.
+            // block by block, no shape tests. Bigger views take the shape walk, which skips
+            // what the last view marked. Only the cells the last view did not hold: a
+            // walker's view moves a fraction of itself a round, so most rounds that is a thin
+            // crescent, or nothing.
             let blocks = self.blocks.get_or_insert_default();
             let by_rows = (stencil.is_some_and(|stencil| stencil.rows_into(&disc, grid, &clip, rows))
                 || disc.contained_rows_into(grid, &clip, rows))

@@ -1,13 +1,11 @@
 //! Known cells of a map around a robot's view, 64 × 64 cells as row masks, so that marking
 //! the view leaves out what is known with a word operation per row.
 //!
-//! Issue 11: two views in three of a dense random walker add no cell to its map (622,866 of
-//! 958,311 in 1,000 rounds), yet each worked out the view's rows, took out the last view's
-//! and looked the blocks left up in a cache of blocks or the tree: callgrind counted 870
-//! and 780 instructions a view for the two steps, perf 12 and 10 % of the walk's time. With
-//! the known cells at hand as rows, the view's rows leave them out as they are made (the
-//! cells on its rim that are known need no exact test) and only blocks with cells to set
-//! are visited: the second step fell to 170 instructions and 2 % of the time.
+//! Most views add no cell to a walker's map. With the known cells at hand as rows, the
+//! view's rows leave them out as they are made (the known cells on its rim need no exact
+//! test) and only blocks with cells to set are visited. Invariant: every cell of a loaded
+//! block is known in the tree (known maps only grow); checked by [`KnownWindow::check`]
+//! (run by `KnownMap::validate`) and `views_through_the_known_window_are_the_walks_cells`.
 
 use crate::cache::prefetch;
 use crate::spatial::quadtree::RegionQuadtree;
@@ -29,9 +27,8 @@ pub(crate) const MAX_VIEW_CELLS: u32 = 32;
 /// [`add_rows`](Self::add_rows) gives it, but not those the tree learns otherwise (merged
 /// maps). As known maps only grow, what it holds stays known, which is all a view needs
 /// (what it leaves out of a view is known); a view that finds cells it does not hold, known
-/// already, sets them again, which changes nothing in the tree, and adds them here (issue
-/// 11: a crowd's explorers merge maps nearly every round, and loading blocks again after
-/// each merge cost more than the window saved).
+/// already, sets them again, which changes nothing in the tree, and adds them here. So a
+/// merge need not reload the window: crowds merge maps nearly every round.
 #[derive(Clone, Debug)]
 pub(crate) struct KnownWindow {
     /// Column and row of the window's south-west cell (multiples of 8).
@@ -56,8 +53,8 @@ impl Default for KnownWindow {
 
 impl KnownWindow {
     /// Start loading the whole window (see [`prefetch`]): its nine lines at once, rather
-    /// than the rows around a view, which would wait for the window's place to arrive first
-    /// (issue 11: that load was half of marking a view's own time in perf).
+    /// than the rows around a view, which would wait for the window's place to arrive
+    /// first. A hint only: it changes no result.
     #[inline]
     pub(crate) fn prefetch(&self) {
         prefetch(&self.loaded);

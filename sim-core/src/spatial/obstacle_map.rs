@@ -23,7 +23,8 @@ pub(crate) const MAX_LEG_BLOCKS: u32 = 64;
 #[derive(Clone, Debug)]
 pub struct ObstacleMap {
     tree: RegionQuadtree,
-    /// The tree's nodes at one level, for descents to its blocks (the tree never changes).
+    /// The tree's nodes at one level, for descents to its blocks. Valid because the tree
+    /// never changes; checked by [`validate`](Self::validate).
     directory: Option<Directory>,
 }
 
@@ -167,10 +168,10 @@ impl ObstacleMap {
     /// [`is_swept_disc_free`](Self::is_swept_disc_free) finds (the largest fraction it proved
     /// free), for a move that is not free as a whole.
     ///
-    /// The result is exactly that bisection's, but faster: the blocked leaves near the whole
-    /// move are gathered once, each step is decided against them, and a step whose nearest
-    /// leaf is too close to call either way is decided by the exact test. A robot walking into
-    /// a wall used to pay for 25 quadtree walks (a third of the dense random walk's time).
+    /// The result is exactly that bisection's, with fewer tree walks: the blocked leaves near
+    /// the whole move are gathered once, each step is decided against them, and a step whose
+    /// nearest leaf is too close to call either way is decided by the exact test. Checked by
+    /// `swept_disc_free_fraction_is_the_bisections`.
     pub fn swept_disc_free_fraction(&self, from: DVec2, d: DVec2, radius_m: f64) -> f64 {
         let exact = |t: f64| self.is_swept_disc_free(from, from + d * t, radius_m);
         // Segments (radius 0) are tested differently by the exact test: they take it always.
@@ -230,9 +231,8 @@ impl ObstacleMap {
         };
         // The bisection ends at the largest k / 2²⁴ (0 < k < 2²⁴) that `free` accepts, or 0,
         // as a longer step sweeps a superset of a shorter one. So start where the disc's
-        // centre first comes within the radius of a near box, and test the steps around it
-        // (issue 11: the bisection's 24 tests were a tenth of the dense random walk, where
-        // walkers run into walls all the time); only if that takes long, bisect.
+        // centre first comes within the radius of a near box, and test the steps around it;
+        // only if that takes long, bisect.
         if quick && !near.is_empty() {
             const STEPS: f64 = (1u32 << 24) as f64;
             const LAST: i64 = (1 << 24) - 1;

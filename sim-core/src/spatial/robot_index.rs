@@ -8,10 +8,12 @@
 //!
 //! An index made with [`RobotIndex::dense_when_compact`] lays the cells out row by row
 //! instead, when the robots' cells span a rectangle of at most about sixteen cells a robot:
-//! a query then reads one run of entries per row of cells, without hashing (issue 11: the
-//! buckets of a contact query were a sixth of a random walker's round). Only the order in
-//! which a query visits robots differs. In a crowd (more than four robots a cell over
-//! the robots' box) such an index also halves its cells, up to three times.
+//! a query then reads one run of entries per row of cells, without hashing. Only the order
+//! in which a query visits robots differs. In a crowd (more than four robots a cell over
+//! the robots' box) such an index also halves its cells, up to three times. Invariant: a
+//! query yields exactly the robots in its disc, in the walk's order, for either layout;
+//! checked by `robot_index_matches_brute_force`, `a_robot_on_the_rim_is_found` and
+//! `runs_hold_the_disc_in_the_walks_order`.
 
 use std::ops::ControlFlow;
 
@@ -157,8 +159,7 @@ impl RobotIndex {
         };
         let mut area = area_of(lo, hi);
         // A crowd (more than four robots a cell over the robots' box) gets cells half as
-        // wide, up to three times: a query then reads about half the robots it did
-        // (issue 11: a contact query in the moonshot's crowd read 314 robots to list 38).
+        // wide, up to three times, so that a query reads fewer robots outside its disc.
         let mut halvings = 0;
         while self.dense_allowed && halvings < 3 && n as u64 > 4 * area {
             halvings += 1;
@@ -195,10 +196,8 @@ impl RobotIndex {
         }
         // Running sums, so that `starts[b]` is where bucket `b` ends; placing the robots
         // from the last one back then leaves it where `b` starts, with each bucket in input
-        // order (stable, so query order is deterministic). The sum is kept in a register
-        // and no copy of the starts is made (issue 11: perf put half of this rebuild's
-        // samples on reloading each sum from memory; its share of a 1-thread dense random
-        // walk fell from 1.6 to 0.9 %).
+        // order (stable, so query order is deterministic). The sum is kept in a local and
+        // no copy of the starts is made.
         let mut end = 0;
         for start in &mut self.starts {
             end += *start;
@@ -261,9 +260,7 @@ impl RobotIndex {
     /// starts in [`entries`](Self::entries). A run given with a cell holds other cells'
     /// robots too (a hashed bucket): only those whose [`Entry::cell`] is that cell belong
     /// to it. For callers that test robots by tests of their own, without a branch per
-    /// robot, or that keep data of their own beside the entries (issue 11: in the
-    /// moonshot's crowd the contact query's tests were mispredicted branches, an eighth of
-    /// a round).
+    /// robot, or that keep data of their own beside the entries.
     pub(crate) fn for_each_run_near(
         &self,
         p: DVec2,
@@ -318,9 +315,9 @@ impl RobotIndex {
     /// them: how many ranges were written to `out` (the first ones), or `None` otherwise.
     /// They hold the robots in the disc that [`for_each_run_near`](Self::for_each_run_near)
     /// gives, in its order (it may scan every robot instead, where the box holds more cells
-    /// than there are robots). Each range holds only robots of its row's cells. For a query in a loop of its own, without a call per run
-    /// (issue 11: the contact query's per-run visits and set-up were 890 instructions of a
-    /// dense random walker's round).
+    /// than there are robots). Each range holds only robots of its row's cells. For a query
+    /// in a loop of its own, without a call per run. Checked by
+    /// `runs_hold_the_disc_in_the_walks_order`.
     #[inline]
     pub(crate) fn dense_runs_near<const N: usize>(
         &self,
@@ -330,8 +327,7 @@ impl RobotIndex {
     ) -> Option<usize> {
         // The box of `try_for_each_run_near`, with the same slack. It dwarfs the rounding of
         // a product by `1 / cell_m` (a few units in the last place), so the box still holds
-        // every cell a robot in the disc is filed in, without two divisions to wait for
-        // (issue 11: they were a tenth of this query's time).
+        // every cell a robot in the disc is filed in, without two divisions to wait for.
         let reach = radius_m + self.query_slack(p, radius_m);
         let cell = |q: DVec2| {
             let c = q * self.cells_per_m;
@@ -413,13 +409,13 @@ mod tests {
     proptest! {
         #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..ProptestConfig::default() })]
 
-        /// Issue 11: the runs of entries a query reads are the index's own entries where they
-        /// say they start, and, with each run's cell test, hold every robot in the disc
-        /// once, in `for_each_within`'s order (contact lists and budgeted delivery read runs
-        /// and rely on both), for either layout and a crowd that halves the cells; and so do
-        /// a dense layout's runs as ranges.
+        /// The runs of entries a query reads are the index's own entries where they say they
+        /// start, and, with each run's cell test, hold every robot in the disc once, in
+        /// `for_each_within`'s order (contact lists and budgeted delivery read runs and rely
+        /// on both), for either layout and a crowd that halves the cells; and so do a dense
+        /// layout's runs as ranges.
         #[test]
-        fn issue11_runs_hold_the_disc_in_the_walks_order(
+        fn runs_hold_the_disc_in_the_walks_order(
             points in proptest::collection::vec((-20.0f64..20.0, -20.0f64..20.0), 0..300),
             crowd in 0usize..400,
             dense in any::<bool>(),

@@ -6,9 +6,8 @@
 //! into [`BINS`] × [`BINS`] bins and holds, for a centre anywhere in each bin, the cells
 //! surely inside the disc (with a margin far wider than any rounding) and the cells that
 //! may be. A view takes the first and tests only the few in between (the *ring*) exactly as
-//! [`Disc::contained_rows`] does, so its cells are the same to the last bit (issue 11: the
-//! direct rows were two thousand instructions per view, a quarter of a dense random
-//! walker's round).
+//! [`Disc::contained_rows`] does, so its cells are the same to the last bit. Checked by
+//! `stencil_rows_are_the_direct_rows` and `stencil_at_the_edges`.
 
 use glam::DVec2;
 
@@ -208,8 +207,8 @@ impl PlacedView<'_> {
         };
         // A known row in the stencil's columns.
         let aligned = |known: u64| (known << known_left) >> known_right;
-        // Two views in three of a dense random walker hold only known cells: a word
-        // operation a row tells, before any rim cell is tested or row written (issue 11).
+        // Most views of a walker hold only known cells: a word operation a row tells,
+        // before any rim cell is tested or row written.
         if known.is_some()
             && self
                 .rows
@@ -320,11 +319,11 @@ mod tests {
         rows
     }
 
-    /// Issue 11: the stencil's rows are the direct rows, bit for bit, for centres anywhere
-    /// (at random, on bin edges, on grid lines and corners, where rims pass through grid
+    /// The stencil's rows are the direct rows, bit for bit, for centres anywhere (at
+    /// random, on bin edges, on grid lines and corners, where rims pass through grid
     /// corners), several radii and cell sizes, on grids whose origin is off zero.
     #[test]
-    fn issue11_stencil_rows_are_the_direct_rows() {
+    fn stencil_rows_are_the_direct_rows() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         for (cell_m, origin) in [
             (1.0, DVec2::ZERO),
@@ -351,8 +350,7 @@ mod tests {
                     let want = direct(&disc, &grid);
                     assert_eq!(got, want, "centre {center}, radius {radius}");
                     // Leaving out known cells, given over 64 columns and more rows that
-                    // cover the view's box (as a known-cell window does): exactly the rest
-                    // (issue 11).
+                    // cover the view's box (as a known-cell window does): exactly the rest.
                     let view = stencil.place(&disc, &grid, &grid.extent()).expect("inside the map");
                     let (lo, hi) = view.cells();
                     assert_eq!((lo.0, lo.1, (hi.1 - lo.1 + 1) as usize), (want.x0, want.y0, want.len));

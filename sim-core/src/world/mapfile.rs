@@ -262,8 +262,8 @@ impl MapData {
         Ok(map)
     }
 
-    /// Check the map, then write it to `path` atomically (a temporary file beside it, then a rename), so a failed
-    /// save never leaves half a map behind.
+    /// Check the map, then write it to `path` atomically (a temporary file beside it, then
+    /// a rename), so a failed save never leaves half a map behind.
     pub fn save(&self, path: &Path) -> Result<()> {
         self.problems().map_err(|problem| Error::MapFile {
             path: path.to_path_buf(),

@@ -4,14 +4,14 @@
 use std::collections::HashMap;
 use std::hash::Hash;
 
-/// A fast, fixed-seed hasher: keys are small ids, nothing here faces untrusted input, and
-/// `SipHash` was the largest single cost of perception in crowds (issue 11 profile).
+/// A fast, fixed-seed hasher: keys are small ids and nothing here faces untrusted input,
+/// so `SipHash`'s resistance to flooding is not needed.
 type FastMap<K, V> = HashMap<K, V, foldhash::fast::FixedState>;
 
 /// A key a [`MemoryList`] can remember items by. Keys that are small dense numbers (robot
 /// and treasure ids) say so with [`dense_index`](Self::dense_index), and are then looked up
-/// in a table instead of hashed (issue 11: hashed look-ups of the sightings a robot hears
-/// were a sixth of the paper-scale round); the default hashes every key.
+/// in a table instead of hashed; the default hashes every key. Either way the list is the
+/// same: `matches_a_brute_force_model`.
 pub trait ListKey: Eq + Hash + Copy {
     /// The key as a small index, if it is one.
     fn dense_index(self) -> Option<usize> {
@@ -322,9 +322,8 @@ impl<K: ListKey, T: Clone> MemoryList<K, T> {
 
     /// Whether any remembered item satisfies `pred`, in no particular order.
     ///
-    /// A scan of the slab, not a walk of the list: a few times faster on long lists (no
-    /// dependent loads), for checks that usually fail, such as "is any remembered treasure
-    /// in view" every round.
+    /// A scan of the slab, not a walk of the list (no dependent loads), for checks that
+    /// usually fail, such as "is any remembered treasure in view" every round.
     pub fn any(&self, mut pred: impl FnMut(&T) -> bool) -> bool {
         self.slots.iter().any(|s| s.older != FREED && pred(&s.item))
     }
@@ -397,8 +396,8 @@ mod tests {
         assert_eq!(m.iter().map(|(v, _)| *v).collect::<Vec<_>>(), vec![22]);
     }
 
-    /// Issue 11: recording only the tail `kept_of` gives of a round's distinct keys leaves
-    /// the list as recording them all does, under either policy, whatever it held before.
+    /// Recording only the tail `kept_of` gives of a round's distinct keys leaves the list
+    /// as recording them all does, under either policy, whatever it held before.
     #[test]
     fn recording_the_kept_tail_is_recording_all() {
         use rand::{Rng, SeedableRng};
@@ -446,7 +445,7 @@ mod tests {
     /// The list against a brute-force model (a vector of (key, item, round) in sighting
     /// order), through random records, forgets and evictions under both policies: small
     /// dense keys (a table), keys some of which are too large for the table (a table and a
-    /// map, issue 11), keys that are never dense (a map), and keys that move between them.
+    /// map), keys that are never dense (a map), and keys that move between them.
     #[test]
     fn matches_a_brute_force_model() {
         use rand::Rng;

@@ -107,8 +107,7 @@ pub struct Message {
 
 /// The messages one robot reads in a round, in sending order: picks from the round's mail
 /// bag, which every receiver shares. A broadcast heard by hundreds is stored once, and
-/// delivering it to a receiver costs an index (issue 11: copying each message into every
-/// receiver's list was most of the sequential step in a crowd). Iterate it with `for m in
+/// delivering it to a receiver costs an index, not a copy. Iterate it with `for m in
 /// ctx.messages()` or [`iter`](Self::iter).
 #[derive(Clone, Debug, Default)]
 pub struct Inbox {

@@ -91,7 +91,7 @@ robot_type_table! {
     /// the lowest robot index first within a cell (the index's own order when the range
     /// spans more cells than there are senders). In a crowd that fills the budget a
     /// receiver therefore hears its south-western and low-id neighbours most (BENCHMARKS.md,
-    /// thirteenth session: 68 % of the moonshot's broadcasts taken came from the south).
+    /// "Radio budgets favour the south-west").
     radio_bytes_per_round: u64 = u64::MAX, NonNegative;
 }
 

@@ -19,26 +19,16 @@ pub(super) struct Sharing {
     pub(super) max_claims: usize,
     /// How much farther than the nearest frontier a robot walks to one no team mate
     /// claims (`None`: as far as it takes; see [`FrontierSeeking::seek`]). Unbounded by
-    /// default (issue 12, BENCHMARKS.md, fifteenth session: 0 explores a fifth more of the
-    /// kernel's large map in 1,500 rounds and plans less, but eight robots then took 1.3 to
-    /// 2.1 times as long to cover 95 % of the example maps).
+    /// default: a bound of 0 explores large maps faster but small teams cover the example
+    /// maps more slowly (BENCHMARKS.md, "Defaults of `cooperative`").
     #[serde(default)]
     pub(super) max_detour_m: Option<f64>,
 }
 
 /// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
 /// the paper's kind (the last n), so that a crowd's memory and work stay linear in its
-/// size (issue 11: unbounded, each of 10,000 robots crowded at home held a thousand goals
-/// after 20 rounds and merged its list with hundreds more every round, a stream of memory
-/// that bounded the whole round).
-///
-/// 64 (issue 11, measured in BENCHMARKS.md, twelfth and fifteenth sessions): only robots
-/// in a crowd hear more (the paper scale's and the moonshot's runs are the same with 256),
-/// and there merging and cutting hundreds of claims a round was a tenth of the round; the
-/// moonshot runs 18–35 % faster with 64. In the twelfth session 64 cost `bench-1000`'s
-/// diggers 30 % of what they dug; since the workers claim treasures themselves `bench-1000`
-/// does better with 64 (five seeds, 1,000 rounds: 50.4 against 47.8 % explored, 134.2
-/// against 128.2 units dug, 55.2 against 47.8 delivered).
+/// size. Only robots in a crowd hear more than 64 goals, and for them merging hundreds a
+/// round is costly (BENCHMARKS.md, "Defaults of `cooperative`").
 pub(super) const MAX_CLAIMS: u64 = 64;
 
 fn default_max_claims() -> usize {
@@ -116,11 +106,10 @@ impl Explorer {
     }
 }
 
-/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by
-/// half since it was last shared, and in any case every fifth time (maps of a crowd are
+/// Every `every` rounds (staggered by robot id): broadcast the known map if it grew by half
+/// since it was last shared, and in any case every fifth time (maps of a crowd are
 /// near-identical, and merging them costs receivers time for nothing), and all remembered
-/// sightings. Other rounds: fresh
-/// sightings, if any.
+/// sightings. Other rounds: fresh sightings, if any.
 pub(super) fn share_knowledge(ctx: &mut Ctx, every: u64, shared_area: &mut f64) {
     if (ctx.round + u64::from(ctx.me.id.get())).is_multiple_of(every) {
         let area = ctx.known().map_or(0.0, KnownMap::known_area_m2);

@@ -7,12 +7,11 @@ use crate::agent::{Ctx, Needs, Strategy};
 use crate::world::{Action, Payload};
 
 /// Team mates' goals, with the round heard, sorted by robot id: 16 bytes a claim, as a
-/// crowded robot's claims are read and written in full every round and the merge waits on
-/// reading them (issue 11: at 24 bytes the moonshot's perceive + decide took 4 % more). The
-/// round is kept in 32 bits (saturating after 4×10⁹ rounds), the goal in single precision
-/// from the robot's home centre ([`stored_goal`]): within 6 mm on a 100 km map whatever its
-/// origin (half a unit in the last place, 4 mm, on each axis), against avoidance radii of
-/// metres.
+/// crowded robot's claims are read and written in full every round. The round is kept in
+/// 32 bits (saturating after 4×10⁹ rounds), the goal in single precision from the robot's
+/// home centre ([`stored_goal`]): within 6 mm on a 100 km map whatever its origin (half a
+/// unit in the last place, 4 mm, on each axis), against avoidance radii of metres.
+/// `claimed_goals_come_back_within_6_mm_anywhere` checks the bound.
 type Claims = Vec<Claim>;
 
 /// One claim of [`Claims`]: (robot id, goal, round heard).
@@ -42,9 +41,9 @@ fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
 }
 
 /// `claims` with `updates` applied (both sorted by robot id; of a robot's updates the
-/// last counts), into `out`, by one merge of the two lists.
-// Out of line, as is the cut below: inlined into `decide`, the two took a fifth more
-// instructions (callgrind, bench-1000).
+/// last counts), into `out`, by one merge of the two lists: what applying the updates one
+/// by one to a map gives (`merged_claims_equal_updates_applied_one_by_one`).
+// Out of line, as is the cut below: inlined into `decide`, they made it slower.
 #[inline(never)]
 fn merge_claims(claims: &[Claim], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();
@@ -75,8 +74,8 @@ fn keep_newest(claims: &mut Claims, max: usize, round: u64) {
 
 /// Empties `out` and gives it room for `n` claims. It grows by doubling, up to `max` claims
 /// (or `n`, if more), and a new block replaces the old rather than copying it: fitted
-/// exactly, a crowded robot's list grew, and was copied by `realloc`, nearly every round
-/// (issue 11: a tenth of the moonshot's strategy time).
+/// exactly, a crowded robot's list would be regrown and copied nearly every round.
+/// `claims_keep_the_most_recently_heard` checks the block stays within `max` claims.
 fn empty_with_room(out: &mut Claims, n: usize, max: usize) {
     out.clear();
     if out.capacity() < n {
@@ -85,9 +84,8 @@ fn empty_with_room(out: &mut Claims, n: usize, max: usize) {
 }
 
 /// [`keep_newest`] of `claims`, written into `out` (its capacity at most `max` claims, or
-/// what is kept if more): the merged claims are cut while they are copied back (issue 12: a
-/// copy, then a pass to count and a pass to cut the robot's own list, were a tenth of
-/// `bench-1000`).
+/// what is kept if more): the merged claims are cut while they are copied back, in one
+/// pass. `claims_keep_the_most_recently_heard` checks both keep the same claims.
 #[inline(never)]
 fn keep_newest_into(claims: &[Claim], max: usize, round: u64, out: &mut Claims) {
     match newest_cut(claims, max, round) {
@@ -175,13 +173,12 @@ fn fresh_claims(updates: &[Update], round: u64) -> impl Iterator<Item = Claim> +
 /// `cut_now`, keep the `max` heard last ([`keep_newest`]); `merged` is a buffer. Without
 /// `cut_now` the claims may come back cut all the same when the round's fresh claims alone
 /// fill `max`, which is what any later forgetting of old or far claims and cut would leave
-/// as long as it keeps every claim heard in `round`.
+/// as long as it keeps every claim heard in `round`. `claims_heard_equal_merged_then_cut`
+/// checks both paths against a merge and a cut.
 fn hear_claims(claims: &mut Claims, updates: &[Update], round: u64, max: usize, cut_now: bool, merged: &mut Claims) {
     if max == 0 || fresh_claims(updates, round).nth(max - 1).is_some() {
         // The round's fresh claims fill `max` on their own: the cut keeps the first `max` of
-        // them, all heard now, and none of the old, which are not read (issue 11: in the
-        // moonshot's crowd a robot hears a hundred new goals a round, and merging its cold
-        // list with them took as long as the rest of its claims).
+        // them, all heard now, and none of the old, which are not read.
         empty_with_room(claims, max, max);
         claims.extend(fresh_claims(updates, round).take(max));
         return;
@@ -212,8 +209,7 @@ pub(super) struct Frontier {
     sharing: Option<Sharing>,
     /// Team mates' announced goals, with the round heard (forgotten after 50 rounds),
     /// sorted by robot id. In a crowd hundreds arrive a round, in sender order, so they are
-    /// merged in one pass (as a hash map they cost 14 % of a `bench-1000` run; as a B-tree
-    /// 15 %).
+    /// merged into this sorted list in one pass.
     claims: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
@@ -258,9 +254,8 @@ impl Strategy for Frontier {
             let p = ctx.position();
             let round = ctx.round;
             // This round's announcements, and the merge, in buffers of the worker thread, not
-            // of the robot (with a crowd of robots each holding hundreds of claims, spare
-            // copies per robot cost megabytes; fresh ones each round, grown as they filled,
-            // put a tenth of a crowded round in the allocator).
+            // of the robot: spare copies per robot would cost megabytes in a crowd, and fresh
+            // ones each round would keep the allocator busy.
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
@@ -321,11 +316,11 @@ mod tests {
 
     use super::{Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, merge_claims, stored_goal};
 
-    /// Issue 11: a goal kept in single precision from the home comes back within 6 mm on a
+    /// A goal kept in single precision from the home comes back within 6 mm on a
     /// 100 km map whatever its origin, here 5,000 km out (a projected map's coordinates),
     /// where single precision from the origin is off by up to a quarter of a metre.
     #[test]
-    fn issue11_claimed_goals_come_back_within_6_mm_anywhere() {
+    fn claimed_goals_come_back_within_6_mm_anywhere() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let origin = glam::DVec2::new(5.0e6, -5.0e6);
@@ -367,10 +362,10 @@ mod tests {
             prop_assert_eq!(out, expected);
         }
 
-        /// Issue 11: a round's announcements applied and cut, with or without the shortcut
-        /// for fresh claims that fill `max`, give what merging and cutting give.
+        /// A round's announcements applied and cut, with or without the shortcut for fresh
+        /// claims that fill `max`, give what merging and cutting give.
         #[test]
-        fn issue11_claims_heard_equal_merged_then_cut(
+        fn claims_heard_equal_merged_then_cut(
             old in proptest::collection::btree_map(0u32..40, (0.0f32..10.0, 0u32..9), 0..30),
             mut updates in proptest::collection::vec((0u32..40, proptest::option::weighted(0.8, 0.0f32..10.0)), 0..40),
             max in 0usize..25,
@@ -390,10 +385,10 @@ mod tests {
             prop_assert_eq!(heard, expected);
         }
 
-        /// Issue 11: a crowd's claims are cut to the `max` heard last (the lowest ids among
-        /// those heard in the same round), in id order, as sorting by recency would.
+        /// A crowd's claims are cut to the `max` heard last (the lowest ids among those
+        /// heard in the same round), in id order, as sorting by recency would.
         #[test]
-        fn issue11_claims_keep_the_most_recently_heard(
+        fn claims_keep_the_most_recently_heard(
             heard in proptest::collection::btree_map(0u32..500, 0u32..60, 0..300),
             max in 0usize..200,
         ) {
@@ -407,9 +402,9 @@ mod tests {
             keep_newest_into(&claims, max, round, &mut copied);
             keep_newest(&mut claims, max, round);
             prop_assert_eq!(&claims, &by_recency);
-            // Issue 12: cut while copied, the same claims.
+            // Cut while copied, the same claims.
             prop_assert_eq!(&copied, &by_recency);
-            // Issue 11: grown without copies, its block still holds at most `max` claims.
+            // Grown without copies, its block still holds at most `max` claims.
             prop_assert!(copied.capacity() <= max.max(copied.len()));
         }
     }

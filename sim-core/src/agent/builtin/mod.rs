@@ -1,6 +1,7 @@
 //! The built-in strategies: `random_walk`, `frontier`, `cooperative`, `team`, `excavator`,
-//! `transporter`, and `tactics` (composed of tactics by name). They use only sim-core's public API (`crate::agent`, `crate::world`,
-//! `crate::spatial`), so a strategy in another crate can do all that they do.
+//! `transporter`, and `tactics` (composed of tactics by name). They use only sim-core's
+//! public API (`crate::agent`, `crate::world`, `crate::spatial`), so a strategy in another
+//! crate can do all that they do.
 
 mod composed;
 mod explorer;

@@ -10,8 +10,8 @@ use crate::spatial::{RobotId, TreasureId};
 use crate::world::{Action, Payload, REACH_M, Sighting, Task};
 
 /// What workers perceive: everything but other robots, which they never look at (the
-/// physical unit keeps bodies apart and the collision tactic handles being stuck). Issue 11:
-/// in a crowd each worker filed hundreds of robots a round into a memory list it never read.
+/// physical unit keeps bodies apart and the collision tactic handles being stuck), so a
+/// crowd's workers file no robots into a memory list they never read.
 const WORKER_NEEDS: Needs = Needs {
     robots: false,
     ..Needs::ALL
@@ -44,10 +44,10 @@ struct HeardClaim {
 /// A worker heads for the nearest treasure it knows that needs its task, leaving to a team
 /// mate of the same task any treasure that mate claimed from nearer (ties to the lower id),
 /// and claims its own choice: so the workers spread over the treasures they know, one of
-/// each task per treasure, instead of all walking to the same one (measured in
-/// BENCHMARKS.md, fifteenth session: in `bench-1000` the diggers crowded round the nearest
-/// treasure, blocking one another and the haulers waiting there, and dug 56 units in 1,000
-/// rounds, the mean of five seeds; with claims 132).
+/// each task per treasure, instead of crowding round the nearest one and blocking each
+/// other. `an_excavator_leaves_a_treasure_claimed_from_nearer_to_its_claimant` and
+/// `a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant` (tests/workers.rs)
+/// check it.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Worker {
     explorer: Explorer,
@@ -237,11 +237,9 @@ impl Strategy for Transporter {
             .core
             .choose(ctx, |s| s.loose > 0)
             .or_else(|| self.core.choose(ctx, |s| s.buried > 0));
-        // Deliver what it carries once no loose units it knows of are left to load (issue
-        // 12, fifteenth session: waiting for more at buried treasures with a part load, until
-        // half full, kept units off the home for hundreds of rounds; `bench-1000` delivered
-        // 25 units in 1,000 rounds that way, 56 this way, five seeds, both measured with
-        // `cooperative`'s `max_detour_m` at 0).
+        // Deliver what it carries once no loose units it knows of are left to load: waiting
+        // at buried treasures with a part load keeps units off the home for hundreds of
+        // rounds (`a_transporter_with_a_part_load_and_nothing_loose_goes_home`).
         if load > 0 && (full || pick.is_none_or(|s| s.loose == 0)) {
             if ctx.home().contains(ctx.position()) {
                 return Action::Unload;

@@ -13,12 +13,13 @@ const ARRIVED_M: f64 = 0.05;
 const HEADINGS: u32 = 24;
 
 /// Goes to the goal ([`Ctx::goal`]) straight where it can; at an obstacle it follows the
-/// obstacle's boundary, keeping it on its right, until it is back on the line from where
-/// it met the obstacle to the goal, closer to the goal than where it met it, with the way
-/// on free: Lumelsky and Stepanov's Bug2, which gets round any obstacle, concave ones
-/// included (each obstacle is left closer to the goal than it was met, so it ends). Only known terrain is tested
-/// (unknown terrain counts as free until seen). Quiet with no goal, at the goal, when boxed
-/// in, or once it has gone all the way round an obstacle (the goal cannot be reached).
+/// obstacle's boundary, keeping it on its right, until it is back on the line from where it
+/// met the obstacle to the goal, closer to the goal than where it met it, with the way on
+/// free: Lumelsky and Stepanov's Bug2, which gets round any obstacle, concave ones included
+/// (each obstacle is left closer to the goal than it was met, so it ends). Only known
+/// terrain is tested (unknown terrain counts as free until seen). Quiet with no goal, at
+/// the goal, when boxed in, or once it has gone all the way round an obstacle (the goal
+/// cannot be reached).
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct BoundaryFollowing {
     goal: Option<DVec2>,

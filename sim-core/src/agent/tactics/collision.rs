@@ -89,7 +89,7 @@ impl Tactic for CollisionAvoidance {
 
 /// Whether an escape may head for `to`: not known to be blocked, and not off the map (no
 /// cell there is ever known, so the known map cannot say; a robot pressed against the
-/// map's edge used to pick such headings again and again).
+/// map's edge would pick such headings again and again): `escapes_never_head_off_the_map`.
 fn may_head_for(ctx: &Ctx, to: DVec2) -> bool {
     let on_map = ctx.known().is_none_or(|k| k.grid().extent().contains_strictly(to));
     on_map && ctx.can_move(ctx.position(), to) != Some(false)

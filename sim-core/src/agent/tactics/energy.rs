@@ -15,8 +15,9 @@ use crate::world::Action;
 /// The way home is measured (a shortest route within the known map) once an excursion
 /// starts, and again only when the energy left nears what it costs: in between, the last
 /// measure plus the distance walked since bounds it from above (the robot can always walk
-/// back the way it came), and while that bound leaves room, nothing needs measuring. (Issue
-/// 12: measuring every robot's way home every 10 rounds was 84 % of a round on a large map.)
+/// back the way it came), and while that bound leaves room, no route is searched.
+/// `energy_management_bounds_the_way_home_between_measures` (tests/tactics.rs) checks that
+/// the bound decides between measures.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct EnergyManagement {
     /// Extra energy kept beyond the way home, as a fraction of capacity (default 0.1).

@@ -10,11 +10,8 @@ use crate::spatial::PieceMemo;
 use crate::world::Action;
 
 /// How near a revealed target a robot walks before it searches for the next frontier, as a
-/// fraction of its view radius (issue 12, measured in BENCHMARKS.md, fifteenth session: at
-/// half the view, 1,000 kernel explorers searched once every five or six robot-rounds; at a
-/// quarter they cover more of the map in 1,500 rounds, 22.6 % against 20.4 % at seed 7,
-/// planning an eighth less; with 8 robots the example maps take 9 % longer to cover in
-/// all, with 32 robots 16 % less).
+/// fraction of its view radius. Smaller fractions search less often, but 0 (re-plan only
+/// on arrival) stalls exploration (BENCHMARKS.md, "Defaults of `cooperative`").
 const REPLAN_WITHIN_VIEW: f64 = 0.25;
 
 /// Walks to the nearest frontier (by route: known free space bordering the unknown) and

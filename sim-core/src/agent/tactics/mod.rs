@@ -52,8 +52,9 @@ pub trait Tactic: Send {
         Needs::NONE
     }
 
-    /// Its state, for checkpoints, as [`Strategy::save_state`](crate::agent::Strategy::save_state)
-    /// (default `None`: a strategy using it cannot be checkpointed). [`serde_state!`](crate::serde_state)
+    /// Its state, for checkpoints, as
+    /// [`Strategy::save_state`](crate::agent::Strategy::save_state) (default `None`: a
+    /// strategy using it cannot be checkpointed). [`serde_state!`](crate::serde_state)
     /// writes both methods for a serde-serializable tactic.
     fn save_state(&self) -> Option<Vec<u8>> {
         None

@@ -98,11 +98,12 @@ impl Navigator {
     /// first target it skipped, the route goes to that target after all (`f64::INFINITY`:
     /// no bound; the search goes on to the nearest target clear of every claim).
     ///
-    /// With `frontier` (the robot's [`Frontier`], synced with its known map) the search asks
-    /// the set whether a node is a frontier before asking the map; without, it asks the map
-    /// of each node it reaches. The route is the same either way. The built-in explorers
-    /// search without: keeping the set costs more than it saves when the frontier is near,
-    /// as it mostly is (BENCHMARKS.md, "Navigation").
+    /// With `frontier` (the robot's [`Frontier`], synced with its known map) the search
+    /// asks the set whether a node is a frontier before asking the map; without, it asks
+    /// the map of each node it reaches. The route is the same either way
+    /// (`navigator_frontier_route_leaves_the_known_disc`). The built-in explorers search
+    /// without: keeping the set costs more than it saves when the frontier is near, as it
+    /// mostly is (BENCHMARKS.md, "Navigation").
     pub fn frontier_route(
         ctx: &Ctx,
         frontier: Option<&Frontier>,
@@ -122,7 +123,8 @@ impl Navigator {
 
     /// [`frontier_route`](Self::frontier_route) that remembers, in `memo`, which pieces the
     /// robot's known map touches and covers (a strategy keeps one per robot: its next
-    /// search asks about much the same pieces). The route is the same.
+    /// search asks about much the same pieces). The route is the same, as the memo answers
+    /// as the map does (`piece_memo_answers_as_the_map_does`, spatial/nav/tests.rs).
     pub fn frontier_route_memo(
         ctx: &Ctx,
         memo: &mut PieceMemo,
@@ -216,12 +218,12 @@ impl Navigator {
 /// nearest.
 ///
 /// The walk prunes boxes farther than the best point found so far, but it goes in the
-/// tree's order, not outward from `p`: in a large piece most of the walk came before a
-/// near point was found (issue 11: two thirds of the paper-scale frontier searches). So a
-/// first point is looked for near `p` (in growing squares round the point of `area`
-/// nearest to `p`), and the whole walk starts from it, taking a later leaf at the same
-/// distance only where the first walk would have: before it reaches the leaf that point
-/// came from.
+/// tree's order, not outward from `p`: in a large piece most of it could come before a
+/// near point is found. So a first point is looked for near `p` (in growing squares round
+/// the point of `area` nearest to `p`), and the whole walk starts from it, taking a later
+/// leaf at the same distance only where the first walk would have: before it reaches the
+/// leaf that point came from. The answer is the one walk's, ties included:
+/// `nearest_unknown_equals_a_whole_walk`.
 fn nearest_unknown(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
     let cell = known.grid().cell_m();
     // Small areas are walked whole at once: a first look round `p` would cost about as much.
@@ -305,10 +307,10 @@ fn nearest_unknown_from(known: &KnownMap, area: &Aabb, p: DVec2, seed: (Square, 
 /// a leaf's point and squared distance, if given; its leaf is not visited again): the
 /// first point found at the nearest distance, with its leaf and squared distance, and how
 /// many leaves' points (the seed's included) are that near. With `z_order` blocks' leaves
-/// come in Z order, cheaper than the walk's own (issue 12: that order was a quarter of
-/// finding a frontier's point): the leaves visited are the same, as the pruning never
-/// cuts a leaf as near as the best, so the nearest distance and the count are too, and
-/// when one point alone is that near it is the walk's answer whatever the order.
+/// come in Z order, cheaper than the walk's own: the leaves visited are the same, as the
+/// pruning never cuts a leaf as near as the best, so the nearest distance and the count
+/// are too, and when one point alone is that near it is the walk's answer whatever the
+/// order.
 #[allow(clippy::float_cmp)] // ties are exactly equal distances, as the walks see them
 fn nearest_unknown_pass(
     known: &KnownMap,
@@ -346,9 +348,8 @@ fn nearest_unknown_pass(
 }
 
 /// `area`, minus the boxes whose part in `area` lies farther from `p` than the best
-/// distance found so far: their leaves cannot win (issue 11: the search scanned every
-/// unknown leaf of a large free node). Only strictly farther boxes are cut, so ties resolve
-/// as in a full scan (first visited wins) and the result is the same.
+/// distance found so far: their leaves cannot win. Only strictly farther boxes are cut, so
+/// ties resolve as in a full scan (first visited wins) and the result is the same.
 struct NearerThan<'a> {
     area: Aabb,
     p: DVec2,
@@ -427,7 +428,7 @@ mod tests {
         (first, points.iter().filter(|e| e.1 == min).count())
     }
 
-    /// The walk as it was before issue 11's first point: one pruned walk from nothing.
+    /// One pruned walk from nothing, without a first point near `p`: the reference.
     fn one_walk(known: &KnownMap, area: &Aabb, p: DVec2) -> Option<DVec2> {
         let cell = known.grid().cell_m();
         let best_d = std::cell::Cell::new(f64::INFINITY);
@@ -452,11 +453,12 @@ mod tests {
         best
     }
 
-    /// Issue 11: the nearest unknown point found from a first point near the robot is the
-    /// one a whole walk finds (and as near as any, by brute force), ties included (robots and areas on whole and half cells, so
-    /// that points at equal distances come up), on maps known in patches of every size.
+    /// The nearest unknown point found from a first point near the robot is the one a
+    /// whole walk finds (and as near as any, by brute force), ties included (robots and
+    /// areas on whole and half cells, so that points at equal distances come up), on maps
+    /// known in patches of every size.
     #[test]
-    fn issue11_nearest_unknown_equals_a_whole_walk() {
+    fn nearest_unknown_equals_a_whole_walk() {
         let (mut ties, mut found, mut tie_seeds) = (0, 0, 0);
         for seed in 0..40u64 {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);

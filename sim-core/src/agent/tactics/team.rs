@@ -9,8 +9,8 @@ use crate::spatial::RobotId;
 use crate::world::{Action, Payload, StrategyEvent};
 
 /// Team behaviour: robots of the same type that hear each other form a group led by the
-/// lowest id in range; followers keep to their own slot `spacing_m` from the leader; the group breaks up
-/// when the leader has not been heard for `timeout_rounds`.
+/// lowest id in range; followers keep to their own slot `spacing_m` from the leader; the
+/// group breaks up when the leader has not been heard for `timeout_rounds`.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Team {
     /// Distance followers keep from the leader (default 2 m).

@@ -17,11 +17,11 @@ use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
 use crate::world::{Action, Recipient, Robot, RobotType};
 
 /// The most robots one parallel task takes. Rayon splits a slice in halves only while
-/// workers are idle, so two workers end up with a few large runs of robots; robots differ
-/// in cost (a crowd of explorers merging maps beside idle diggers), and one worker was left
-/// with the last run while the other waited: busy 0.72 s against 0.62 s over bench-1000's
-/// 200 rounds. Runs of 16 balance them: the parallel step took 10 % less there (median of
-/// five runs, 0.78 against 0.88 s; 4 to 32 did about as well).
+/// workers are idle, so uncapped, workers end up with a few large runs of robots; robots
+/// differ in cost (a crowd of explorers merging maps beside idle diggers), so one worker is
+/// left with the last run while the others wait. Small runs balance them. A task writes
+/// only its own robots' data, so the split changes no result:
+/// `results_do_not_depend_on_the_thread_count` (tests/kernel.rs).
 pub(super) const ROBOTS_PER_TASK: usize = 16;
 
 impl Simulation {
@@ -67,12 +67,11 @@ impl Simulation {
                     perceive(agent, turn, robot, kind, &snapshot, round);
                     let rng = Simulation::rng_for(seed, robot.id, round);
                     let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
-                    // A strategy that panics takes down its robot, not the run (issue 13):
-                    // step 3 disables the robot and logs why. Nothing it did this round is kept.
+                    // A strategy that panics takes down its robot, not the run: step 3
+                    // disables the robot and logs why. Nothing it did this round is kept.
                     let strategy = &mut agent.strategy;
-                    // A coarse clock (a few milliseconds' resolution, a tenth of the cost of a
-                    // precise one: issue 11, two precise reads were 5 % of a random walker's
-                    // round) is ample for limits of tens of milliseconds.
+                    // A coarse clock (a few milliseconds' resolution, cheaper than a precise
+                    // one) is ample for limits of tens of milliseconds.
                     let started = limit.map(|_| coarsetime::Instant::now());
                     let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
                     let planned_ns = ctx.planning_ns();
@@ -103,8 +102,7 @@ impl Simulation {
                                 }
                             }
                             // Step 3 for a robot whose turn depends on nobody, while its data
-                            // are at hand (issue 11: a pass of its own over every robot, or
-                            // step 3's sequential loop, cost more than the turns).
+                            // are at hand.
                             turn.alone = alone_allowed && resolve_alone(robot, agent, kind, &home);
                         }
                         Err(payload) => {
@@ -157,7 +155,7 @@ impl Simulation {
 
 /// The robots other than `robot` within `range_m` of where it stands (the start-of-round
 /// index), by id: who hears its broadcasts. In step 2, in parallel, rather than in the
-/// sequential step 3, where the look-up and sort were a tenth of a crowded round.
+/// sequential step 3.
 fn hearers(index: &RobotIndex, id: RobotId, at: DVec2, range_m: f64, out: &mut Vec<RobotId>) {
     thread_local! {
         /// A bit per robot, all clear between calls.
@@ -172,8 +170,8 @@ fn hearers(index: &RobotIndex, id: RobotId, at: DVec2, range_m: f64, out: &mut V
         out.sort_unstable();
         return;
     }
-    // In a crowd, hundreds: put them in order by a bit per robot, read back word by word
-    // (callgrind: sorting them was 14 % of bench-1000's instructions).
+    // In a crowd, hundreds: put them in id order by a bit per robot, read back word by
+    // word, rather than by a sort.
     HEARD.with(|heard| {
         let mut bits = heard.borrow_mut();
         let words = out.iter().map(|id| id.index() / 64 + 1).max().unwrap_or(0);
@@ -208,9 +206,7 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 /// (upkeep is charged first), the same trim to speed and energy, the same bisection; and
 /// the robots that could be in its way (into `agent.planned_near`).
 // Inlined into step 2's per-robot closure, its only caller: left to itself the compiler
-// flips between inlining it or not as the queries under it change size (the call cost 29 M
-// instructions over 1,000 rounds of the dense random walk; perceive + decide on 1 thread
-// read 3 % slower in one series).
+// flips between inlining it or not as the queries under it change size.
 #[inline]
 fn plan_move(
     agent: &mut Agent,

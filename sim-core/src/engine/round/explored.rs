@@ -5,8 +5,9 @@
 //! map gained), so it runs alongside step 3 on another thread: [`ExploredUpdate::take`]
 //! moves what it needs out of the simulation, [`ExploredUpdate::run`] does the work, and
 //! [`ExploredUpdate::finish`] puts it back and credits the robots in id order. It also lists
-//! the robots whose known map changed, for the round's report (issue 11: a sequential pass
-//! of its own over the turns, 5 µs of a dense random walk's round).
+//! the robots whose known map changed, for the round's report, in the same pass over the
+//! turns. `map_explored_once_and_every_free_cell_credited_once` and
+//! `reports_list_changed_maps_and_first_sightings` (tests/kernel.rs) check both.
 
 use crate::engine::simulation::{Simulation, Turn};
 use crate::spatial::{BlockMemo, CellSet, Disc, DiscBeyond, KnownMap, ObstacleMap, RobotId};

@@ -20,7 +20,7 @@ impl Simulation {
         let mut held = false;
         for i in 0..self.agents.len() {
             // An agent is about a kilobyte, and this loop is sequential: the inboxes ahead
-            // are prefetched (issue 11: each was a cache miss in the moonshot's crowd).
+            // are prefetched.
             if let Some(ahead) = self.agents.get(i + AGENTS_AHEAD) {
                 prefetch(&ahead.mind.perception.inbox);
                 prefetch(&ahead.needs);
@@ -41,16 +41,14 @@ impl Simulation {
 
     /// First sightings of treasures and the strategies' events, credited in id order, for
     /// the robots whose turn has news (step 2 tells whether any has: most rounds of most
-    /// swarms have none, and this pass over every turn was 5 µs of a dense random walk's
-    /// sequential round).
+    /// swarms have none, and then this pass is skipped).
     pub(super) fn record_discoveries(&mut self, round: u64, any_news: bool) {
         if !any_news {
             return;
         }
         for (i, ((robot, agent), turn)) in self.robots.iter_mut().zip(&self.agents).zip(&self.turns).enumerate() {
-            // Only the agents of robots with something to report are looked at (issue 11:
-            // reading every agent took 10 µs of a dense random walk's sequential round);
-            // those a few ahead are prefetched.
+            // Only the agents of robots with something to report are looked at; those a
+            // few ahead are prefetched.
             if self.turns.get(i + AGENTS_AHEAD).is_some_and(|t| t.news) {
                 let ahead = &self.agents[i + AGENTS_AHEAD];
                 prefetch(&ahead.mind.perception.treasures);
@@ -126,8 +124,9 @@ pub(super) fn perceive(
             }
         });
         perception.robots.sort_by_key(|r| r.id);
-        // Only those the memory will keep (issue 11: in the moonshot's crowd a robot sees
-        // hundreds, and recording each into a list of 64 forgot all but the last 64).
+        // Only those the memory will keep: in a crowd a robot sees hundreds, and a bounded
+        // memory forgets all but the last few. Recording the rest too would leave the same
+        // memory: `recording_the_kept_tail_is_recording_all` (world/memory.rs).
         for r in data.robots.kept_of(&perception.robots) {
             data.robots.record(r.id, (r.position, round), round);
         }
@@ -219,8 +218,8 @@ pub(super) fn perceive(
 /// Note that a robot merged a map of `cells` known cells from `from`.
 fn remember_merge(merged_from: &mut MergedFrom, from: RobotId, cells: u64) {
     if merged_from.capacity() == 0 {
-        // In a crowd a robot merges from new senders every round: grown one doubling at a
-        // time, the table's rehashes were 2 % of the moonshot's crowded rounds (issue 11).
+        // In a crowd a robot merges from new senders every round: the table starts at a
+        // useful size rather than rehashing through every doubling.
         merged_from.reserve(MERGED_FROM_FIRST_CAPACITY);
     }
     merged_from.insert(from, cells);

@@ -18,7 +18,7 @@ use crate::world::{
 };
 
 /// How many turns ahead step 3 prefetches a robot's contact list (and twice as many, its
-/// agent).
+/// robot and agent). Prefetches are hints: they change no result.
 const TURNS_READ_AHEAD: usize = 4;
 
 impl Simulation {
@@ -26,19 +26,15 @@ impl Simulation {
     ///
     /// Robots whose turn depends on no other robot (see [`resolve_alone`]) had it in step 2,
     /// in parallel; the rest have theirs here, in id order. The result is that of one pass
-    /// in id order (issue 11: this step was sequential, a third of a 2-thread round of
-    /// spread-out walkers).
+    /// in id order: `turns_resolved_alone_give_the_id_order_run` (tests/kernel.rs).
     pub(super) fn resolve(&mut self, round: u64, turns: &[Turn]) -> (u64, u64) {
         let (mut messages, mut bytes) = (0, 0);
         // Held apart from `self` so the loop can mutate the simulation while it reads a type
-        // (one count update a round, not one a robot: this loop is the round's sequential
-        // part).
+        // (one reference-count update a round, not one a robot).
         let types = Arc::clone(&self.types);
         let home = self.map.home;
-        // The robots left for this step, from the turns alone: the loop below then reads
-        // (and prefetches) only their robots and agents (issue 11: a pass over every robot,
-        // with prefetches for the agents of robots resolved in step 2, made this step as
-        // long as a dense random walk's parallel marking of the explored map beside it).
+        // The robots left for this step (alive, not resolved alone), from the turns alone:
+        // the loop reads and prefetches only their robots and agents.
         let mut pending = std::mem::take(&mut self.step3_robots);
         pending.clear();
         pending.extend(
@@ -51,9 +47,7 @@ impl Simulation {
         for (k, &i) in pending.iter().enumerate() {
             let i = i as usize;
             // Prefetch what the turns ahead read of their robots and agents (spread over an
-            // agent of about a kilobyte), then, once that has arrived, their contact lists
-            // (issue 11: in the moonshot's crowd each was a miss; a plain load of the list
-            // ahead stalled the loop as long, a third of this step's samples).
+            // agent of about a kilobyte), then, once that has arrived, their contact lists.
             if let Some(&ahead) = pending.get(k + 2 * TURNS_READ_AHEAD) {
                 let ahead = ahead as usize;
                 prefetch(&self.robots[ahead]);
@@ -85,8 +79,7 @@ impl Simulation {
             } else {
                 Outcome::Refused
             };
-            // Most turns send nothing: their outbox is left alone (taking, draining and
-            // giving it back was a seventh of a dense random walk's step 3).
+            // Most turns send nothing: their outbox is left alone.
             if !self.agents[i].mind.output.outbox().is_empty() {
                 let (sent, size) = self.send_outbox(i, kind, round, turns);
                 messages += sent;
@@ -278,9 +271,8 @@ impl Simulation {
         let d = move_within_means(from, to, kind, self.robots[i].energy);
         // Other robots: halve the move until the end position overlaps nobody. Who could be
         // in the way depends only on the start of the round and the obstacle-trimmed move,
-        // so step 2 listed them with the move's obstacle test (issue 11: the look-up was an
-        // eighth of the sequential step); otherwise they are listed here, once for the whole
-        // move, not once per halving.
+        // so step 2 listed them with the move's obstacle test; otherwise they are listed
+        // here, once for the whole move, not once per halving.
         let mut near = std::mem::take(&mut self.near_scratch);
         let d = match self.agents[i].planned_move.take() {
             Some(p) if p.is_for(from, d, kind.radius_m) => {
@@ -426,12 +418,10 @@ impl Simulation {
                 .map(|i| (self.robots[i].id, self.turns[i].start)),
             max_range.clamp(1.0, 64.0),
         );
-        // Beside the index's entries, in its order, each sender's range and broadcasts: a
-        // receiver reads them in step with the entries (issue 11: read from `outgoing` by
-        // sender, in the index's order they were a cache miss each, a tenth of the
-        // moonshot's crowded rounds). The range was noted with the sender's first broadcast
-        // (all of a sender's sends have its type's range), so this sequential pass reads one
-        // table, not three.
+        // Beside the index's entries, in its order, each sender's range and broadcasts, so
+        // a receiver reads them in step with the entries rather than jumping about
+        // `outgoing`. The range was noted with the sender's first broadcast (all of a
+        // sender's sends have its type's range).
         let by_entry: Vec<(f64, u32, u32)> = senders
             .entries()
             .iter()
@@ -442,9 +432,7 @@ impl Simulation {
             .collect();
         // Receivers are independent (each reads the shared sends and writes its own inbox),
         // so they run in parallel. Each worker also gathers which messages anyone accepted,
-        // so the bag can be made without another pass over every pick (issue 11: that pass,
-        // and gathering every delivery as a link, were sequential, and millions a round in
-        // a crowd).
+        // so the bag is made without another pass over every pick.
         let sends = Sends {
             outgoing: &outgoing,
             broadcasts: &broadcasts,
@@ -486,10 +474,9 @@ impl Simulation {
     }
 
     /// Move `outgoing` into the bag, in order, so that the inboxes' picks (indices into
-    /// `outgoing`) point into the bag as they are (issue 11: renumbering the picks, millions
-    /// a round in a crowd, was a sixth of budgeted delivery). Messages nobody accepted keep
-    /// their place with an empty payload: theirs (whole known maps, often) are dropped now,
-    /// not kept for a round.
+    /// `outgoing`) point into the bag as they are, without renumbering. Messages nobody
+    /// accepted keep their place with an empty payload: theirs (whole known maps, often)
+    /// are dropped now, not kept for a round.
     fn bag_outgoing(&mut self, outgoing: &mut Vec<Outgoing>, used: &[u64]) {
         let dropped = Arc::new(Payload::Custom {
             kind: String::new(),
@@ -532,8 +519,9 @@ impl Sends<'_> {
     /// a clear bitset over `outgoing` (left clear); the accepted messages are also set in
     /// `used`.
     ///
-    /// The bitset is read back a word at a time: sender order, as a sort would give,
-    /// instead of a sort of each receiver's hundreds (16 % of a crowded round).
+    /// The bitset is read back a word at a time, which gives sender order without a sort;
+    /// `a_budget_that_never_fills_delivers_exactly_what_no_budget_does` (tests/radio.rs)
+    /// checks the order.
     fn deliver_to(&self, r: usize, inbox: &mut Vec<u32>, used: &mut [u64], accepted: &mut [u64]) {
         let robot = &self.robots[r];
         if !robot.alive {
@@ -594,10 +582,9 @@ impl Sends<'_> {
 }
 
 /// `to.distance(from) <= range_m`, without the square root for all but the points within a
-/// part in 10¹² of the range (issue 11: the root and the branch on it were a third of the
-/// moonshot's budgeted delivery, hundreds of senders a receiver). Below
-/// `range_m² (1 − 10⁻¹²)`, rounded either way, the squared distance's root is below the range
-/// by far more than its rounding, so the test agrees with the distance's.
+/// part in 10¹² of the range. Below `range_m² (1 − 10⁻¹²)`, rounded either way, the squared
+/// distance's root is below the range by far more than its rounding, so the test agrees
+/// with the distance's: `within_range_agrees_with_the_distance`.
 #[inline]
 fn within_range(to: DVec2, from: DVec2, range_m: f64) -> bool {
     let d2 = to.distance_squared(from);
@@ -645,8 +632,8 @@ pub(super) fn end_of_turn(r: &mut Robot, kind: &RobotType, home: &HomeBase, last
 /// What viewers show of a robot's plan: the goal and path its strategy published this
 /// round. Set in step 2, in parallel, for every robot whose strategy decided (those are
 /// the robots whose turn ends in step 3 or [`resolve_alone`]), rather than in the
-/// sequential step 3 (issue 11: copying paths there was a tenth of the moonshot's step 3);
-/// nothing reads them before the round ends.
+/// sequential step 3; nothing reads them before the round ends.
+/// `published_goals_and_paths_reach_every_robot_that_decided` (tests/resolve.rs) checks it.
 pub(super) fn publish_plan(r: &mut Robot, output: &StrategyOutput) {
     r.goal = output.goal();
     r.path.clear();
@@ -666,7 +653,8 @@ pub(super) fn publish_plan(r: &mut Robot, output: &StrategyOutput) {
 /// depends on whether this one has moved yet: that matters only to robots before it, which
 /// all started farther than the radii plus the top speed from this one's move, so move
 /// farther than the two radii from both where this one started and where it ends. The
-/// arithmetic is that of the id-order path.
+/// arithmetic is that of the id-order path ([`walk`]).
+/// `turns_resolved_alone_give_the_id_order_run` (tests/kernel.rs) checks it.
 pub(super) fn resolve_alone(r: &mut Robot, agent: &mut Agent, kind: &RobotType, home: &HomeBase) -> bool {
     if agent.failure.is_some() || !agent.mind.output.outbox().is_empty() {
         return false;
@@ -758,13 +746,12 @@ impl<'a> Bodies<'a> {
     /// it and before those after it. One before it has moved at most `max_speed_m`, so one
     /// touching an end point `p` started within `radius + max_radius_m + max_speed_m` of
     /// `p`, hence within that of the move's segment; one after it still stands where it
-    /// started, so within `radius + max_radius_m` (issue 11: in the moonshot's crowd the
-    /// top speed alone put 72 robots in each list, read one by one in the sequential step
-    /// 3; and in a crowd, a disc of that plus the move's length around `from` held twice
-    /// the robots, each then tested at every halving of a blocked move).
+    /// started, so within `radius + max_radius_m`.
     ///
     /// Robots that [`resolve_alone`] moved ahead of the order are no exception: one after
     /// `i` in a list could not have been alone, as `i` started within the reach of its move.
+    /// `a_move_meets_robots_before_it_where_they_moved_and_after_it_where_they_stand`
+    /// (tests/resolve.rs) checks both reaches.
     pub(super) fn near_move(&self, i: usize, from: DVec2, d: DVec2, radius: f64, near: &mut Vec<u32>) {
         near.clear();
         let reach = radius + self.max_radius_m + self.max_speed_m;
@@ -816,13 +803,10 @@ impl Sift {
     /// Append to `near` the robots of `run` (of `cell`, see
     /// [`RobotIndex::for_each_run_near`]) that could touch the move.
     ///
-    /// The robots are tested without a branch per robot: in a crowd each test goes either
-    /// way (issue 11: mispredicted, they made this query an eighth of the moonshot's
-    /// round). Two passes over each chunk of up to 64 robots: the cheap disc test first,
-    /// into a bit per robot, then the segment test (a division) on the robots kept, each
-    /// appended and kept or not by its length (issue 11: a run holds the rows of cells
-    /// around the disc, four times its area; testing all of them against the segment was a
-    /// sixth of a dense random walker's round).
+    /// The robots are tested without a branch per robot, as in a crowd each test goes
+    /// either way. Two passes over each chunk of up to 64 robots: the cheap disc test
+    /// first, into a bit per robot, then the segment test (a division) only on the robots
+    /// kept, each appended and kept or not by its length.
     #[inline]
     fn run(&self, run: &[IndexEntry], cell: Option<(i32, i32)>, near: &mut Vec<u32>) {
         for chunk in run.chunks(64) {
@@ -864,8 +848,8 @@ mod tests {
 
     use super::within_range;
 
-    /// Issue 11: the range test without a square root agrees with the distance's, for
-    /// points at random and for points within a few rounding steps of the rim.
+    /// The range test without a square root agrees with the distance's, for points at
+    /// random and for points within a few rounding steps of the rim.
     #[test]
     fn within_range_agrees_with_the_distance() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);

@@ -11,9 +11,9 @@
 //! (non-observable successors). Where nothing can happen for several bands, the cone crosses
 //! them in one step: rows whose free run is the same walled run (a rectangle), or rows where
 //! the cone keeps a free cell beside it on both sides (no corner at its ends, nothing cuts
-//! it). Paths along a row line (Anya's flat nodes) are walked at once,
-//! bit-scan by bit-scan, to the end of the free stretch, rooting cones at the convex corners on
-//! the way. A* orders the nodes by the root's distance plus the shortest way from the root
+//! it). Paths along a row line (Anya's flat nodes) are walked at once, bit-scan by
+//! bit-scan, to the end of the free stretch, rooting cones at the convex corners on the
+//! way. A* orders the nodes by the root's distance plus the shortest way from the root
 //! through the interval to the goal; a corner reached again no shorter is pruned
 //! (root-level pruning, as in Polyanya: a bend that only the longer way there would make is
 //! on no shortest path, since the shorter way plus a straight leg beats it).
@@ -165,11 +165,11 @@ fn through(r: DVec2, y: f64, a: f64, b: f64, g: DVec2) -> f64 {
     r.distance(p) + p.distance(g2)
 }
 
-/// A search's buffers, kept per thread between queries (allocating and faulting them in
-/// anew was a tenth of a query's time). They grow with the largest search run on the thread
-/// (what it sweeps, never the map's size) and are cut back to [`KEEP`] entries after a search
-/// that needed more, so a thread's scratch stays bounded across any number of queries and
-/// maps.
+/// A search's buffers, kept per thread between queries so that none is allocated per
+/// query. They grow with the largest search run on the thread (what it sweeps, never the
+/// map's size) and are cut back to [`KEEP`] entries after a search that needed more, so a
+/// thread's scratch stays bounded across any number of queries and maps. Checked by
+/// `a_query_on_a_large_map_keeps_little_scratch`.
 #[derive(Default)]
 struct Scratch {
     roots: Vec<Root>,

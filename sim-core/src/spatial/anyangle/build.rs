@@ -16,7 +16,7 @@ use crate::{Error, Result};
 /// corner of the map, so a search that expands `k` corners costs `k` times that the first
 /// time; a map with many more corners is refused rather than taking minutes a query. Point
 /// robots' searches (Anya) link no corner: any number is accepted, and only should Anya fail
-/// (never seen) is a graph wanted, which above this many corners answers
+/// is a graph wanted, which above this many corners answers
 /// [`NoPath::Undecided`](super::NoPath::Undecided).
 pub const MAX_VERTICES: usize = 250_000;
 
@@ -123,7 +123,7 @@ impl AnyAnglePlanner {
         let grid = *obstacles.grid();
         let graph = OnceLock::new();
         let (corners, regions, obstacles) = if radius_m == 0.0 {
-            // Counted for figures; a corner list would only serve a fallback never seen.
+            // Counted for statistics; a corner list would only serve the fallback.
             let corners = (0..=raster.height())
                 .map(|y| {
                     (0..=raster.width())
@@ -131,8 +131,8 @@ impl AnyAnglePlanner {
                         .count()
                 })
                 .sum();
-            // A point robot's searches ask which region each end is in (a few milliseconds
-            // on a 768² map: part of building, not of the first query).
+            // A point robot's searches ask which region each end is in: worked out as part
+            // of building, not of the first query.
             (corners, Some(super::regions::Regions::new(&raster)), None)
         } else {
             let Some(vertices) = graph_corners(&raster, Some((obstacles, radius_m))) else {

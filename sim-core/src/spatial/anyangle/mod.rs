@@ -1,20 +1,20 @@
-//! Any-angle shortest paths (issue 12): polylines with real-valued vertices among the map's
-//! blocked cells, exact for point robots.
+//! Any-angle shortest paths: polylines with real-valued vertices among the map's blocked
+//! cells, exact for point robots.
 //!
-//! A shortest path among polygonal obstacles bends only at their convex corners. Point robots
-//! (radius 0) are routed by **Anya** (`anya`: Harabor, Grastien, Öz and Aksakalli, "Optimal
-//! Any-Angle Pathfinding In Practice", JAIR 2016): an A* search over *cones*, intervals of a
-//! grid row line seen from a root (the start or a corner the path bends at), pushed from row
-//! line to row line through the runs of free cells (a rectangle of equal runs at once) and
-//! bent round the corners at their ends. It needs no preprocessing and costs what the search
-//! sweeps, not what the map holds: no visibility graph is built. The planner also finds the
-//! free space's connected regions when it is built (`regions`), so that ends in different
-//! regions are answered at once instead of by a search sweeping the start's region. Every
-//! leg of the path Anya returns is checked again by the exact sight test; should one fail
-//! (rounding in the interval arithmetic; not seen in any test), or Anya find no path between
-//! ends in one region, or give up (more than 2^31 search nodes), the visibility graph below
-//! answers instead. A point robot's planner keeps no corner list for that: the graph is built
-//! then, and on a map with more than [`MAX_VERTICES`] corners the answer is
+//! A shortest path among polygonal obstacles bends only at their convex corners. Point
+//! robots (radius 0) are routed by **Anya** (`anya`: Harabor, Grastien, Öz and Aksakalli,
+//! "Optimal Any-Angle Pathfinding In Practice", JAIR 2016): an A* search over *cones*,
+//! intervals of a grid row line seen from a root (the start or a corner the path bends at),
+//! pushed from row line to row line through the runs of free cells (a rectangle of equal
+//! runs at once) and bent round the corners at their ends. It needs no preprocessing and
+//! costs what the search sweeps, not what the map holds: no visibility graph is built. The
+//! planner also finds the free space's connected regions when it is built (`regions`), so
+//! that ends in different regions are answered at once instead of by a search sweeping the
+//! start's region. Every leg of the path Anya returns is checked again by the exact sight
+//! test; should one fail (rounding in the interval arithmetic), or Anya find no path
+//! between ends in one region, or give up (more than 2^31 search nodes), the visibility
+//! graph below answers instead. A point robot's planner keeps no corner list for that: the
+//! graph is built then, and on a map with more than [`MAX_VERTICES`] corners the answer is
 //! [`NoPath::Undecided`] rather than a search that could take hours. A query's memory
 //! follows what it sweeps (the corners it bends at, its cones), never the map's size; the
 //! buffers each thread keeps between queries are capped.
@@ -22,11 +22,10 @@
 //! Robots with a radius use the visibility graph: the planner links the convex corners that
 //! see each other (its size follows the obstacles' outlines, not the number of cells) and
 //! searches it with A*, joining the start and the goal to the corners they see. Only pairs
-//! whose joining line grazes both corners are linked, which keeps about a quarter of the
-//! visible pairs and no shortest path needs the rest. A corner is linked when a search first
-//! expands it (one sight test per corner of the map); links from the start are checked only
-//! when the search takes them (lazy A*), links to the goal only from corners the search
-//! expands.
+//! whose joining line grazes both corners are linked: no shortest path needs the rest. A
+//! corner is linked when a search first expands it (one sight test per corner of the map);
+//! links from the start are checked only when the search takes them (lazy A*), links to the
+//! goal only from corners the search expands.
 //!
 //! The rules are those of the Moving AI any-angle benchmarks: a path may run along the edge of
 //! a blocked cell, but not along an edge that two blocked cells share, nor through a point
@@ -84,7 +83,7 @@ pub struct AnyAnglePlanner {
     /// Corners a path may bend at (the graph's, or for point robots the map's convex ones).
     corners: usize,
     /// The visibility graph: built with the planner for robots with a radius; for point
-    /// robots only if Anya's answer needs checking (never seen), and then `None` above
+    /// robots only if Anya's answer needs checking (a fallback), and then `None` above
     /// [`MAX_VERTICES`] corners.
     graph: std::sync::OnceLock<Option<build::Graph>>,
     /// The map, kept for exact swept-disc tests when the radius is positive.
@@ -112,7 +111,7 @@ pub enum NoPath {
     GoalBlocked(DVec2),
     /// Both ends are free but no path joins them.
     Unreachable(DVec2, DVec2),
-    /// Not decided: a point robot's search (Anya) failed, which no test has seen (a leg
+    /// Not decided: a point robot's search (Anya) failed, which is not expected (a leg
     /// that fails the exact sight test, more than 2^31 search nodes, or no path between ends
     /// in one region), and the map has more corners than the visibility graph that would
     /// decide instead accepts ([`MAX_VERTICES`]).

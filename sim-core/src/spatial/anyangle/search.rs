@@ -86,8 +86,8 @@ impl AnyAnglePlanner {
                 // A path exists between ends in one 4-connected region: an Anya bug. Tests
                 // (debug assertions on) stop here; a release build asks the visibility graph.
                 Some(Err(_)) => debug_assert!(false, "Anya finds no path from {s} to {g} in one region"),
-                // A leg failed the exact sight test or the search gave up (never seen): the
-                // visibility graph decides.
+                // A leg failed the exact sight test or the search gave up: the visibility
+                // graph decides.
                 None => {}
             }
         }

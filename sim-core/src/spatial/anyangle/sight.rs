@@ -20,7 +20,7 @@ pub(crate) fn corner_passable(around: u8) -> bool {
 
 /// Cell index of a coordinate: its floor where that is a cell of the map or beside it; any
 /// negative coordinate gives -1 (outside, like its floor). A truncating cast instead of
-/// `floor`, which is a library call on the baseline x86-64 target (20 % of a query's time).
+/// `floor`, which is a library call on the baseline x86-64 target.
 #[inline]
 #[allow(clippy::cast_possible_truncation)] // Saturating casts: far-away points read as outside.
 fn cell(v: f64) -> i64 {
@@ -103,7 +103,7 @@ impl Crossings {
 /// quotient of small integers, so coincident crossings compare equal exactly.
 ///
 /// The ends must already pass [`point_clear`] (corners of the graph, a query's checked start
-/// and goal): testing them again on every call was a fifth of a search's time.
+/// and goal): they are not tested again.
 pub(crate) fn segment_between_legal_ends_clear(r: &CellRaster, a: DVec2, b: DVec2) -> bool {
     if let (Some(a), Some(b)) = (as_lattice(a), as_lattice(b)) {
         return lattice_segment_clear(r, a, b);

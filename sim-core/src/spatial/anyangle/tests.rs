@@ -338,10 +338,10 @@ fn quarter_map(max_side: u32) -> impl Strategy<Value = QuarterMap> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 3000, rng_seed: proptest::test_runner::RngSeed::Fixed(1212), ..ProptestConfig::default() })]
 
-    /// Issue 12: Anya (radius 0) gives the visibility-graph search's length exactly (to
-    /// 1e-9 relative), between any two points of the quarter-cell lattice, reaches what it
-    /// reaches, is never shorter than the straight line, and every leg passes the exact sight
-    /// test; the brute force over all lattice points agrees for ends on cell corners.
+    /// Anya (radius 0) gives the visibility-graph search's length exactly (to 1e-9
+    /// relative), between any two points of the quarter-cell lattice, reaches what it
+    /// reaches, is never shorter than the straight line, and every leg passes the exact
+    /// sight test; the brute force over all lattice points agrees for ends on cell corners.
     #[test]
     fn anya_equals_the_visibility_graph_and_the_brute_force((w, h, cells, s4, g4) in quarter_map(12)) {
         let map = map_of(w, h, &cells);
@@ -399,13 +399,13 @@ proptest! {
     }
 }
 
-/// Issue 12, item 2: a point robot's query on a planner just built costs what the search
-/// sweeps, not a sight test per corner of the map. On a 96 × 96 map of 12-cell rooms with
-/// doors and pillars, 60 queries between cell centres link no corner at all (the visibility
-/// graph is never built), and give the visibility graph's lengths (Anya asked directly, and
-/// `path` gives the same).
+/// A point robot's query on a planner just built costs what the search sweeps, not a sight
+/// test per corner of the map. On a 96 × 96 map of 12-cell rooms with doors and pillars, 60
+/// queries between cell centres link no corner at all (the visibility graph is never
+/// built), and give the visibility graph's lengths (Anya asked directly, and `path` gives
+/// the same).
 #[test]
-fn issue12_point_queries_build_no_visibility_graph_and_match_it() {
+fn point_queries_build_no_visibility_graph_and_match_it() {
     let grid = Grid::new(DVec2::ZERO, 1.0, 96, 96).unwrap();
     // Walls on every 12th row and column, a 2-cell door in each wall segment placed by a
     // fixed hash, and a pillar in each room.
@@ -508,9 +508,8 @@ fn point_planners_take_maps_with_more_corners_than_the_graph_limit() {
     assert!(e.contains("corners"), "{e}");
 }
 
-/// A query's memory follows what it sweeps, not the map: a short query on a 2048² map (the
-/// old per-thread buffer: 16 bytes per lattice point, 67 MB) leaves a few kilobytes of
-/// scratch.
+/// A query's memory follows what it sweeps, not the map: a short query on a 2048² map
+/// leaves a few kilobytes of scratch, not a buffer per lattice point.
 #[test]
 fn a_query_on_a_large_map_keeps_little_scratch() {
     let n = 2048;

@@ -1,5 +1,5 @@
-//! String pulling (issue 12): the shortest polyline through a route's corridor of free
-//! pieces, instead of one that zig-zags through the midpoints of the pieces' shared edges.
+//! String pulling: the shortest polyline through a route's corridor of free pieces,
+//! instead of one that zig-zags through the midpoints of the pieces' shared edges.
 //!
 //! The corridor is given as its portals, the shared edge stretches in the order the route
 //! crosses them. The "simple stupid funnel" keeps the wedge of directions from the last bend
@@ -30,8 +30,9 @@ fn side(o: DVec2, a: DVec2, b: DVec2) -> f64 {
 
 /// The shortest polyline from `from` through every portal in order to `to`, as its bends
 /// and then `to`, each with how many portals lie behind it: `k` for a bend on the `k`-th
-/// portal (counting from 1), `portals.len() + 1` for `to`. `from` is not repeated. Every portal must be crossable in order: consecutive portals are edges of one
-/// convex piece, `from` lies in the first piece and `to` in the last.
+/// portal (counting from 1), `portals.len() + 1` for `to`. `from` is not repeated. Every
+/// portal must be crossable in order: consecutive portals are edges of one convex piece,
+/// `from` lies in the first piece and `to` in the last.
 pub(super) fn pull(from: DVec2, portals: &[Portal], to: DVec2) -> Vec<(DVec2, usize)> {
     // Portal 0 is `from`, 1..=n the corridor's, n + 1 the goal.
     let n = portals.len();

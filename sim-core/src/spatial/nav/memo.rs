@@ -22,8 +22,7 @@ const LINES: usize = SLOTS / LANES;
 /// Facts in a slot's low bits: a "yes" (bits 0–1) holds for good, a "no" (bits 2–3) only
 /// while the map is as it was (its epoch in bits 4–9, the table emptied when they wrap);
 /// the piece's line tag (its number without the lane bits, plus one) in the bits above (an
-/// empty slot is 0). Four bytes a slot, so that a line holds 16 (issue 12: the memo's
-/// lines were a tenth of a search's cache misses).
+/// empty slot is 0). Four bytes a slot, so that a line holds 16.
 const TOUCHED: u32 = 1;
 const COVERED: u32 = 2;
 const NO_SHIFT: u32 = 2;
@@ -34,19 +33,17 @@ const KEY_SHIFT: u32 = 10;
 const MAX_PIECES: usize = (LANES << (32 - KEY_SHIFT)) - LANES;
 
 /// A small cache of "the known map touches piece n" and "covers piece n" for one robot's
-/// own known map and navigation graph (issue 12: these tests, each a descent of the known
-/// map's tree, were a third of the frontier searches, and a robot searches again every few
-/// rounds over much the same pieces, often twice in a round).
+/// own known map and navigation graph, each otherwise a descent of the known map's tree: a
+/// robot searches again every few rounds over much the same pieces.
 ///
-/// A robot's known map only grows, so a "yes" stays right for good, and a "no" as long as
-/// the map's number of known cells is the same (any change adds cells). The answers are
-/// exactly those of [`NavGraph::touched_by`] and [`NavGraph::covered_by`]; a question the
-/// memo cannot answer is asked of the map for both facts at once. The table is 4 KB,
-/// allocated at its first use, and emptied when half full (with 512 direct-mapped slots,
-/// pieces taking each other's slots were most of the questions asked again: issue 12).
-/// Use it with one robot's map and one graph only (it forgets everything if the graph's
-/// size changes); it is not part of a strategy's saved state, as it can always be worked
-/// out again.
+/// Invariant: a robot's known map only grows, so a "yes" stays right for good, and a "no"
+/// as long as the map's number of known cells is the same (any change adds cells). The
+/// answers are exactly those of [`NavGraph::touched_by`] and [`NavGraph::covered_by`];
+/// checked by `piece_memo_answers_as_the_map_does`. A question the memo cannot answer is
+/// asked of the map for both facts at once. The table is 4 KB, allocated at its first use,
+/// and emptied when half full. Use it with one robot's map and one graph only (it forgets
+/// everything if the graph's size changes); it is not part of a strategy's saved state, as
+/// it can always be worked out again.
 #[derive(Clone, Debug, Default)]
 pub struct PieceMemo {
     slots: Option<Box<[u32; SLOTS]>>,

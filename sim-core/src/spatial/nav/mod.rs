@@ -1,10 +1,10 @@
 //! The navigation graph (paper §4.2): computed once per map, its nodes are convex pieces of
 //! free space (the obstacle quadtree's free leaves merged into rectangles, [`pieces`]) and
 //! its edges join pieces that share a stretch of edge (a "portal"). A robot may only use
-//! the nodes its known map touches. Searches order nodes by
-//! the walk through the nearest points of their portals; the route found is then pulled taut through its
-//! corridor of nodes ([`funnel`]), so robots walk straight lines that bend only at corners
-//! of the corridor, keeping their radius clear of them.
+//! the nodes its known map touches. Searches order nodes by the walk through the nearest
+//! points of their portals; the route found is then pulled taut through its corridor of
+//! nodes ([`funnel`]), so robots walk straight lines that bend only at corners of the
+//! corridor, keeping their radius clear of them.
 
 use std::cell::RefCell;
 use std::cmp::Reverse;
@@ -34,8 +34,8 @@ pub use pieces::Piece;
 pub struct NavNodeId(pub u32);
 
 /// A [`NavGraph`] built on first use: most strategies never plan a route, and building the
-/// graph of a million-leaf map takes seconds (issue 11). Thread-safe; every caller gets the
-/// same graph whichever asks first, so results do not depend on the order.
+/// graph of a large map is costly. Thread-safe; every caller gets the same graph whichever
+/// asks first, so results do not depend on the order.
 #[derive(Debug, Default)]
 pub struct LazyNavGraph(std::sync::OnceLock<NavGraph>);
 
@@ -65,8 +65,8 @@ pub struct NavGraph {
     /// cells, increasing (Z order), their levels and their pieces.
     keys: Vec<u64>,
     /// Where the keys of each Z-order prefix (`key >> prefix_shift`) start in `keys`, and
-    /// where the last one ends: a point's leaf is looked for among a few dozen keys (issue
-    /// 12: a binary search of all of them missed the cache at most steps).
+    /// where the last one ends: a point's leaf is looked for among a few dozen keys, not
+    /// by a binary search of all of them.
     key_starts: Vec<u32>,
     prefix_shift: u32,
     levels: Vec<u8>,
@@ -186,8 +186,7 @@ impl Terrain<'_> {
             b,
             radius: self.radius_m,
         };
-        // The obstacle test first: it is cheaper, and it fails often enough that corner
-        // cuts cost a third less (callgrind: bench-1000 and the kernel bench's scenario).
+        // The obstacle test first: it is cheaper, and often fails.
         self.leg_clear(a, b) && {
             let known = self.known.tree();
             match known.capsule_meets_cells(&swept, false, MAX_LEG_BLOCKS) {
@@ -204,8 +203,8 @@ const SHORTCUT_LOOKAHEAD: usize = 8;
 /// A search's scratch, kept per thread and reused: the current stamp; per node (stamp, its
 /// current entry); where the search entered nodes (point, distance walked, node, the node
 /// it came from), indexed by the heap's entries; the heap of (estimate, node's rank, entry).
-/// A node's mark is 8 bytes, its distance and parent in its entry (issue 12: a search's
-/// reads of its neighbours' marks missed the cache; half the bytes, half the lines).
+/// A node's mark is 8 bytes, its distance and parent in its entry, so that the marks of
+/// neighbouring nodes share cache lines.
 #[derive(Default)]
 struct Scratch {
     stamp: u32,
@@ -234,8 +233,9 @@ impl NavGraph {
         let (pieces, piece_of) = pieces::merge(&leaves);
         // Nodes numbered in Z order of their pieces' lower-left cells (distinct: pieces are
         // disjoint), so that neighbours have nearby ids and a search's reads of nodes,
-        // marks and neighbour lists fall in few cache lines (issue 12: numbered as merged,
-        // by leaf size and column, a search missed the cache at almost every node).
+        // marks and neighbour lists fall in few cache lines. Searches break ties by `rank`
+        // (the merge's order), so routes do not depend on this numbering; checked by
+        // `graph_of_the_maze_matches_its_cells` and `a_star_routes_match_dijkstra`.
         let mut rank: Vec<u32> = (0..u32::try_from(pieces.len()).expect("pieces fit u32")).collect();
         rank.sort_unstable_by_key(|&i| morton(pieces[i as usize].x, pieces[i as usize].y));
         let mut id_of = vec![0u32; pieces.len()];
@@ -393,8 +393,8 @@ impl NavGraph {
     }
 
     /// [`node_at`](Self::node_at), trying `hint` and its neighbours first: a robot's next
-    /// search mostly starts where its last route ended (issue 12: the look-up among the
-    /// leaves missed the cache a few times each).
+    /// search mostly starts where its last route ended. The same answer for any hint;
+    /// checked by `graph_of_the_maze_matches_its_cells`.
     pub fn node_at_near(&self, p: DVec2, hint: Option<NavNodeId>) -> Option<NavNodeId> {
         let cell = self.grid.cell_of(p)?;
         hint.filter(|h| (h.0 as usize) < self.pieces.len())
@@ -470,7 +470,7 @@ impl NavGraph {
     /// Ends of the edge stretch two adjacent nodes share (lower left first).
     pub fn portal_ends(&self, a: NavNodeId, b: NavNodeId) -> (DVec2, DVec2) {
         // In cells, then to the world: the corners are the same, as a corner grows with its
-        // cell (issue 12: both boxes in metres were a twelfth of the frontier searches).
+        // cell, and the boxes in metres are not worked out.
         let (p, q) = (self.piece(a), self.piece(b));
         let lo = self.grid.corner(p.x.max(q.x), p.y.max(q.y));
         let hi = self.grid.corner((p.x + p.w).min(q.x + q.w), (p.y + p.h).min(q.y + q.h));
@@ -645,8 +645,7 @@ impl NavGraph {
 
     /// [`search`](Self::search) whose goal test also gets a test of whether this search has
     /// reached a node (found it usable) yet: a goal test that asks about a node's
-    /// neighbours can skip what the search knows already (issue 12: the frontier search
-    /// asked whether the known map touches every neighbour of every node it settled).
+    /// neighbours can skip what the search knows already.
     /// The node holding `from` is looked for at `start_hint` and its neighbours first (see
     /// [`node_at_near`](Self::node_at_near)).
     pub fn search_knowing_reached(
@@ -669,9 +668,8 @@ impl NavGraph {
     ///
     /// With a zero estimate (Dijkstra: `estimate` is `None`) a node's cost is final once
     /// settled, as costs popped never decrease, so the moves back into settled nodes are
-    /// not worked out (issue 12: about half of a frontier search's moves). With an
-    /// estimate a later, cheaper way into a settled node reopens it, as entry points
-    /// depend on the way in.
+    /// not worked out. With an estimate a later, cheaper way into a settled node reopens
+    /// it, as entry points depend on the way in. Checked by `a_star_routes_match_dijkstra`.
     fn best_first(
         &self,
         from: DVec2,
@@ -694,10 +692,9 @@ impl NavGraph {
             } = &mut *guard;
             if marks.len() != self.pieces.len() {
                 // All zero bytes, so the allocator hands out pages the kernel maps only
-                // when a search first writes them: searches stay local, and a marked copy
-                // of a ten-million-node graph per thread cost the moonshot 200 MB and a
-                // tenth of its first rounds in page clearing (issue 11). A node's entry
-                // is read only once it carries the search's stamp (never 0).
+                // when a search first writes them: a thread's searches pay only for the
+                // part of a big graph they reach. A node's entry is read only once it
+                // carries the search's stamp (never 0).
                 *marks = vec![(0, 0); self.pieces.len()];
                 *stamp = 0;
             }
@@ -712,8 +709,8 @@ impl NavGraph {
             let stamp = *stamp;
             let settled_stamp = stamp + 1;
             // Where the search enters each node (portal or start), for edge costs, and the
-            // distance walked to get there (buffers reused: a search is planned every few
-            // rounds by every explorer, and allocating them was a few per cent of a round).
+            // distance walked to get there (buffers reused: every explorer plans a search
+            // every few rounds).
             entry.clear();
             entry.push((from, 0.0, start.0, u32::MAX));
             heap.clear();
@@ -771,15 +768,12 @@ impl NavGraph {
         let known = terrain.known;
         let goal = self.node_at(to)?;
         // A goal the known map does not touch is never reached (only the start is exempt
-        // from that test): say so now instead of searching everything known first (issue
-        // 12: workers heading for treasures they only heard of spent 18 % of bench-1000's
-        // time on such searches).
+        // from that test): say so now instead of searching everything known first.
         if self.node_at(from) != Some(goal) && !self.touched_by(known, goal) {
             return None;
         }
         // A*: the straight line to `to` is never longer than a route's rest, and shrinks by
-        // at most what a step walks (issue 12: workers re-planning to treasures and energy
-        // management measuring the way home were 22 % of a bench-1000 round with Dijkstra).
+        // at most what a step walks, so it finds Dijkstra's routes.
         let (nodes, to) = self.best_first(
             from,
             None,
@@ -791,14 +785,14 @@ impl NavGraph {
         Some(self.taut_route(from, nodes, to, terrain))
     }
 
-    /// The shortest route from `from` to `to` if unknown terrain were open (issue 12:
-    /// planning optimistically): through nodes the known map touches either to the goal,
-    /// or to a frontier node from which a hopeful straight leg (no cell known to be blocked
-    /// near it) leads on to `to`, from the node's point nearest to `to` or else from its
-    /// corner nearest to `to` that allows one; the search takes the node whose way there
-    /// plus the straight line on is shortest. The known part is pulled taut and checked like any route; the last leg is
-    /// a hope, never checked against what the robot has not seen, and a robot that meets
-    /// an obstacle on it plans again. `None` if no such route exists within `max_nodes`.
+    /// The shortest route from `from` to `to` if unknown terrain were open: through nodes
+    /// the known map touches either to the goal, or to a frontier node from which a hopeful
+    /// straight leg (no cell known to be blocked near it) leads on to `to`, from the node's
+    /// point nearest to `to` or else from its corner nearest to `to` that allows one; the
+    /// search takes the node whose way there plus the straight line on is shortest. The
+    /// known part is pulled taut and checked like any route; the last leg is a hope, never
+    /// checked against what the robot has not seen, and a robot that meets an obstacle on
+    /// it plans again. `None` if no such route exists within `max_nodes`.
     pub fn route_optimistic(&self, terrain: Terrain, from: DVec2, to: DVec2, max_nodes: usize) -> Option<Route> {
         let known = terrain.known;
         // The map's edges are known to every robot.
@@ -866,9 +860,9 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
 }
 
 /// A search heap entry as one number, ordered as the tuple (`cost` by `total_cmp`, `node`,
-/// `entry`): ties broken by the node's rank, so searches are deterministic. One integer compare
-/// instead of a float's `total_cmp` and two more (issue 12: the heap was an eighth of the
-/// frontier searches' instructions).
+/// `entry`): ties broken by the node's rank, so searches are deterministic. One integer
+/// compare instead of a float's `total_cmp` and two more; checked by
+/// `heap_keys_order_as_their_tuples`.
 #[inline]
 fn heap_key(cost: f64, node: u32, entry: u32) -> u128 {
     let bits = cost.to_bits();

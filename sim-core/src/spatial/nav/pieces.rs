@@ -1,9 +1,8 @@
-//! Free space in convex pieces (issue 12, item 1): the obstacle quadtree's free leaves,
-//! merged into rectangles. Leaves of one size that sit side by side in a row become a run;
-//! runs of the same leaves stacked one on the next become a rectangle. A quadtree splits
-//! free space wherever the square grid does (a corridor one leaf wide is a chain of
-//! leaves); merged, it splits where obstacles do, and searches settle that many fewer
-//! nodes.
+//! Free space in convex pieces: the obstacle quadtree's free leaves, merged into
+//! rectangles. Leaves of one size that sit side by side in a row become a run; runs of the
+//! same leaves stacked one on the next become a rectangle. A quadtree splits free space
+//! wherever the square grid does (a corridor one leaf wide is a chain of leaves); merged,
+//! it splits where obstacles do, and searches settle that many fewer nodes.
 
 use crate::spatial::quadtree::Square;
 
@@ -38,9 +37,8 @@ impl Piece {
     }
 }
 
-/// The most leaves a piece spans along either side. Searches cost a piece by the distance
-/// between the midpoints of its portals; a cap keeps that estimate local on long open
-/// stretches.
+/// The most leaves a piece spans along either side. Searches cost a piece by the walk
+/// between points of its portals; a cap keeps that estimate local on long open stretches.
 pub(super) const MAX_SPAN_LEAVES: u32 = 16;
 
 /// Merge disjoint free `leaves` into pieces. Returns the pieces and each leaf's piece.

@@ -41,7 +41,7 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
                 "({x}, {y})"
             );
             assert_eq!(g.node_at(map.grid().cell_center(x, y)), here, "({x}, {y})");
-            // Issue 12: with any hint, the same node.
+            // With any hint, the same node.
             for hint in [here, owner[(y * w + (x + 1) % w) as usize], Some(NavNodeId(0))] {
                 assert_eq!(
                     g.node_at_near(map.grid().cell_center(x, y), hint),
@@ -60,8 +60,8 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
             }
         }
     }
-    // Issue 12: nodes numbered in Z order of their pieces' lower-left cells, each one's
-    // neighbours listed in the order the pieces were merged in.
+    // Nodes numbered in Z order of their pieces' lower-left cells, each one's neighbours
+    // listed in the order the pieces were merged in.
     for i in 1..g.len() {
         let (a, b) = (g.piece(NavNodeId(i as u32 - 1)), g.piece(NavNodeId(i as u32)));
         assert!(morton(a.x, a.y) < morton(b.x, b.y), "node {i} out of Z order");
@@ -87,7 +87,7 @@ fn assert_graph_matches_cells(map: &ObstacleMap) {
 fn graph_of_the_maze_matches_its_cells() {
     let map = maze();
     assert_graph_matches_cells(&map);
-    // Two open halves and a door: a handful of pieces, not 255 cells (issue 12).
+    // Two open halves and a door: a handful of pieces, not 255 cells.
     assert!(NavGraph::build(&map).len() <= 12, "{}", NavGraph::build(&map).len());
 }
 
@@ -113,8 +113,8 @@ fn route_goes_through_the_door() {
     // No path is shorter than the taut string through the door's corners:
     // |(2.5,2.5)-(8,14)| + 1 + |(9,14)-(13.5,2.5)| = 12.747 + 1 + 12.349.
     let taut = DVec2::new(2.5, 2.5).distance(DVec2::new(8.0, 14.0)) + 1.0 + DVec2::new(9.0, 14.0).distance(to);
-    // Pulled taut, a point's route is close to that string (issue 12: no zig-zag through
-    // portal midpoints): its legs keep a twentieth of a cell off the corners, and the search
+    // Pulled taut, a point's route is close to that string (no zig-zag through portal
+    // midpoints): its legs keep a twentieth of a cell off the corners, and the search
     // picks the chain of pieces by the walk through their portals' nearest points, which can
     // miss the chain the string needs (here: down the column east of the door, 3 % longer).
     assert!(
@@ -160,7 +160,7 @@ fn midpoint_length(g: &NavGraph, from: DVec2, nodes: &[NavNodeId], to: DVec2) ->
 }
 
 #[test]
-fn issue12_wide_robot_keeps_its_radius_round_a_block() {
+fn wide_robot_keeps_its_radius_round_a_block() {
     // 20 × 10 with a block at x 8..12, y 0..6: from low left to low right over its top.
     let grid = Grid::new(DVec2::ZERO, 1.0, 20, 10).unwrap();
     let map = ObstacleMap::from_fn(grid, |x, y| (8..12).contains(&x) && y < 6);
@@ -200,9 +200,9 @@ fn issue12_wide_robot_keeps_its_radius_round_a_block() {
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig { cases: 300, rng_seed: proptest::test_runner::RngSeed::Fixed(7), ..proptest::prelude::ProptestConfig::default() })]
 
-    /// Issue 12: A* (`route_within`) finds a route exactly when a Dijkstra search over
-    /// the same known nodes does, never longer than it, never shorter than the straight
-    /// line, and along segments free of obstacles.
+    /// A* (`route_within`) finds a route exactly when a Dijkstra search over the same known
+    /// nodes does, never longer than it, never shorter than the straight line, and along
+    /// segments free of obstacles.
     #[test]
     fn a_star_routes_match_dijkstra(
         cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
@@ -238,11 +238,11 @@ proptest::proptest! {
         }
     }
 
-    /// Issue 12: a small robot's route, pulled taut, keeps its radius clear of obstacles,
-    /// is never shorter than a point's exact any-angle optimum (a visibility graph of the
-    /// blocked cells' corners, built independently), and never longer than the midpoint
-    /// route through the same nodes plus, at each portal, the portal's length (the most a
-    /// detour into the pieces either side of its middle adds).
+    /// A small robot's route, pulled taut, keeps its radius clear of obstacles, is never
+    /// shorter than a point's exact any-angle optimum (a visibility graph of the blocked
+    /// cells' corners, built independently), and never longer than the midpoint route
+    /// through the same nodes plus, at each portal, the portal's length (the most a detour
+    /// into the pieces either side of its middle adds).
     #[test]
     fn taut_routes_are_free_and_between_the_optimum_and_the_midpoints(
         cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
@@ -276,9 +276,8 @@ proptest::proptest! {
         }
     }
 
-    /// Issue 12, item 1: the pieces partition the free cells and their edges are exactly
-    /// the cell adjacencies between them, on random maps of scattered and clustered
-    /// obstacles.
+    /// The pieces partition the free cells and their edges are exactly the cell adjacencies
+    /// between them, on random maps of scattered and clustered obstacles.
     #[test]
     fn pieces_partition_free_space(
         cells in proptest::collection::vec(proptest::bool::weighted(0.25), 20 * 13),
@@ -292,9 +291,6 @@ proptest::proptest! {
     }
 }
 
-/// Issue 12, item 3: the frontier kept up to date by the known map's changed tiles equals
-/// the frontier worked out from scratch after every step of random runs of views (the
-/// kernel's marking), discs, boxes and merges with other robots' maps.
 /// One random step of a known map's growth over its whole grid: mostly the view of a robot
 /// walking from `at`, else a disc, a box, or a team mate's few views merged in.
 fn grow_known(known: &mut KnownMap, at: &mut DVec2, rng: &mut rand_chacha::ChaCha8Rng) {
@@ -329,8 +325,11 @@ fn grow_known(known: &mut KnownMap, at: &mut DVec2, rng: &mut rand_chacha::ChaCh
     }
 }
 
+/// The frontier kept up to date by the known map's changed tiles equals the frontier worked
+/// out from scratch after every step of random runs of views (the kernel's marking), discs,
+/// boxes and merges with other robots' maps.
 #[test]
-fn issue12_incremental_frontier_equals_from_scratch() {
+fn incremental_frontier_equals_from_scratch() {
     use rand::{Rng, SeedableRng};
     for seed in 0..12u64 {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
@@ -369,11 +368,11 @@ fn issue12_incremental_frontier_equals_from_scratch() {
     }
 }
 
-/// Issue 12: a robot's memo of touched and covered pieces answers exactly as its map does,
-/// while the map grows by views, marks and merges, with more pieces than the memo has
-/// slots, each asked several times between changes.
+/// A robot's memo of touched and covered pieces answers exactly as its map does, while the
+/// map grows by views, marks and merges, with more pieces than the memo has slots, each
+/// asked several times between changes.
 #[test]
-fn issue12_piece_memo_answers_as_the_map_does() {
+fn piece_memo_answers_as_the_map_does() {
     use rand::{Rng, SeedableRng};
     for seed in 0..8u64 {
         let mut memo = PieceMemo::default();
@@ -413,9 +412,6 @@ fn issue12_piece_memo_answers_as_the_map_does() {
     }
 }
 
-/// Issue 12, item 1: planning optimistically through unknown space. 30 × 20 with a wall at
-/// x = 15 from the bottom up to y = 17 (a gap above it); the robot at (3, 3.5) has seen only
-/// a disc of 5 m around itself, the goal is at (27, 3.5) beyond the wall.
 /// The terrain of a robot of radius 0.25 m.
 fn robot<'a>(map: &'a ObstacleMap, known: &'a KnownMap) -> Terrain<'a> {
     Terrain {
@@ -425,8 +421,11 @@ fn robot<'a>(map: &'a ObstacleMap, known: &'a KnownMap) -> Terrain<'a> {
     }
 }
 
+/// Planning optimistically through unknown space. 30 × 20 with a wall at x = 15 from the
+/// bottom up to y = 17 (a gap above it); the robot at (3, 3.5) has seen only a disc of 5 m
+/// around itself, the goal is at (27, 3.5) beyond the wall.
 #[test]
-fn issue12_optimistic_routes_hope_only_where_nothing_known_is_blocked() {
+fn optimistic_routes_hope_only_where_nothing_known_is_blocked() {
     let grid = Grid::new(DVec2::ZERO, 1.0, 30, 20).unwrap();
     let map = ObstacleMap::from_fn(grid, |x, y| x == 15 && y < 17);
     let g = NavGraph::build(&map);
@@ -469,10 +468,10 @@ fn issue12_optimistic_routes_hope_only_where_nothing_known_is_blocked() {
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..proptest::prelude::ProptestConfig::default() })]
 
-    /// Issue 12: the search heap's packed keys order entries as the tuples they pack do
-    /// (cost by `total_cmp`, then node, then entry), so searches pop the same nodes.
+    /// The search heap's packed keys order entries as the tuples they pack do (cost by
+    /// `total_cmp`, then node, then entry), so searches pop the same nodes.
     #[test]
-    fn issue12_heap_keys_order_as_their_tuples(
+    fn heap_keys_order_as_their_tuples(
         a in (proptest::num::f64::ANY, 0u32..4, 0u32..4),
         b in (proptest::num::f64::ANY, 0u32..4, 0u32..4),
         equal_cost in proptest::bool::ANY,

@@ -36,10 +36,12 @@ pub(super) fn held_blocks<'a>(keys: &'a [u64], bits: &'a [u64]) -> impl Iterator
 /// The cells (Z-order bits, as the tree stores a block) of up to 16 blocks of a tree,
 /// exactly as the tree holds them: [`RegionQuadtree::fill_new_rows_cached`] keeps it up
 /// to date and skips the blocks in which it would change nothing without descending the
-/// tree (issue 11: a dense random walker's view touches two blocks a round; three times in
-/// four they were known already, and the descents to them were a sixth of its round).
+/// tree. A walker's view mostly touches the same few blocks round after round.
 ///
-/// Whoever changes the tree otherwise must [`clear`](Self::clear) it.
+/// Invariant: every block held equals the tree's cells there. Whoever changes the tree
+/// otherwise must [`clear`](Self::clear) it. Checked by
+/// [`check`](Self::check) (run by `KnownMap::validate`) and
+/// `views_marked_by_blocks_are_the_walks_cells`.
 #[derive(Clone, Debug, PartialEq, Eq)]
 #[repr(align(64))] // four whole cache lines, fetched together
 pub struct BlockCache {

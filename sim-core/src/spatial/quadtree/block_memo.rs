@@ -15,9 +15,10 @@ const SIDE_BITS: u32 = 6;
 /// the block's set cells (Z order, as the tree stores a block).
 ///
 /// A set of cells that a slot already holds would change nothing: the caller skips its
-/// descent (issue 11: nearly every block a dense random walker's map gains was explored by
-/// another walker before, and the collective map's descents to them were most of its
-/// update). A subset stays one however the tree grows, so nothing needs telling.
+/// descent (most blocks a walker's map gains were explored by another walker before).
+/// Invariant: a slot holds a subset of its block's set cells; a subset stays one however
+/// the tree grows, so the memo is never stale. Checked by [`check`](Self::check) and
+/// `marking_through_the_memo_is_marking_every_set`.
 ///
 /// It holds nothing, and allocates nothing, until the first [`put`](Self::put).
 #[derive(Clone, Debug, Default)]
@@ -95,12 +96,12 @@ mod tests {
     use crate::spatial::quadtree::{CellSet, Square};
     use crate::spatial::{Grid, KnownMap};
 
-    /// Issue 11: marking sets of cells through the memo (skipping those it holds, noting
-    /// each block's cells after a fill) grows the same map, reporting the same new cells,
-    /// as marking every set; and the memo stays a subset of the map. Sets of random
-    /// blocks near a few spots (so blocks repeat and share slots) and some whole squares.
+    /// Marking sets of cells through the memo (skipping those it holds, noting each
+    /// block's cells after a fill) grows the same map, reporting the same new cells, as
+    /// marking every set; and the memo stays a subset of the map. Sets of random blocks
+    /// near a few spots (so blocks repeat and share slots) and some whole squares.
     #[test]
-    fn issue11_marking_through_the_memo_is_marking_every_set() {
+    fn marking_through_the_memo_is_marking_every_set() {
         let grid = Grid::new(DVec2::ZERO, 1.0, 1500, 1500).unwrap();
         let (mut plain, mut memoed) = (KnownMap::new(grid), KnownMap::new(grid));
         let mut memo = BlockMemo::default();

@@ -1,9 +1,11 @@
 //! A directory of a tree's nodes at one level, so that a descent to a block starts there
-//! instead of at the root: for trees that no longer change (the obstacle map).
+//! instead of at the root: for trees that no longer change (the obstacle map), whose move
+//! tests read the one to four blocks around each move.
 //!
-//! Issue 11: a robot's move test reads the one to four blocks around its move, each by a
-//! descent from the root, ten levels in the dense random walk's map: the descents were a
-//! twentieth of its instructions (callgrind, 250 a move test).
+//! Invariant: a descent from a directory entry reaches the node a descent from the root
+//! reaches, as long as the tree is unchanged since the directory was built. Checked by
+//! [`RegionQuadtree::check_directory`] (run by `ObstacleMap::validate`) and
+//! `descents_from_the_directory_are_the_root_descents`.
 
 use super::block::{BLOCK_LEVEL, Node};
 use super::{NodeRef, RegionQuadtree, Square, is_block, is_leaf};
@@ -111,10 +113,10 @@ mod tests {
     use crate::spatial::grid::Grid;
     use crate::spatial::quadtree::{RegionQuadtree, Square};
 
-    /// Issue 11: a descent from a directory entry finds what the descent from the root
-    /// finds, for every square at or below the directory's level, whatever the level.
+    /// A descent from a directory entry finds what the descent from the root finds, for
+    /// every square at or below the directory's level, whatever the level.
     #[test]
-    fn issue11_descents_from_the_directory_are_the_root_descents() {
+    fn descents_from_the_directory_are_the_root_descents() {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for case in 0..24 {
             let (w, h) = (rng.random_range(9..300), rng.random_range(9..300));

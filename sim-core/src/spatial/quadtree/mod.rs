@@ -7,20 +7,23 @@
 //! its leaf, and a query prunes a subtree with one box test. Uniform siblings are always
 //! merged (see [`RegionQuadtree::validate`]).
 //!
-//! **Bit-packed bottom** (issue 11): in a tree at least 8 cells a side, every mixed square
-//! of 8 × 8 cells is a block, one `u64` with a bit per cell in Z order (see [`block`]),
-//! instead of up to 21 groups of four references. The quadtree below a block is still
-//! there, implicit in the bits: a 4 × 4 or 2 × 2 run of equal bits is a leaf. Queries see
-//! it through [`Node`], so they walk one tree whatever its storage; updates and unions act
-//! on a block with a few word operations. The result is the same canonical tree and leaves
-//! as before, in a fraction of the memory (a group is 16 bytes, a block 8); only the order
-//! in which a query reports a block's leaves may differ (see
-//! [`RegionQuadtree::visit_leaves_in`]).
+//! **Bit-packed bottom**: in a tree at least 8 cells a side, every mixed square of 8 × 8
+//! cells is a block, one `u64` with a bit per cell in Z order (see [`block`]), instead of
+//! up to 21 groups of four references (a group is 16 bytes, a block 8). The quadtree below
+//! a block is implicit in the bits: a 4 × 4 or 2 × 2 run of equal bits is a leaf. Queries
+//! see it through [`Node`], so they walk one tree whatever its storage; updates and unions
+//! act on a block with a few word operations. Invariant: a packed tree is the same
+//! canonical tree, with the same leaves, counts and map-file bytes, as its unpacked twin;
+//! only the order in which a query reports a block's leaves may differ (see
+//! [`RegionQuadtree::visit_leaves_in`]). Checked by `packed_trees_are_the_unpacked_tree`
+//! and [`RegionQuadtree::validate`].
 //!
 //! Split by operation: `build` (from rasters, predicates and region classifiers), `query`
 //! (shape visitors, ray casting, areas), `update` (fill, union), `validate`, `codec` (the
-//! map file's bit string), `block` (the packed bottom) and `components` (connected free
-//! space). Node references are internal to sim-core; users see squares, values and shapes.
+//! map file's bit string), `block` (the packed bottom), `components` (connected free
+//! space), `hash` (content hashes for unions), `state` (the checkpoint form), and
+//! `directory`, `block_cache` and `block_memo` (shortcuts to blocks). Node references are
+//! internal to sim-core; users see squares, values and shapes.
 
 pub(crate) mod block;
 mod block_cache;
@@ -49,7 +52,7 @@ use crate::spatial::geometry::{Aabb, BlockCells};
 use crate::spatial::grid::{Grid, MAX_DEPTH};
 use block::{BLOCK_LEVEL, Node, internal_nodes_in};
 
-/// A node reference: a leaf code or a group index.
+/// A node reference: a leaf code, a group index, or a block index tagged with `BLOCK_TAG`.
 pub(crate) type NodeRef = u32;
 /// Leaf code of a uniformly empty square (free space / unknown space).
 pub(crate) const EMPTY: NodeRef = u32::MAX;
@@ -138,8 +141,7 @@ impl Square {
 
 /// Some cells of one square of a tree: all of them, or those of a bit mask inside an 8 × 8
 /// block. What a block-wise fill reports, and what the collective explored map takes from
-/// the robots' own maps (issue 11: a view's gain in one block is one set, settled by one
-/// descent, instead of a handful of squares each descended to on its own).
+/// the robots' own maps: a view's gain in one block is one set, settled by one descent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct CellSet {
     square: Square,

@@ -9,8 +9,8 @@ use super::directory::Directory;
 use super::{CellSet, NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Capsule, Overlap, Shape, clip_line, segment_box_distance_squared};
 
-/// Cells too near a capsule's edge to tell by distance that
-/// [`RegionQuadtree::capsule_meets_cells`] decides by the walk's tests; past that, the walk.
+/// How many cells within rounding of a capsule's rim [`RegionQuadtree::capsule_meets_cells`]
+/// decides by the walk's own tests; with more it gives up (`None`).
 const MAX_TIES: usize = 8;
 
 impl RegionQuadtree {
@@ -139,11 +139,13 @@ impl RegionQuadtree {
     }
 
     /// The leaves of the mixed square at `sq` (≤ [`BLOCK_LEVEL`]) whose cells are all in
-    /// `wanted` and that share a cell with `hits` (both the square's cells in their low
-    /// bits, Z order), in the order [`visit_bits`](Self::visit_bits) walks them without the
-    /// cells' answers: at each square its leaf children last to first, then into its mixed
-    /// ones first to last. A leaf shares a cell with the hits exactly when its box meets
-    /// the shape, so these are the leaves that walk visits, tested once per block.
+    /// `wanted` and that share a cell with `hits` (both Z-order masks of the square's
+    /// cells), in the order [`visit_bits`](Self::visit_bits) walks them: at each square its
+    /// leaf children last to first, then its mixed children first to last.
+    ///
+    /// Invariant: a leaf shares a cell with `hits` exactly when its box meets the shape, so
+    /// these are the leaves the square-by-square walk visits, with one shape test per
+    /// block. Checked by `cells_in_walk_order_visit_the_leaves_of_the_square_by_square_walk`.
     fn visit_cells_in_walk_order(
         &self,
         wanted: u64,
@@ -198,10 +200,9 @@ impl RegionQuadtree {
     }
 
     /// The deepest node (and its square) whose square holds `bounds` with room to spare (see
-    /// [`Reach`]): a walk for the shape starts there, with the same leaves in the same order
-    /// as from the root (every other branch would be found disjoint), without classifying
-    /// the levels above (issue 11: a robot's move test classified ≈ 40 squares on its way
-    /// down a 10-level tree). Stops at leaves and blocks.
+    /// [`Reach`]), stopping at leaves and blocks. A walk for the shape may start there: every
+    /// other branch would be found disjoint, so it visits the same leaves in the same order
+    /// as a walk from the root without classifying the levels above. O(depth).
     #[inline]
     fn start_node(&self, bounds: &Aabb) -> (NodeRef, Square) {
         let (mut n, mut sq) = (self.root, self.root_square());
@@ -260,9 +261,8 @@ impl RegionQuadtree {
     /// Visit the cells `(x, y)` holding `value` in the cell rectangle `x0..=x1` × `y0..=y1`
     /// (inside the covering square), block by block, or return `None` (visiting nothing) if
     /// the rectangle meets more than 2 × 2 blocks or the tree has none. One integer descent
-    /// per block and a mask, no shape tests: what a robot's move test needs to learn about
-    /// the few cells around it (issue 11: walking down from the root with box tests at every
-    /// level was a fifth of the dense random walk).
+    /// per block and a mask, no shape tests: for the few cells around a robot's move.
+    /// Checked by `cells_in_small_rectangles_match_the_raster`.
     pub fn visit_cells_in_rect(
         &self,
         lo: (u32, u32),
@@ -366,19 +366,17 @@ impl RegionQuadtree {
 
     /// Whether a capsule of positive radius meets a cell holding `value`, told from the
     /// cells near it instead of by a walk, or `None` when that cannot tell: a radius of 0, a
-    /// tree without blocks, more than `max_blocks` blocks near a long capsule to read, or
-    /// more than eight cells within a part in 10⁷ of the radius. A capsule meets a
-    /// leaf exactly when it meets one of the leaf's cells, and a distance more than a part
-    /// in 10⁷ off the radius decides the same whatever the rounding of either box's
-    /// arithmetic, so an answer is that of [`any_leaf_in`](Self::any_leaf_in). A cell
-    /// nearer the radius than that (a route's leg pulled round a corner to its clearance,
-    /// a robot stopped where it touched a wall) is decided by the walk's own tests on the
-    /// way down to it (the private `walk_meets_cell`).
+    /// tree without blocks, more than `max_blocks` blocks to read near a long capsule, or
+    /// more than eight cells within a part in 10⁷ of the radius. A capsule within 2 × 2
+    /// blocks reads their cells; a longer one, row of blocks by row of blocks, only the
+    /// blocks within its reach.
     ///
-    /// A capsule within 2 × 2 blocks reads their cells; a longer one, row of blocks by row
-    /// of blocks, only those within its reach (issue 12: the tree walks for routes' long
-    /// legs, and for the known map under corner cuts, were a tenth of the frontier
-    /// searches).
+    /// Invariant: an answer is that of [`any_leaf_in`](Self::any_leaf_in). A capsule meets a
+    /// leaf exactly when it meets one of the leaf's cells; a distance more than a part in
+    /// 10⁷ off the radius decides the same whatever the rounding, and a cell nearer the rim
+    /// than that (a leg pulled round a corner to its clearance) is decided by the walk's own
+    /// tests on the way down to it (the private `walk_meets_cell`). Checked by
+    /// `capsule_meets_cells_is_the_walks`.
     pub fn capsule_meets_cells(&self, capsule: &Capsule, value: bool, max_blocks: u32) -> Option<bool> {
         self.capsule_meets_cells_via(None, capsule, value, max_blocks)
     }
@@ -401,11 +399,9 @@ impl RegionQuadtree {
         let grid = self.grid;
         let bounds = capsule.bounds();
         // A cell whose centre lies farther from the axis's line than the radius, half the
-        // cell's diagonal and room for rounding is farther than the radius from the axis
-        // by more than a part in 10⁷: it cannot decide anything, and one cross product
-        // tells (issue 12: the full distance of every blocked cell near a long leg was a
-        // fifth of its test). An axis of a cell or two (a robot's step) passes near the few
-        // cells it reads: those are not sifted.
+        // cell's diagonal and room for rounding is clear by more than a part in 10⁷ and
+        // cannot decide anything: one cross product skips it. An axis of a cell or two (a
+        // robot's step) reads only the few cells near it, unsifted.
         let axis = b - a;
         let (per_m, beyond) = if axis.length_squared() > 4.0 * grid.cell_m() * grid.cell_m() {
             let margin = capsule.radius * 1e-6 + bounds.rounding_margin();
@@ -554,9 +550,7 @@ impl RegionQuadtree {
 
     /// Which values the cells of the rectangle `lo ..= hi` (as for
     /// [`any_cell_in_rect`](Self::any_cell_in_rect)) hold: `(some cell holds false, some
-    /// cell holds true)`. Both answers of `any_cell_in_rect` from one descent (issue 12:
-    /// navigation asks a piece whether it is touched and whether it is covered, each a
-    /// descent of the known map).
+    /// cell holds true)`. Both answers of `any_cell_in_rect` from one descent.
     pub fn values_in_rect(&self, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
         self.values_in_rect_from(&mut Finger::new(self), lo, hi)
     }
@@ -564,7 +558,8 @@ impl RegionQuadtree {
     /// [`values_in_rect`](Self::values_in_rect) descending from where `finger` points if
     /// that holds the rectangle (it then points at the rectangle's ancestor at
     /// level 6): a run of queries about nearby rectangles skips the levels above.
-    /// `finger` must be of this tree.
+    /// `finger` must be of this tree. Same answer as from the root; checked by
+    /// `values_in_rect_from_a_finger_match_the_root_descent`.
     pub fn values_in_rect_from(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32)) -> (bool, bool) {
         debug_assert!(std::ptr::eq(finger.tree, self), "a finger of another tree");
         let held = self.values_in_rect_until(finger, lo, hi, BOTH_VALUES);
@@ -575,10 +570,8 @@ impl RegionQuadtree {
     /// once all of `wanted` are found (the answer then holds at least those).
     fn values_in_rect_until(&self, finger: &mut Finger, lo: (u32, u32), hi: (u32, u32), wanted: u8) -> u8 {
         debug_assert!(lo.0 <= hi.0 && lo.1 <= hi.1 && hi.0 < self.grid.side_cells() && hi.1 < self.grid.side_cells());
-        // Straight down to the smallest square that holds the rectangle, by its cells' bits
-        // (issue 12: walking down from the root testing four children's bounds at every
-        // level was most of the cost of the navigation pieces' tests, a thousand
-        // instructions each).
+        // Straight down to the smallest square that holds the rectangle, found from the
+        // bits of its corners' coordinates, with no box tests.
         let differ = (lo.0 ^ hi.0) | (lo.1 ^ hi.1);
         let level = (u32::BITS - differ.leading_zeros()).min(u32::from(self.grid.depth()));
         let keep = u32::MAX.checked_shl(level).unwrap_or(0);
@@ -881,9 +874,8 @@ const BOTH_VALUES: u8 = 3;
 const FINGER_LEVEL: u8 = 6;
 
 /// Where descents of one tree toward nearby squares may start: a node an earlier descent
-/// passed, and its square (issue 12: a frontier search asks the known map about dozens of
-/// pieces close together, each a descent from the root). It borrows the tree, so the tree
-/// cannot change while it points into it.
+/// passed, and its square. It borrows the tree, so the tree cannot change while it points
+/// into it, and a descent from it reaches the node a descent from the root reaches.
 #[derive(Clone, Copy)]
 pub struct Finger<'a> {
     tree: &'a RegionQuadtree,

@@ -1,10 +1,9 @@
-//! A [`RegionQuadtree`] as checkpoints store it (issue 13): its vectors with their
-//! capacities, so that a restored tree costs what the saved one did (its memory is a
-//! metric) and grows as it would have; a resumed run must be the same, byte for byte.
-//! The vectors are written as little-endian byte strings, one CBOR item each: item by item
-//! they made checkpoint encoding 12 % of a run writing one every 20 rounds. Written from
-//! borrowed vectors (a checkpoint never copies a tree); whoever reads a tree back checks it
-//! with `validate`.
+//! A [`RegionQuadtree`] as checkpoints store it: its vectors with their capacities, so
+//! that a restored tree costs what the saved one did (its memory is a metric) and grows as
+//! it would have; a resumed run must be the same, byte for byte. The vectors are written as
+//! little-endian byte strings, one CBOR item each, not item by item, which would be slow.
+//! Written from borrowed vectors (a checkpoint never copies a tree); whoever reads a tree
+//! back checks it with `validate`.
 
 use serde::{Deserialize, Serialize, Serializer};
 use serde_bytes::ByteBuf;
@@ -81,7 +80,7 @@ pub(super) struct TreeState {
     capacities: [usize; 4],
     block_internal: usize,
     packed: bool,
-    /// Absent from checkpoints written before trees kept hashes: none kept then.
+    /// Optional when read: a checkpoint without them keeps no hashes.
     #[serde(default)]
     hashes: ByteBuf,
     #[serde(default)]

@@ -1,6 +1,6 @@
-//! The packed bottom changes storage, not the tree (issue 11): a packed tree and its
-//! unpacked twin (groups down to single cells, the representation before blocks) get the
-//! same random updates and must agree on every leaf, count, visit order and byte.
+//! The packed bottom changes storage, not the tree: a packed tree and its unpacked twin
+//! (groups down to single cells, no blocks) get the same random updates and must agree on
+//! every leaf, count, visit order and byte.
 
 use std::collections::BTreeSet;
 use std::ops::ControlFlow;
@@ -102,7 +102,7 @@ fn union_partner(rng: &mut ChaCha8Rng, tree: &RegionQuadtree, hashing: bool) -> 
 }
 
 #[test]
-fn issue11_packed_trees_are_the_unpacked_tree() {
+fn packed_trees_are_the_unpacked_tree() {
     let mut rng = ChaCha8Rng::seed_from_u64(0xB10C);
     for case in 0..120 {
         let (w, h) = (rng.random_range(1..70), rng.random_range(1..70));
@@ -118,9 +118,9 @@ fn issue11_packed_trees_are_the_unpacked_tree() {
         assert_eq!(decoded.packed, packed.packed);
         assert_same(&decoded, &twin, &format!("case {case}: decoded"));
 
-        // Odd cases keep content hashes (issue 11: unions skip subtrees equal to the other
-        // tree's), worked out again now and then, so that fills and unions must forget
-        // those they change: every check below validates each hash kept.
+        // Odd cases keep content hashes (unions skip subtrees equal to the other tree's),
+        // worked out again now and then, so that fills and unions must forget those they
+        // change: every check below validates each hash kept.
         let hashing = case % 2 == 1;
         for step in 0..12 {
             let what = format!("case {case} step {step}");
@@ -213,8 +213,8 @@ fn issue11_packed_trees_are_the_unpacked_tree() {
     }
 }
 
-/// Issue 12: `any_cell_in_rect` and `values_in_rect` against the cells one by one, on
-/// random trees (packed and not) and random rectangles.
+/// `any_cell_in_rect` and `values_in_rect` against the cells one by one, on random trees
+/// (packed and not) and random rectangles.
 #[test]
 fn any_cell_in_rect_matches_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(12);
@@ -234,7 +234,7 @@ fn any_cell_in_rect_matches_brute_force() {
         let packed = RegionQuadtree::from_fn(grid, false, value_at);
         let unpacked = packed.unpacked();
         // Fingers kept across the queries, so that descents start from where earlier ones
-        // passed (issue 12).
+        // passed.
         let mut fingers = [super::Finger::new(&packed), super::Finger::new(&unpacked)];
         let side = grid.side_cells();
         for k in 0..200 {
@@ -242,8 +242,8 @@ fn any_cell_in_rect_matches_brute_force() {
             let (y0, y1) = (rng.random_range(0..side), rng.random_range(0..side));
             let (lo, mut hi) = ((x0.min(x1), y0.min(y1)), (x0.max(x1), y0.max(y1)));
             if k % 2 == 0 {
-                // Small ones too, as navigation pieces mostly are (issue 12: the descent
-                // goes straight to the square that holds them).
+                // Small ones too, as navigation pieces mostly are (the descent goes
+                // straight to the square that holds them).
                 hi = (
                     (lo.0 + rng.random_range(0..4)).min(side - 1),
                     (lo.1 + rng.random_range(0..4)).min(side - 1),
@@ -270,7 +270,7 @@ fn any_cell_in_rect_matches_brute_force() {
                         "case {case}: {lo:?}..={hi:?} {value}"
                     );
                 }
-                // Issue 12: both answers from one descent.
+                // Both answers from one descent.
                 assert_eq!(
                     tree.values_in_rect(lo, hi),
                     (brute(false), brute(true)),
@@ -281,14 +281,14 @@ fn any_cell_in_rect_matches_brute_force() {
     }
 }
 
-/// Issue 11: a view's rows are filled block by block (`fill_new_rows_reporting`). Rows
-/// that complete whole squares (merged into one leaf while the call goes on), clear cells
-/// (splitting leaves, reusing freed nodes) and revisit blocks of a square merged earlier in
-/// the same call leave exactly the cells a brute-force grid holds, report exactly those
-/// that switched, and keep the tree well formed (odd cases keep content hashes, worked out
-/// again every few calls, which each fill must forget where it changes cells).
+/// A view's rows are filled block by block (`fill_new_rows_reporting`). Rows that complete
+/// whole squares (merged into one leaf while the call goes on), clear cells (splitting
+/// leaves, reusing freed nodes) and revisit blocks of a square merged earlier in the same
+/// call leave exactly the cells a brute-force grid holds, report exactly those that
+/// switched, and keep the tree well formed (odd cases keep content hashes, worked out again
+/// every few calls, which each fill must forget where it changes cells).
 #[test]
-fn issue11_rows_filled_block_by_block_match_a_grid() {
+fn rows_filled_block_by_block_match_a_grid() {
     let mut rng = ChaCha8Rng::seed_from_u64(0x9A7B);
     let grid = Grid::new(DVec2::ZERO, 1.0, 96, 80).unwrap();
     let side = grid.side_cells();
@@ -356,11 +356,11 @@ fn issue11_rows_filled_block_by_block_match_a_grid() {
     }
 }
 
-/// Issue 12: descents that start from a finger (moved by each query to the ancestor at its
-/// level) answer as descents from the root, on a tree deep enough for the finger to move:
-/// runs of queries close together, then far apart.
+/// Descents that start from a finger (moved by each query to the ancestor at its level)
+/// answer as descents from the root, on a tree deep enough for the finger to move: runs of
+/// queries close together, then far apart.
 #[test]
-fn issue12_values_in_rect_from_a_finger_match_the_root_descent() {
+fn values_in_rect_from_a_finger_match_the_root_descent() {
     let mut rng = ChaCha8Rng::seed_from_u64(1212);
     let grid = Grid::new(DVec2::ZERO, 1.0, 300, 200).unwrap();
     let cells: Vec<bool> = (0..300 * 200).map(|_| rng.random_bool(0.2)).collect();
@@ -441,11 +441,11 @@ impl Shape for CellsInWalkOrder<'_> {
     }
 }
 
-/// Issue 12: a shape that answers a block's cells at once but keeps the walk's order is
-/// visited leaf for leaf in the order of the square-by-square walk (a nearest-point search
-/// breaks ties by that order), on random trees and shapes of every kind.
+/// A shape that answers a block's cells at once but keeps the walk's order is visited leaf
+/// for leaf in the order of the square-by-square walk (a nearest-point search breaks ties
+/// by that order), on random trees and shapes of every kind.
 #[test]
-fn issue12_cells_in_walk_order_visit_the_leaves_of_the_square_by_square_walk() {
+fn cells_in_walk_order_visit_the_leaves_of_the_square_by_square_walk() {
     let mut rng = ChaCha8Rng::seed_from_u64(1207);
     let mut blocks_seen = 0;
     for case in 0..300 {

@@ -47,9 +47,8 @@ impl RegionQuadtree {
     /// Set every cell of grid square `sq` to `value`, calling `changed` with squares whose
     /// cells all switched (together exactly the cells that changed): what
     /// [`fill_reporting`](Self::fill_reporting) does with the square's own box, by one
-    /// descent along its coordinates instead of box tests at every node (issue 11: the
-    /// collective explored map takes each robot's new squares this way, a few thousand a
-    /// round).
+    /// descent along its coordinates instead of box tests at every node. O(depth) plus the
+    /// nodes replaced. Checked by `filling_a_square_is_filling_its_box`.
     pub fn fill_square_reporting(&mut self, sq: Square, value: bool, mut changed: impl FnMut(Square)) {
         let root = self.root_square();
         let before = self.root;
@@ -71,10 +70,10 @@ impl RegionQuadtree {
 
     /// Set the cells `cover` (Z order) of the block at `sq` to `value`: a loop down the
     /// block's coordinates that remembers its way, then back up only as far as something
-    /// changed (issue 11: the recursive descent wrote back and tested for merging at every
-    /// level, ≈ 300 instructions a block, and marking a view touches several blocks a round).
-    /// A leaf of the other value on the way is split along the path, as the recursive
-    /// descent would. Packed trees only. Returns the block's cells after (Z order).
+    /// changed, writing back and merging there alone. A leaf of the other value on the way
+    /// is split along the path, as the recursive descent would, so the tree stays the same
+    /// canonical tree. Packed trees only. Returns the block's cells after (Z order).
+    /// Checked by `rows_filled_block_by_block_match_a_grid`.
     fn fill_block_cells(&mut self, sq: Square, cover: u64, value: bool, changed: &mut impl FnMut(CellSet)) -> u64 {
         debug_assert!(self.packed && sq.level == BLOCK_LEVEL);
         let want = leaf(value);
@@ -173,13 +172,11 @@ impl RegionQuadtree {
     /// shapes), stopping at squares that hold `value` already. Trees with blocks only
     /// (`false`, nothing done, otherwise).
     ///
-    /// Issue 11: a robot's view, a few blocks across, was marked by a shape-driven walk
-    /// from the root along its rim; with its cells worked out at once
-    /// ([`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows)) and the
-    /// last view's left out as the rows are cut, marking is a few descents. (A walk from
-    /// the deepest group holding every cell visited all four children at each level below
-    /// it, and a view near the middle of the map, where homes usually are, straddles the
-    /// root's own halves.)
+    /// For a robot's view: its cells come from
+    /// [`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows) and the last
+    /// view's are left out as the rows are cut, so marking is a few descents, not a shape
+    /// walk along the rim. Checked by `rows_filled_block_by_block_match_a_grid` and
+    /// `views_marked_by_blocks_are_the_walks_cells`.
     pub fn fill_new_rows_reporting(
         &mut self,
         cells: &CellRows,
@@ -268,9 +265,8 @@ impl RegionQuadtree {
     }
 
     /// One node of a fill: the quick cases here, inlined into the parent's loop, so that
-    /// the children a shape misses (most of them on the way down) cost no call (issue 11:
-    /// the calls were most of marking a robot's view).
-    #[allow(clippy::inline_always)] // measured (callgrind): 6 % of the dense random walk
+    /// the children a shape misses (most of them on the way down) cost no call.
+    #[allow(clippy::inline_always)] // the hot path of marking views: no call per missed child
     #[inline(always)]
     fn fill_node<S: Shape>(
         &mut self,
@@ -454,15 +450,14 @@ impl RegionQuadtree {
     }
 
     /// [`union_with`](Self::union_with), returning how many cells became `1`: a known map
-    /// keeps its count up to date without a traversal of the whole tree (issue 11: the
-    /// recount after every merge was a twentieth of a crowded round).
+    /// keeps its count up to date without a traversal of the whole tree.
     pub fn union_counting(&mut self, other: &RegionQuadtree) -> u64 {
         self.union_reporting(other, |_| {})
     }
 
     /// [`union_counting`](Self::union_counting), calling `changed` with squares that hold
     /// every cell that became `1` (a square may hold cells that were `1` already): what a
-    /// known map's frontier needs to look at again after a merge (issue 12).
+    /// known map's frontier needs to look at again after a merge.
     pub fn union_reporting(&mut self, other: &RegionQuadtree, mut changed: impl FnMut(Square)) -> u64 {
         assert_eq!(self.grid.depth(), other.grid.depth(), "trees over different grids");
         let mut added = 0;
@@ -495,10 +490,10 @@ impl RegionQuadtree {
             changed(sq);
             return self.copy_from(other, m, level);
         }
-        // Groups both: the same contents add nothing (the other tree's hashes are kept
-        // when it was shared for merging; see `hash`). Not above `HASHED_LEVELS`: maps
-        // that differ anywhere differ there, and each view marked would make this tree
-        // work out those groups' hashes again.
+        // Groups both: equal hashes mean equal contents, which add nothing (the other
+        // tree's hashes are kept when it was shared for merging; see `hash`). Not above
+        // `HASHED_LEVELS`: maps that differ anywhere differ there, and each view marked
+        // would make this tree work out those groups' hashes again.
         if level <= super::hash::HASHED_LEVELS
             && !is_block(n)
             && !is_block(m)
@@ -546,9 +541,9 @@ impl RegionQuadtree {
 
     /// [`union_node`](Self::union_node) for a group `n` whose children are blocks or
     /// leaves (as are those of `other`'s group, `theirs`): the eight children's cells are
-    /// read at once and settled without a call each (merges of maps exchanged before are
-    /// mostly no-ops, and most of their calls were these). The same cells, counts, reports
-    /// and slots as one call per child.
+    /// read at once and settled without a call each, since merges of maps exchanged before
+    /// are mostly no-ops. The same cells, counts, reports and slots as one call per child;
+    /// checked by `packed_trees_are_the_unpacked_tree`.
     #[allow(clippy::too_many_arguments)] // `union_node`'s own, with the children it read
     fn union_blocks(
         &mut self,
@@ -561,7 +556,7 @@ impl RegionQuadtree {
         changed: &mut impl FnMut(Square),
     ) -> NodeRef {
         // `bits_of` at the block level, for packed trees only (children here are leaves or
-        // blocks): calling `bits_of` itself made bench-1000's merges 18 % dearer (callgrind).
+        // blocks), without its general cases.
         let cells = |t: &RegionQuadtree, k: NodeRef| match k {
             FULL => u64::MAX,
             super::EMPTY => 0,
