@@ -184,90 +184,99 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
     )
     .map_err(|e| bad(format!("world: {e}")))?;
     let world = grid.extent();
-    let inside = |b: &Aabb| world.contains_box(b);
-    let mut shapes = Vec::new();
-    let mut home = None;
-    let mut treasures = Vec::new();
-    for (i, item) in raw.items.into_iter().enumerate() {
-        let n = i + 1;
-        let shape = match item {
-            Item::Home { x, y, radius } => {
-                let h = HomeBase::Disc {
-                    center: DVec2::new(x, y),
-                    radius_m: radius,
-                };
-                if !(radius > 0.0 && radius.is_finite() && inside(&h.bounds())) {
-                    return Err(bad(format!(
-                        "item {n} (home at {x}, {y}, radius {radius}) must be a positive-radius disc inside the world"
-                    )));
-                }
-                if home.replace(h).is_some() {
-                    return Err(bad(format!("item {n}: a second home base")));
-                }
-                continue;
-            }
-            Item::Treasure { x, y, quantity } => {
-                let p = DVec2::new(x, y);
-                if !inside(&Aabb { min: p, max: p }) || quantity == 0 {
-                    return Err(bad(format!(
-                        "item {n} (treasure at {x}, {y}) must lie inside the world and have a quantity ≥ 1"
-                    )));
-                }
-                treasures.push(TreasureSpec { position: p, quantity });
-                continue;
-            }
-            Item::Disc { x, y, radius } => ("disc", Obstacle::disc(DVec2::new(x, y), radius)),
-            Item::Rect {
-                x,
-                y,
-                width,
-                height,
-                rotation_deg,
-            } => (
-                "rect",
-                Obstacle::rect(DVec2::new(x, y), width, height, rotation_deg.to_radians()),
-            ),
-            Item::Capsule { x1, y1, x2, y2, radius } => (
-                "capsule",
-                Obstacle::capsule(DVec2::new(x1, y1), DVec2::new(x2, y2), radius),
-            ),
-            Item::Polygon {
-                x,
-                y,
-                rotation_deg,
-                points,
-            } => {
-                let pts: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.x, p.y)).collect();
-                (
-                    "polygon",
-                    Obstacle::polygon(DVec2::new(x, y), &pts, rotation_deg.to_radians()),
-                )
-            }
-        };
-        let (kind, Some(s)) = shape else {
-            return Err(bad(format!(
-                "item {n} ({}) is degenerate (non-positive size, fewer than 3 points, or a self-intersecting polygon)",
-                shape.0
-            )));
-        };
-        let b = s.bounds();
-        if !inside(&Aabb {
-            min: b.min + 2e-3,
-            max: b.max - 2e-3,
-        }) {
-            return Err(bad(format!(
-                "item {n} ({kind}, spanning ({:.3}, {:.3})–({:.3}, {:.3})) reaches outside the world ({}, {})–({}, {})",
-                b.min.x, b.min.y, b.max.x, b.max.y, world.min.x, world.min.y, world.max.x, world.max.y
-            )));
-        }
-        shapes.push(s);
-    }
-    Ok(Scene {
+    let mut scene = Scene {
         grid,
-        shapes,
-        home,
-        treasures,
-    })
+        shapes: Vec::new(),
+        home: None,
+        treasures: Vec::new(),
+    };
+    for (i, item) in raw.items.into_iter().enumerate() {
+        add_item(&mut scene, &world, i + 1, item).map_err(bad)?;
+    }
+    Ok(scene)
+}
+
+/// Add item `n` of a scene (counted from 1) to `scene`: its home base, a treasure or an
+/// obstacle, each checked to lie inside `world`; the error says what is wrong with it.
+fn add_item(scene: &mut Scene, world: &Aabb, n: usize, item: Item) -> Result<(), String> {
+    match item {
+        Item::Home { x, y, radius } => {
+            let h = HomeBase::Disc {
+                center: DVec2::new(x, y),
+                radius_m: radius,
+            };
+            if !(radius > 0.0 && radius.is_finite() && world.contains_box(&h.bounds())) {
+                return Err(format!(
+                    "item {n} (home at {x}, {y}, radius {radius}) must be a positive-radius disc inside the world"
+                ));
+            }
+            if scene.home.replace(h).is_some() {
+                return Err(format!("item {n}: a second home base"));
+            }
+        }
+        Item::Treasure { x, y, quantity } => {
+            let p = DVec2::new(x, y);
+            if !world.contains_box(&Aabb { min: p, max: p }) || quantity == 0 {
+                return Err(format!(
+                    "item {n} (treasure at {x}, {y}) must lie inside the world and have a quantity ≥ 1"
+                ));
+            }
+            scene.treasures.push(TreasureSpec { position: p, quantity });
+        }
+        shape => scene.shapes.push(obstacle(shape, world, n)?),
+    }
+    Ok(())
+}
+
+/// The obstacle of shape item `n`, checked to be non-degenerate and to lie inside `world`;
+/// the error says what is wrong with it.
+fn obstacle(item: Item, world: &Aabb, n: usize) -> Result<Obstacle, String> {
+    let (kind, built) = match item {
+        Item::Disc { x, y, radius } => ("disc", Obstacle::disc(DVec2::new(x, y), radius)),
+        Item::Rect {
+            x,
+            y,
+            width,
+            height,
+            rotation_deg,
+        } => (
+            "rect",
+            Obstacle::rect(DVec2::new(x, y), width, height, rotation_deg.to_radians()),
+        ),
+        Item::Capsule { x1, y1, x2, y2, radius } => (
+            "capsule",
+            Obstacle::capsule(DVec2::new(x1, y1), DVec2::new(x2, y2), radius),
+        ),
+        Item::Polygon {
+            x,
+            y,
+            rotation_deg,
+            points,
+        } => {
+            let pts: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.x, p.y)).collect();
+            (
+                "polygon",
+                Obstacle::polygon(DVec2::new(x, y), &pts, rotation_deg.to_radians()),
+            )
+        }
+        Item::Home { .. } | Item::Treasure { .. } => unreachable!("homes and treasures are not obstacles"),
+    };
+    let Some(s) = built else {
+        return Err(format!(
+            "item {n} ({kind}) is degenerate (non-positive size, fewer than 3 points, or a self-intersecting polygon)"
+        ));
+    };
+    let b = s.bounds();
+    if !world.contains_box(&Aabb {
+        min: b.min + 2e-3,
+        max: b.max - 2e-3,
+    }) {
+        return Err(format!(
+            "item {n} ({kind}, spanning ({:.3}, {:.3})–({:.3}, {:.3})) reaches outside the world ({}, {})–({}, {})",
+            b.min.x, b.min.y, b.max.x, b.max.y, world.min.x, world.min.y, world.max.x, world.max.y
+        ));
+    }
+    Ok(s)
 }
 
 /// Rasterise a scene. Without a declared home base, one is chosen automatically.

@@ -4,6 +4,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_core::glam::DVec2;
+use sim_core::spatial::Grid;
 use sim_core::spatial::ObstacleMap;
 use sim_core::spatial::Square;
 use sim_core::world::{HomeBase, MapData, TreasureSpec};
@@ -160,12 +161,38 @@ fn check_radius(r: f64) -> Result<()> {
 /// Apply `opts` to `map`: set the home base, then scatter treasures reachable from it.
 pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
     check_radius(opts.home_radius_m)?;
-    let (qmin, qmax) = opts.quantity;
+    check_quantity(opts.quantity)?;
+    set_home(map, opts)?;
+    if !opts.keep_treasures {
+        map.treasures.clear();
+    }
+    if opts.treasures == 0 {
+        return Ok(());
+    }
+    let area = Reachable::around(&map.obstacles, &map.home)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    match opts.spread {
+        Spread::Uniform => scatter_uniform(&mut map.treasures, opts, &area, &mut rng),
+        Spread::Clustered { clusters, sigma_m } => {
+            scatter_clustered(&mut map.treasures, opts, &area, clusters, sigma_m, &mut rng)?;
+        }
+    }
+    Ok(())
+}
+
+/// Check the treasure quantity range `(min, max)`: non-empty, and from at least 1.
+fn check_quantity((qmin, qmax): (u32, u32)) -> Result<()> {
     if qmin == 0 || qmin > qmax {
         return Err(EditorError::InvalidParameter(format!(
             "treasure quantity range {qmin}..={qmax} must be non-empty and at least 1"
         )));
     }
+    Ok(())
+}
+
+/// Set the home base `opts` asks for: a disc at the given centre, checked to be free, or one
+/// chosen automatically; otherwise keep the map's.
+fn set_home(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
     if let Some(h) = opts.home {
         let free = map.obstacles.is_point_free(h);
         if !free {
@@ -187,71 +214,113 @@ pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
     } else if opts.auto_home {
         map.home = auto_home(&map.obstacles, opts.home_radius_m)?;
     }
-    if !opts.keep_treasures {
-        map.treasures.clear();
+    Ok(())
+}
+
+/// Add `opts.treasures` treasures at cells drawn uniformly from `area`.
+fn scatter_uniform(treasures: &mut Vec<TreasureSpec>, opts: &PlaceOptions, area: &Reachable<'_>, rng: &mut ChaCha8Rng) {
+    let (qmin, qmax) = opts.quantity;
+    for _ in 0..opts.treasures {
+        let position = area.uniform_cell(rng);
+        let quantity = rng.random_range(qmin..=qmax);
+        treasures.push(TreasureSpec { position, quantity });
     }
-    if opts.treasures == 0 {
-        return Ok(());
+}
+
+/// Add `opts.treasures` treasures around `clusters` centres drawn uniformly from `area`, taken
+/// in turn, each at a Gaussian offset of `sigma_m` from its centre.
+fn scatter_clustered(
+    treasures: &mut Vec<TreasureSpec>,
+    opts: &PlaceOptions,
+    area: &Reachable<'_>,
+    clusters: u32,
+    sigma_m: f64,
+    rng: &mut ChaCha8Rng,
+) -> Result<()> {
+    if clusters == 0 || !(sigma_m.is_finite() && sigma_m > 0.0) {
+        return Err(EditorError::InvalidParameter(format!(
+            "clustered spread needs at least one cluster and a positive sigma, got {clusters} and {sigma_m}"
+        )));
     }
-    let comps = Components::new(map.obstacles.tree());
-    let Some(home) = comps.label_at(map.home.center()) else {
-        return Err(EditorError::Placement(
-            "the home base centre lies in a blocked cell; no treasure can be reachable".into(),
-        ));
-    };
-    let leaves: Vec<Square> = comps.leaves().filter(|&(_, l)| l == home).map(|(s, _)| s).collect();
-    let mut cumulative = Vec::with_capacity(leaves.len());
-    let mut total = 0u64;
-    for s in &leaves {
-        total += s.cells();
-        cumulative.push(total);
-    }
-    let g = *map.obstacles.grid();
-    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
-    let uniform_cell = |rng: &mut ChaCha8Rng| -> DVec2 {
-        let u = rng.random_range(0..total);
-        let k = cumulative.partition_point(|&c| c <= u);
-        let s = leaves[k];
-        let side = s.side_cells();
-        let (dx, dy) = (rng.random_range(0..side), rng.random_range(0..side));
-        g.cell_center(s.x + dx, s.y + dy)
-    };
-    let quantity = |rng: &mut ChaCha8Rng| rng.random_range(qmin..=qmax);
-    match opts.spread {
-        Spread::Uniform => {
-            for _ in 0..opts.treasures {
-                let position = uniform_cell(&mut rng);
-                let quantity = quantity(&mut rng);
-                map.treasures.push(TreasureSpec { position, quantity });
-            }
-        }
-        Spread::Clustered { clusters, sigma_m } => {
-            if clusters == 0 || !(sigma_m.is_finite() && sigma_m > 0.0) {
-                return Err(EditorError::InvalidParameter(format!(
-                    "clustered spread needs at least one cluster and a positive sigma, got {clusters} and {sigma_m}"
-                )));
-            }
-            let centres: Vec<DVec2> = (0..clusters).map(|_| uniform_cell(&mut rng)).collect();
-            for i in 0..opts.treasures {
-                let c = centres[i as usize % centres.len()];
-                let mut position = None;
-                for _ in 0..1000 {
-                    // Box–Muller.
-                    let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-                    let r = sigma_m * (-2.0 * u1.ln()).sqrt();
-                    let p = c + r * DVec2::new((std::f64::consts::TAU * u2).cos(), (std::f64::consts::TAU * u2).sin());
-                    if let Some((x, y)) = g.cell_of(p)
-                        && comps.label_of_cell(x, y) == Some(home)
-                    {
-                        position = Some(g.cell_center(x, y));
-                        break;
-                    }
-                }
-                let position = position.unwrap_or(c);
-                let quantity = quantity(&mut rng);
-                map.treasures.push(TreasureSpec { position, quantity });
-            }
-        }
+    let (qmin, qmax) = opts.quantity;
+    let centres: Vec<DVec2> = (0..clusters).map(|_| area.uniform_cell(rng)).collect();
+    for i in 0..opts.treasures {
+        let c = centres[i as usize % centres.len()];
+        let position = area.near(c, sigma_m, rng);
+        let quantity = rng.random_range(qmin..=qmax);
+        treasures.push(TreasureSpec { position, quantity });
     }
     Ok(())
+}
+
+/// The free cells reachable from the home base (its 4-connected free component), to draw
+/// treasure positions from.
+struct Reachable<'a> {
+    /// The map's free components.
+    comps: Components<'a>,
+    /// The home base's component.
+    label: u32,
+    /// The component's free leaves.
+    leaves: Vec<Square>,
+    /// Running cell count: entry `i` counts the cells of `leaves[..=i]`.
+    cumulative: Vec<u64>,
+    /// Cells in the component.
+    total: u64,
+    /// The map's grid.
+    grid: Grid,
+}
+
+impl<'a> Reachable<'a> {
+    /// The free component of `obstacles` around `home`'s centre; an error if that centre is
+    /// blocked.
+    fn around(obstacles: &'a ObstacleMap, home: &HomeBase) -> Result<Self> {
+        let comps = Components::new(obstacles.tree());
+        let Some(label) = comps.label_at(home.center()) else {
+            return Err(EditorError::Placement(
+                "the home base centre lies in a blocked cell; no treasure can be reachable".into(),
+            ));
+        };
+        let leaves: Vec<Square> = comps.leaves().filter(|&(_, l)| l == label).map(|(s, _)| s).collect();
+        let mut cumulative = Vec::with_capacity(leaves.len());
+        let mut total = 0u64;
+        for s in &leaves {
+            total += s.cells();
+            cumulative.push(total);
+        }
+        Ok(Self {
+            comps,
+            label,
+            leaves,
+            cumulative,
+            total,
+            grid: *obstacles.grid(),
+        })
+    }
+
+    /// The centre of a cell drawn uniformly from the component.
+    fn uniform_cell(&self, rng: &mut ChaCha8Rng) -> DVec2 {
+        let u = rng.random_range(0..self.total);
+        let k = self.cumulative.partition_point(|&c| c <= u);
+        let s = self.leaves[k];
+        let side = s.side_cells();
+        let (dx, dy) = (rng.random_range(0..side), rng.random_range(0..side));
+        self.grid.cell_center(s.x + dx, s.y + dy)
+    }
+
+    /// The centre of the cell of the component at a Gaussian offset of `sigma_m` from `c`,
+    /// or `c` itself when a thousand draws all miss the component.
+    fn near(&self, c: DVec2, sigma_m: f64, rng: &mut ChaCha8Rng) -> DVec2 {
+        for _ in 0..1000 {
+            // Box–Muller.
+            let (u1, u2): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
+            let r = sigma_m * (-2.0 * u1.ln()).sqrt();
+            let p = c + r * DVec2::new((std::f64::consts::TAU * u2).cos(), (std::f64::consts::TAU * u2).sin());
+            if let Some((x, y)) = self.grid.cell_of(p)
+                && self.comps.label_of_cell(x, y) == Some(self.label)
+            {
+                return self.grid.cell_center(x, y);
+            }
+        }
+        c
+    }
 }

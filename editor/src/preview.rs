@@ -6,7 +6,8 @@ use std::path::Path;
 
 use image::{ImageFormat, Rgb, RgbImage};
 use sim_core::glam::DVec2;
-use sim_core::world::MapData;
+use sim_core::spatial::Grid;
+use sim_core::world::{HomeBase, MapData, TreasureSpec};
 
 use crate::{EditorError, Result};
 
@@ -33,22 +34,74 @@ impl Default for PreviewOptions {
 
 /// Draw `map`.
 pub fn render(map: &MapData, opts: &PreviewOptions) -> Result<RgbImage> {
-    let g = *map.obstacles.grid();
-    let (wc, hc) = (g.width_cells(), g.height_cells());
-    let longer = wc.max(hc);
-    let px = opts.px.unwrap_or(longer.min(4096));
-    if px == 0 {
-        return Err(EditorError::InvalidParameter("--px must be at least 1".into()));
+    let frame = Frame::new(*map.obstacles.grid(), opts.px)?;
+    let mut img = draw_obstacles(map, &frame);
+    if opts.overlays {
+        draw_home(&mut img, &frame, &map.home);
+        draw_treasures(&mut img, &frame, &map.treasures);
     }
-    let scale = f64::from(px) / f64::from(longer); // pixels per cell
-    let w = ((f64::from(wc) * scale).round() as u32).max(1);
-    let h = ((f64::from(hc) * scale).round() as u32).max(1);
-    if u64::from(w) * u64::from(h) > MAX_PIXELS {
-        return Err(EditorError::InvalidParameter(format!(
-            "a {w} × {h} picture is too large; ask for a smaller --px"
-        )));
+    Ok(img)
+}
+
+/// Where a map's cells fall in its picture.
+#[derive(Clone, Copy)]
+struct Frame {
+    /// The map's grid.
+    grid: Grid,
+    /// Pixels along the map's longer side.
+    px: u32,
+    /// Picture width, pixels.
+    w: u32,
+    /// Picture height, pixels.
+    h: u32,
+    /// Pixels per cell along x.
+    sx: f64,
+    /// Pixels per cell along y.
+    sy: f64,
+}
+
+impl Frame {
+    /// The picture of `grid` with `px` pixels along its longer side (`None`: one per cell, at
+    /// most 4096); an error for no pixels or a picture over [`MAX_PIXELS`].
+    fn new(grid: Grid, px: Option<u32>) -> Result<Self> {
+        let (wc, hc) = (grid.width_cells(), grid.height_cells());
+        let longer = wc.max(hc);
+        let px = px.unwrap_or(longer.min(4096));
+        if px == 0 {
+            return Err(EditorError::InvalidParameter("--px must be at least 1".into()));
+        }
+        let scale = f64::from(px) / f64::from(longer); // pixels per cell
+        let w = ((f64::from(wc) * scale).round() as u32).max(1);
+        let h = ((f64::from(hc) * scale).round() as u32).max(1);
+        if u64::from(w) * u64::from(h) > MAX_PIXELS {
+            return Err(EditorError::InvalidParameter(format!(
+                "a {w} × {h} picture is too large; ask for a smaller --px"
+            )));
+        }
+        let (sx, sy) = (f64::from(w) / f64::from(wc), f64::from(h) / f64::from(hc));
+        Ok(Self { grid, px, w, h, sx, sy })
     }
-    let (sx, sy) = (f64::from(w) / f64::from(wc), f64::from(h) / f64::from(hc));
+
+    /// The pixel position (y down) of the world point `p`.
+    fn pixel_of(&self, p: DVec2) -> (f64, f64) {
+        let c = (p - self.grid.origin()) / self.grid.cell_m();
+        (c.x * self.sx, f64::from(self.h) - c.y * self.sy)
+    }
+
+    /// The world position of the centre of pixel `(i, j)`.
+    fn pixel_center(&self, i: u32, j: u32) -> DVec2 {
+        let origin = self.grid.origin();
+        DVec2::new(
+            origin.x + (f64::from(i) + 0.5) / self.sx * self.grid.cell_m(),
+            origin.y + (f64::from(self.h - j) - 0.5) / self.sy * self.grid.cell_m(),
+        )
+    }
+}
+
+/// The obstacles in grey: each pixel darker by the share of it that blocked cells cover.
+fn draw_obstacles(map: &MapData, frame: &Frame) -> RgbImage {
+    let Frame { w, h, sx, sy, .. } = *frame;
+    let (wc, hc) = (frame.grid.width_cells(), frame.grid.height_cells());
     let mut cover = vec![0f32; w as usize * h as usize];
     map.obstacles.tree().for_each_leaf(|sq, blocked| {
         if !blocked || sq.x >= wc || sq.y >= hc {
@@ -69,50 +122,46 @@ pub fn render(map: &MapData, opts: &PreviewOptions) -> Result<RgbImage> {
             }
         }
     });
-    let mut img = RgbImage::from_fn(w, h, |i, j| {
+    RgbImage::from_fn(w, h, |i, j| {
         let c = cover[j as usize * w as usize + i as usize].clamp(0.0, 1.0);
         let v = (255.0 * (1.0 - c)).round() as u8;
         Rgb([v, v, v])
-    });
-    if opts.overlays {
-        let origin = g.origin();
-        let to_px = |p: DVec2| {
-            let c = (p - origin) / g.cell_m();
-            (c.x * sx, f64::from(h) - c.y * sy)
-        };
-        let blend = |img: &mut RgbImage, i: u32, j: u32, col: [u8; 3]| {
-            let p = img.get_pixel_mut(i, j);
-            for (c, &k) in p.0.iter_mut().zip(&col) {
-                *c = u16::midpoint(u16::from(*c), u16::from(k)) as u8;
-            }
-        };
-        // Home base: blend blue into every pixel whose centre lies inside it.
-        let b = map.home.bounds();
-        let (a0, a1) = (to_px(b.min), to_px(b.max));
-        let (i0, i1) = (a0.0.floor().max(0.0) as u32, (a1.0.ceil().max(0.0) as u32).min(w));
-        let (j0, j1) = (a1.1.floor().max(0.0) as u32, (a0.1.ceil().max(0.0) as u32).min(h));
-        let mut any = false;
-        for j in j0..j1 {
-            for i in i0..i1 {
-                let c = DVec2::new(
-                    origin.x + (f64::from(i) + 0.5) / sx * g.cell_m(),
-                    origin.y + (f64::from(h - j) - 0.5) / sy * g.cell_m(),
-                );
-                if map.home.contains(c) {
-                    blend(&mut img, i, j, [0, 90, 255]);
-                    any = true;
-                }
-            }
+    })
+}
+
+/// The home base in blue: blended into every pixel whose centre lies inside it, or a dot at
+/// its centre when it holds no pixel centre.
+fn draw_home(img: &mut RgbImage, frame: &Frame, home: &HomeBase) {
+    let blend = |img: &mut RgbImage, i: u32, j: u32, col: [u8; 3]| {
+        let p = img.get_pixel_mut(i, j);
+        for (c, &k) in p.0.iter_mut().zip(&col) {
+            *c = u16::midpoint(u16::from(*c), u16::from(k)) as u8;
         }
-        if !any {
-            mark(&mut img, to_px(map.home.center()), 2.0, Rgb([0, 90, 255]));
-        }
-        let r = (f64::from(px) / 150.0).clamp(1.5, 6.0);
-        for t in &map.treasures {
-            mark(&mut img, to_px(t.position), r, Rgb([230, 20, 20]));
+    };
+    let b = home.bounds();
+    let (a0, a1) = (frame.pixel_of(b.min), frame.pixel_of(b.max));
+    let (i0, i1) = (a0.0.floor().max(0.0) as u32, (a1.0.ceil().max(0.0) as u32).min(frame.w));
+    let (j0, j1) = (a1.1.floor().max(0.0) as u32, (a0.1.ceil().max(0.0) as u32).min(frame.h));
+    let mut any = false;
+    for j in j0..j1 {
+        for i in i0..i1 {
+            if home.contains(frame.pixel_center(i, j)) {
+                blend(img, i, j, [0, 90, 255]);
+                any = true;
+            }
         }
     }
-    Ok(img)
+    if !any {
+        mark(img, frame.pixel_of(home.center()), 2.0, Rgb([0, 90, 255]));
+    }
+}
+
+/// The treasures as red dots, sized to the picture.
+fn draw_treasures(img: &mut RgbImage, frame: &Frame, treasures: &[TreasureSpec]) {
+    let r = (f64::from(frame.px) / 150.0).clamp(1.5, 6.0);
+    for t in treasures {
+        mark(img, frame.pixel_of(t.position), r, Rgb([230, 20, 20]));
+    }
 }
 
 /// A filled dot of radius `r` pixels at pixel position `(x, y)` (y down).

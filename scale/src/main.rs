@@ -161,32 +161,55 @@ fn main() {
 }
 
 fn run(cli: &Cli) -> Result<()> {
-    let t0 = Instant::now();
-    let (name, scenario, csv_row) = match cli.scenario {
+    match cli.scenario {
         Scenario::Fig4 {
             ref out,
             quick,
             no_plots,
-        } => return fig4(out, quick, !no_plots),
+        } => fig4(out, quick, !no_plots),
         Scenario::Curves {
             ref out,
             max_robots,
             no_plots,
-        } => return curves::run(out, max_robots, !no_plots),
+        } => curves::run(out, max_robots, !no_plots),
         Scenario::AnyAngle {
             ref map,
             ref scen,
             queries,
             robot_radius_m,
             seed,
-        } => return any_angle(map, scen.as_deref(), queries, robot_radius_m, seed),
+        } => any_angle(map, scen.as_deref(), queries, robot_radius_m, seed),
         Scenario::NavGraph {
             ref map,
             queries,
             robot_radius_m,
             compare_cells,
             seed,
-        } => return nav_graph(map, queries, robot_radius_m, compare_cells, seed),
+        } => nav_graph(map, queries, robot_radius_m, compare_cells, seed),
+        Scenario::RandomWalk { .. } | Scenario::Swarm { .. } | Scenario::Kernel { .. } => time_scenario(cli),
+    }
+}
+
+/// Generate the map and robots of a timed scenario, time `cli.rounds` rounds on
+/// `cli.threads` workers, and print the measurement.
+fn time_scenario(cli: &Cli) -> Result<()> {
+    let t0 = Instant::now();
+    let (name, scenario, csv_row) = build_scenario(&cli.scenario)?;
+    let generate_s = t0.elapsed().as_secs_f64();
+    let mut m = measure(scenario, cli.rounds, cli.threads)?;
+    m.generate_s = generate_s;
+    if csv_row {
+        println!("{}", m.csv_row().join(","));
+        return Ok(());
+    }
+    print_measurement(name, &m);
+    Ok(())
+}
+
+/// A timed scenario with its generated map: its name, the scenario, and whether the
+/// measurement is printed as a CSV row.
+fn build_scenario(scenario: &Scenario) -> Result<(&'static str, sim_core::engine::Scenario, bool)> {
+    Ok(match *scenario {
         Scenario::RandomWalk {
             robots,
             side_m,
@@ -238,16 +261,10 @@ fn run(cli: &Cli) -> Result<()> {
             };
             ("kernel", kernel.scenario(&Kernel::map())?, false)
         }
-    };
-    let generate_s = t0.elapsed().as_secs_f64();
-    let mut m = measure(scenario, cli.rounds, cli.threads)?;
-    m.generate_s = generate_s;
-    if csv_row {
-        println!("{}", m.csv_row().join(","));
-        return Ok(());
-    }
-    print_measurement(name, &m);
-    Ok(())
+        Scenario::Fig4 { .. } | Scenario::Curves { .. } | Scenario::AnyAngle { .. } | Scenario::NavGraph { .. } => {
+            unreachable!("not a timed scenario")
+        }
+    })
 }
 
 /// The measurement as sentences: the run, where its rounds' time went, and its planning.

@@ -233,54 +233,23 @@ impl RerunObserver {
 
     /// A copy of what the world shows after this round.
     fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
+        let final_round = sim.round() >= sim.total_rounds();
+        World {
+            robots: robot_rows(sim),
+            treasures: treasure_rows(sim),
+            paths: planned_paths(sim),
+            links: report.map(|_| drawn_links(sim, self.opts.max_links)),
+            explored: self.explored_if_due(sim, final_round),
+            known: self.known_if_due(sim, final_round),
+            cell_m: sim.obstacles().grid().cell_m(),
+        }
+    }
+
+    /// The collective explored raster and its transform, every `explored_every` rounds and at
+    /// the final round (`None` in between).
+    fn explored_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<(rerun::Transform3D, rerun::Image)> {
         let round = sim.round();
-        let final_round = round >= sim.total_rounds();
-        let robots = sim
-            .robots()
-            .iter()
-            .map(|r| RobotRow {
-                id: r.id.get(),
-                type_index: r.type_index,
-                class: class_of(sim, r.type_index, r.alive),
-                alive: r.alive,
-                position: r.position,
-                z_m: sim.types()[r.type_index].radius_m as f32,
-                energy: r.energy,
-                action: r.last_action.0.name(),
-                outcome: r.last_action.1,
-                goal: r.goal,
-                load: r.load(),
-            })
-            .collect();
-        let treasures = sim
-            .treasures()
-            .iter()
-            .filter(|t| t.buried + t.loose > 0)
-            .map(|t| TreasureRow {
-                position: t.position,
-                remaining: t.buried + t.loose,
-                found: t.found_round.is_some(),
-            })
-            .collect();
-        let paths = sim
-            .robots()
-            .iter()
-            .filter(|r| r.alive && !r.path.is_empty())
-            .map(|r| {
-                let points = std::iter::once(to_2d(r.position))
-                    .chain(r.path.iter().map(|&p| to_2d(p)))
-                    .collect();
-                (r.type_index as u16, points)
-            })
-            .collect();
-        let links = report.map(|_| {
-            let pos = |id: u32| sim.robots().get(id as usize).map(|r| to_2d(r.position));
-            sample_links(sim.links(), sim.link_count(), self.opts.max_links)
-                .into_iter()
-                .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
-                .collect()
-        });
-        let explored = if final_round
+        if final_round
             || self
                 .last_explored_round
                 .is_none_or(|r| round >= r + self.opts.explored_every)
@@ -296,22 +265,19 @@ impl RerunObserver {
             ))
         } else {
             None
-        };
-        let known = match self.opts.known_every {
+        }
+    }
+
+    /// The changed known regions, every `known_every` rounds and at the final round (none in
+    /// between or when known regions are off).
+    fn known_if_due(&mut self, sim: &Simulation, final_round: bool) -> Vec<KnownRegion> {
+        let round = sim.round();
+        match self.opts.known_every {
             Some(every) if final_round || self.last_known_round.is_none_or(|r| round >= r + every) => {
                 self.last_known_round = Some(round);
                 self.changed_known_regions(sim)
             }
             _ => Vec::new(),
-        };
-        World {
-            robots,
-            treasures,
-            paths,
-            links,
-            explored,
-            known,
-            cell_m: sim.obstacles().grid().cell_m(),
         }
     }
 
@@ -462,6 +428,63 @@ struct KnownRegion {
     boxes: Vec<Aabb>,
     /// The robot of each box (empty for a per-robot entity).
     robots: Vec<u32>,
+}
+
+/// One row per robot: what the world shows of it.
+fn robot_rows(sim: &Simulation) -> Vec<RobotRow> {
+    sim.robots()
+        .iter()
+        .map(|r| RobotRow {
+            id: r.id.get(),
+            type_index: r.type_index,
+            class: class_of(sim, r.type_index, r.alive),
+            alive: r.alive,
+            position: r.position,
+            z_m: sim.types()[r.type_index].radius_m as f32,
+            energy: r.energy,
+            action: r.last_action.0.name(),
+            outcome: r.last_action.1,
+            goal: r.goal,
+            load: r.load(),
+        })
+        .collect()
+}
+
+/// One row per treasure with units left.
+fn treasure_rows(sim: &Simulation) -> Vec<TreasureRow> {
+    sim.treasures()
+        .iter()
+        .filter(|t| t.buried + t.loose > 0)
+        .map(|t| TreasureRow {
+            position: t.position,
+            remaining: t.buried + t.loose,
+            found: t.found_round.is_some(),
+        })
+        .collect()
+}
+
+/// The planned path of every live robot that has one: its class id and the 2D points from
+/// the robot along the path.
+fn planned_paths(sim: &Simulation) -> Vec<(u16, Vec<[f32; 2]>)> {
+    sim.robots()
+        .iter()
+        .filter(|r| r.alive && !r.path.is_empty())
+        .map(|r| {
+            let points = std::iter::once(to_2d(r.position))
+                .chain(r.path.iter().map(|&p| to_2d(p)))
+                .collect();
+            (r.type_index as u16, points)
+        })
+        .collect()
+}
+
+/// The 2D end points of at most `max` of the round's message links ([`sample_links`]).
+fn drawn_links(sim: &Simulation, max: usize) -> Vec<[[f32; 2]; 2]> {
+    let pos = |id: u32| sim.robots().get(id as usize).map(|r| to_2d(r.position));
+    sample_links(sim.links(), sim.link_count(), max)
+        .into_iter()
+        .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
+        .collect()
 }
 
 /// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread

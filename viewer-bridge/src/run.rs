@@ -170,94 +170,150 @@ impl std::fmt::Display for Summary {
 pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
     let started = Instant::now();
     let resumed = run.checkpoint.as_ref().and_then(|c| c.resume_from.as_deref());
+    let mut sim = build_simulation(run, registry, resumed)?;
+    let setup = started.elapsed();
+    let mut outputs = Outputs::open(run, &sim, resumed)?;
+    let pool = start_workers(run.threads)?;
+    let t0 = Instant::now();
+    let result = run_rounds(&mut sim, &pool, &mut outputs.observers(extra));
+    let elapsed = t0.elapsed();
+    // Whatever happened, keep the outputs of the rounds that were played.
+    outputs.keep(run, &sim)?;
+    result
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("run stopped at round {}", sim.round()))?;
+    Ok(outputs.summary(run, &sim, resumed, setup, elapsed))
+}
+
+/// The simulation of a run: continued from the checkpoint `resumed`, or set up from the config.
+fn build_simulation(run: &RunConfig, registry: &StrategyRegistry, resumed: Option<&Checkpoint>) -> Result<Simulation> {
     let sim = match resumed {
         Some(checkpoint) => checkpoint.resume(&run.config, registry)?,
         None => Simulation::new(run.config.scenario(registry)?)
             .with_context(|| format!("setting up {}", run.config.path.display()))?,
     };
-    let mut sim = sim.with_decide_limit(run.decide_limit);
-    let setup = started.elapsed();
-    let rows_before = resumed.map_or(&[][..], Checkpoint::metrics);
+    Ok(sim.with_decide_limit(run.decide_limit))
+}
 
-    let mut metrics = match &run.metrics {
-        Some(p) => Some(MetricsCsv::with_rows(
-            BufWriter::new(File::create(p).with_context(|| format!("cannot create metrics file {}", p.display()))?),
-            rows_before,
-        )?),
-        None => None,
-    };
-    let mut checkpoints = run
-        .checkpoint
-        .as_ref()
-        .map(|c| CheckpointWriter::new(c.path.clone(), c.every_rounds, c.source.clone(), rows_before.to_vec()));
-    let mut rerun = match &run.viewer {
-        Some(target) => Some(
-            RerunObserver::new(
-                crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?,
-                run.log,
-            )
-            // A file writer always catches up; a live viewer may be slow or paused.
-            .with_when_behind(match target {
-                ViewerTarget::Rrd(_) => WhenBehind::Wait,
-                ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => WhenBehind::SkipWorld,
-            }),
-        ),
-        None => None,
-    };
-    let mut progress = Progress::new(run.progress, sim.round(), sim.total_rounds());
-    let mut faults = Faults::default();
-    let mut observers: Vec<&mut dyn Observer> = vec![&mut faults];
-    if let Some(m) = metrics.as_mut() {
-        observers.push(m);
-    }
-    if let Some(c) = checkpoints.as_mut() {
-        observers.push(c);
-    }
-    observers.push(&mut progress);
-    if let Some(r) = rerun.as_mut() {
-        observers.push(r);
-    }
-    for o in extra.iter_mut() {
-        observers.push(&mut **o);
-    }
-
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(run.threads.unwrap_or(0))
+/// The worker threads of the decide phase (`None`: one per core).
+fn start_workers(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
         .build()
-        .context("cannot start worker threads")?;
-    let t0 = Instant::now();
-    let result = run_rounds(&mut sim, &pool, &mut observers);
-    let elapsed = t0.elapsed();
-    drop(observers);
-    // Whatever happened, keep the outputs of the rounds that were played.
-    if let Some(m) = metrics.as_mut() {
-        sim_core::io::Observer::on_finish(m, &sim).ok();
+        .context("cannot start worker threads")
+}
+
+/// The built-in observers of a run: its output files, its recording and what it tells the
+/// user. Fields drop in declaration order, so the recording is dropped before the files.
+struct Outputs {
+    faults: Faults,
+    progress: Progress,
+    rerun: Option<RerunObserver>,
+    checkpoints: Option<CheckpointWriter>,
+    metrics: Option<MetricsCsv<BufWriter<File>>>,
+}
+
+impl Outputs {
+    /// Open the outputs in this order: the metrics CSV (with the rows of the rounds before a
+    /// resumed checkpoint), the checkpoint writer, the recording, the progress bar.
+    fn open(run: &RunConfig, sim: &Simulation, resumed: Option<&Checkpoint>) -> Result<Self> {
+        let rows_before = resumed.map_or(&[][..], Checkpoint::metrics);
+        let metrics = match &run.metrics {
+            Some(p) => Some(MetricsCsv::with_rows(
+                BufWriter::new(File::create(p).with_context(|| format!("cannot create metrics file {}", p.display()))?),
+                rows_before,
+            )?),
+            None => None,
+        };
+        let checkpoints = run
+            .checkpoint
+            .as_ref()
+            .map(|c| CheckpointWriter::new(c.path.clone(), c.every_rounds, c.source.clone(), rows_before.to_vec()));
+        let rerun = match &run.viewer {
+            Some(target) => Some(open_recording(sim, target, run.log)?),
+            None => None,
+        };
+        Ok(Self {
+            faults: Faults::default(),
+            progress: Progress::new(run.progress, sim.round(), sim.total_rounds()),
+            rerun,
+            checkpoints,
+            metrics,
+        })
     }
-    if let Some(p) = &run.robot_stats {
-        let file = File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?;
-        write_robot_stats(&sim, BufWriter::new(file)).with_context(|| format!("writing {}", p.display()))?;
+
+    /// The observers in the order they are called: the built-in ones, then `extra`.
+    fn observers<'a>(&'a mut self, extra: &'a mut [&mut dyn Observer]) -> Vec<&'a mut dyn Observer> {
+        let mut observers: Vec<&mut dyn Observer> = vec![&mut self.faults];
+        if let Some(m) = self.metrics.as_mut() {
+            observers.push(m);
+        }
+        if let Some(c) = self.checkpoints.as_mut() {
+            observers.push(c);
+        }
+        observers.push(&mut self.progress);
+        if let Some(r) = self.rerun.as_mut() {
+            observers.push(r);
+        }
+        for o in extra.iter_mut() {
+            observers.push(&mut **o);
+        }
+        observers
     }
-    result
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("run stopped at round {}", sim.round()))?;
-    Ok(Summary {
-        name: sim.name().to_owned(),
-        rounds: sim.round(),
-        resumed_at: resumed.map(Checkpoint::round),
-        robots: sim.robots().len(),
-        metrics: sim.report().metrics,
-        digest: sim.positions_digest(),
-        elapsed,
-        setup,
-        recording: rerun.zip(run.viewer.clone()).map(|(r, target)| RecordingSummary {
-            target,
-            logged_rounds: r.logged_rounds(),
-            skipped_rounds: r.skipped_rounds(),
-            sim_thread: r.busy(),
-            logging_thread: r.worker_busy(),
-        }),
-        slow_decisions: (faults.slow, faults.slowest),
-    })
+
+    /// Flush the metrics CSV and write the robot statistics, whether or not the rounds ended
+    /// well, so the rounds that were played are kept.
+    fn keep(&mut self, run: &RunConfig, sim: &Simulation) -> Result<()> {
+        if let Some(m) = self.metrics.as_mut() {
+            sim_core::io::Observer::on_finish(m, sim).ok();
+        }
+        if let Some(p) = &run.robot_stats {
+            let file = File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?;
+            write_robot_stats(sim, BufWriter::new(file)).with_context(|| format!("writing {}", p.display()))?;
+        }
+        Ok(())
+    }
+
+    /// What the finished run reports; `setup` and `elapsed` are the wall times of set-up and
+    /// of the rounds.
+    fn summary(
+        self,
+        run: &RunConfig,
+        sim: &Simulation,
+        resumed: Option<&Checkpoint>,
+        setup: Duration,
+        elapsed: Duration,
+    ) -> Summary {
+        Summary {
+            name: sim.name().to_owned(),
+            rounds: sim.round(),
+            resumed_at: resumed.map(Checkpoint::round),
+            robots: sim.robots().len(),
+            metrics: sim.report().metrics,
+            digest: sim.positions_digest(),
+            elapsed,
+            setup,
+            recording: self.rerun.zip(run.viewer.clone()).map(|(r, target)| RecordingSummary {
+                target,
+                logged_rounds: r.logged_rounds(),
+                skipped_rounds: r.skipped_rounds(),
+                sim_thread: r.busy(),
+                logging_thread: r.worker_busy(),
+            }),
+            slow_decisions: (self.faults.slow, self.faults.slowest),
+        }
+    }
+}
+
+/// The Rerun recording of `sim` at `target`, logging what `log` asks for.
+fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) -> Result<RerunObserver> {
+    let rec = crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?;
+    // A file writer always catches up; a live viewer may be slow or paused.
+    let when_behind = match target {
+        ViewerTarget::Rrd(_) => WhenBehind::Wait,
+        ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => WhenBehind::SkipWorld,
+    };
+    Ok(RerunObserver::new(rec, log).with_when_behind(when_behind))
 }
 
 /// Tells the user, on stderr, about robots whose strategy failed or was slow (the first

@@ -288,101 +288,133 @@ fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) 
 
 fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
-        Command::Generate(args) => {
-            let obstacles = generate(&args)?;
-            let map = with_placement(obstacles, &args.place)?;
-            save(&map, &args.output)?;
-        }
-        Command::Import(args) => {
-            let opts = ImportOptions {
-                resolution_m: args.resolution_m,
-                threshold: args.threshold,
-                invert: args.invert,
-                unknown: match args.unknown {
-                    UnknownArg::Blocked => Unknown::Blocked,
-                    UnknownArg::Free => Unknown::Free,
-                },
-                origin: args.origin,
-            };
-            let obstacles = editor::import::import(&args.file, &opts)?;
-            let map = with_placement(obstacles, &args.place)?;
-            save(&map, &args.output)?;
-        }
-        Command::Compose { scene, output } => {
-            let map = editor::compose::compose_file(&scene)?;
-            save(&map, &output)?;
-        }
+        Command::Generate(args) => generate_map(&args),
+        Command::Import(args) => import_map(&args),
+        Command::Compose { scene, output } => compose_map(&scene, &output),
         Command::Place {
             map: path,
             place,
             output,
-        } => {
-            let mut map = load(&path)?;
-            editor::place::place(&mut map, &place.options(false))?;
-            save(&map, &output)?;
-        }
-        Command::Validate { map: path } => {
-            let map = load(&path)?;
-            let problems = editor::validate::validate(&map);
-            if problems.is_empty() {
-                println!("{}: ok", path.display());
-            } else {
-                for p in &problems {
-                    println!("{}: {p}", path.display());
-                }
-                eprintln!("{}: {} problem(s)", path.display(), problems.len());
-                return Ok(ExitCode::from(1));
-            }
-        }
-        Command::Stats { map: path, json } => {
-            let bytes = std::fs::metadata(&path)
-                .with_context(|| format!("cannot read {}", path.display()))?
-                .len();
-            let map = load(&path)?;
-            let s = editor::stats::stats(&map, bytes);
-            if json {
-                println!("{}", serde_json::to_string_pretty(&s)?);
-            } else {
-                println!("{s}");
-            }
-        }
+        } => place_on_map(&path, &place, &output),
+        Command::Validate { map: path } => validate_map(&path),
+        Command::Stats { map: path, json } => print_stats(&path, json),
         Command::Path {
             map: path,
             from,
             to,
             robot_radius_m,
             json,
-        } => {
-            let map = load(&path)?;
-            let found = editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)
-                .with_context(|| format!("{}: cannot plan paths", path.display()))?;
-            match found {
-                Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
-                Ok(report) => print!("{report}"),
-                Err(no_path) => {
-                    eprintln!("{}: no path: {no_path}", path.display());
-                    return Ok(ExitCode::from(1));
-                }
-            }
-        }
+        } => print_path(&path, from, to, robot_radius_m, json),
         Command::Preview {
             map: path,
             output,
             px,
             obstacles_only,
-        } => {
-            let map = load(&path)?;
-            let img = editor::preview::render(
-                &map,
-                &PreviewOptions {
-                    px,
-                    overlays: !obstacles_only,
-                },
-            )?;
-            editor::preview::write_png(&img, &output)?;
-            eprintln!("wrote {} ({} × {} px)", output.display(), img.width(), img.height());
+        } => draw_preview(&path, &output, px, obstacles_only),
+    }
+}
+
+/// `generate`: generate the obstacles, place the home base and treasures, and save the map.
+fn generate_map(args: &GenerateArgs) -> Result<ExitCode> {
+    let obstacles = generate(args)?;
+    let map = with_placement(obstacles, &args.place)?;
+    save(&map, &args.output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `import`: import the obstacles from a file, place the home base and treasures, and save
+/// the map.
+fn import_map(args: &ImportArgs) -> Result<ExitCode> {
+    let opts = ImportOptions {
+        resolution_m: args.resolution_m,
+        threshold: args.threshold,
+        invert: args.invert,
+        unknown: match args.unknown {
+            UnknownArg::Blocked => Unknown::Blocked,
+            UnknownArg::Free => Unknown::Free,
+        },
+        origin: args.origin,
+    };
+    let obstacles = editor::import::import(&args.file, &opts)?;
+    let map = with_placement(obstacles, &args.place)?;
+    save(&map, &args.output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `compose`: build the map of an XML scene and save it.
+fn compose_map(scene: &Path, output: &Path) -> Result<ExitCode> {
+    let map = editor::compose::compose_file(scene)?;
+    save(&map, output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `place`: set the home base and treasures of the map at `path` and save it to `output`.
+fn place_on_map(path: &Path, place: &PlaceArgs, output: &Path) -> Result<ExitCode> {
+    let mut map = load(path)?;
+    editor::place::place(&mut map, &place.options(false))?;
+    save(&map, output)?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `validate`: print "ok" or every problem of the map; exit status 1 when there are problems.
+fn validate_map(path: &Path) -> Result<ExitCode> {
+    let map = load(path)?;
+    let problems = editor::validate::validate(&map);
+    if problems.is_empty() {
+        println!("{}: ok", path.display());
+    } else {
+        for p in &problems {
+            println!("{}: {p}", path.display());
+        }
+        eprintln!("{}: {} problem(s)", path.display(), problems.len());
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `stats`: print the map's figures, as text or JSON.
+fn print_stats(path: &Path, json: bool) -> Result<ExitCode> {
+    let bytes = std::fs::metadata(path)
+        .with_context(|| format!("cannot read {}", path.display()))?
+        .len();
+    let map = load(path)?;
+    let s = editor::stats::stats(&map, bytes);
+    if json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+    } else {
+        println!("{s}");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `path`: print the shortest path from `from` to `to`; exit status 1 when there is none.
+fn print_path(path: &Path, from: DVec2, to: DVec2, robot_radius_m: f64, json: bool) -> Result<ExitCode> {
+    let map = load(path)?;
+    let found = editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)
+        .with_context(|| format!("{}: cannot plan paths", path.display()))?;
+    match found {
+        Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
+        Ok(report) => print!("{report}"),
+        Err(no_path) => {
+            eprintln!("{}: no path: {no_path}", path.display());
+            return Ok(ExitCode::from(1));
         }
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `preview`: draw the map (or its obstacles only) as a PNG at `output`.
+fn draw_preview(path: &Path, output: &Path, px: Option<u32>, obstacles_only: bool) -> Result<ExitCode> {
+    let map = load(path)?;
+    let img = editor::preview::render(
+        &map,
+        &PreviewOptions {
+            px,
+            overlays: !obstacles_only,
+        },
+    )?;
+    editor::preview::write_png(&img, output)?;
+    eprintln!("wrote {} ({} × {} px)", output.display(), img.width(), img.height());
     Ok(ExitCode::SUCCESS)
 }
 

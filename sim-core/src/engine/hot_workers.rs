@@ -161,7 +161,9 @@ mod tests {
                 let got = pool.install(|| with_hot_workers(nested_sums));
                 let polled = POLLED_JOBS.load(Ordering::Relaxed) - polled_before;
                 assert_eq!(got, want, "{threads} threads");
-                if threads > 1 && cores > 1 {
+                // With a core for each, the pool's one other worker is the poller: it takes
+                // part. (With more threads than cores, sleeping workers may take every job.)
+                if threads == 2 && cores >= 2 {
                     assert!(polled > 0, "{threads} threads: the poller ran no job");
                 }
                 a_panic_reaches_the_caller(threads);

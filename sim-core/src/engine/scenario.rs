@@ -142,52 +142,114 @@ impl ScenarioBuilder {
             name: groups[index].name.clone(),
             message,
         };
-        let obstacles = &map.obstacles;
         let max_radius_m = types.iter().map(|t| t.radius_m).fold(0.0, f64::max);
+        let roster = Roster {
+            map: &map,
+            types: &types,
+            groups: &groups,
+            error: &group_error,
+        };
         // Room first, before anything is built for each robot: a crowd that cannot fit is
         // refused at once, whatever its size.
+        let wanted = roster.starts()?;
+        let total = check_room(&wanted.demand, &map.obstacles, max_radius_m, &group_error)?;
+        let robots = roster.robots(registry, &wanted.centres, total, max_radius_m)?;
+        Ok(Scenario {
+            name,
+            map,
+            seed,
+            rounds,
+            types,
+            groups,
+            strategies: robots.strategies,
+            starts: robots.starts,
+            max_radius_m,
+        })
+    }
+}
+
+/// The groups being built, with what they are checked against: the map, the robot types,
+/// and how to report an error that a group causes.
+struct Roster<'a> {
+    map: &'a MapData,
+    types: &'a [RobotType],
+    groups: &'a [Group],
+    error: &'a dyn Fn(usize, String) -> Error,
+}
+
+/// Where the groups start: each group's start point, and the robots wanted around each
+/// distinct start (start, robots, first group starting there).
+struct Starts {
+    centres: Vec<DVec2>,
+    demand: Vec<(DVec2, u64, usize)>,
+}
+
+/// Every robot's strategy and start position, in id order.
+struct Robots {
+    strategies: Vec<Box<dyn Strategy>>,
+    starts: Vec<DVec2>,
+}
+
+impl Roster<'_> {
+    /// Check each group's type and start point, and add up the robots wanted around each
+    /// distinct start.
+    fn starts(&self) -> Result<Starts> {
         let mut demand: Vec<(DVec2, u64, usize)> = Vec::new();
         // Each group's start point, checked once here and used again for placement.
-        let mut centres = Vec::with_capacity(groups.len());
-        for (gi, g) in groups.iter().enumerate() {
-            let kind = types
-                .get(g.type_index)
-                .ok_or_else(|| group_error(gi, format!("refers to robot type #{} of {}", g.type_index, types.len())))?;
-            let at = match g.start {
-                Start::Home => map.home.center(),
-                Start::At(p) => {
-                    if !obstacles.is_disc_free(p, kind.radius_m) {
-                        return Err(group_error(
-                            gi,
-                            format!(
-                                "starts at ({}, {}), which is inside an obstacle or outside the map",
-                                p.x, p.y
-                            ),
-                        ));
-                    }
-                    p
-                }
-            };
+        let mut centres = Vec::with_capacity(self.groups.len());
+        for (gi, g) in self.groups.iter().enumerate() {
+            let kind = self.types.get(g.type_index).ok_or_else(|| {
+                (self.error)(
+                    gi,
+                    format!("refers to robot type #{} of {}", g.type_index, self.types.len()),
+                )
+            })?;
+            let at = self.start_point(gi, kind)?;
             centres.push(at);
             match demand.iter_mut().find(|d| d.0 == at) {
                 Some(d) => d.1 += u64::from(g.count),
                 None => demand.push((at, u64::from(g.count), gi)),
             }
         }
-        let total = check_room(&demand, obstacles, max_radius_m, &group_error)?;
-        let mut placer = Placer::new(obstacles, lattice_spacing(max_radius_m));
+        Ok(Starts { centres, demand })
+    }
+
+    /// Group `gi`'s start point, for robots of type `kind`: the home base centre, or its own
+    /// point if a robot fits there.
+    fn start_point(&self, gi: usize, kind: &RobotType) -> Result<DVec2> {
+        match self.groups[gi].start {
+            Start::Home => Ok(self.map.home.center()),
+            Start::At(p) => {
+                if !self.map.obstacles.is_disc_free(p, kind.radius_m) {
+                    return Err((self.error)(
+                        gi,
+                        format!(
+                            "starts at ({}, {}), which is inside an obstacle or outside the map",
+                            p.x, p.y
+                        ),
+                    ));
+                }
+                Ok(p)
+            }
+        }
+    }
+
+    /// Create every robot's strategy and place it on the start lattice near its group's
+    /// start (`centres`, one per group), group by group and robot by robot.
+    fn robots(&self, registry: &StrategyRegistry, centres: &[DVec2], total: u64, max_radius_m: f64) -> Result<Robots> {
+        let mut placer = Placer::new(&self.map.obstacles, lattice_spacing(max_radius_m));
         let mut strategies = Vec::with_capacity(total as usize);
         let mut starts = Vec::with_capacity(total as usize);
-        for (gi, (g, &at)) in groups.iter().zip(&centres).enumerate() {
-            let kind = &types[g.type_index];
+        for (gi, (g, &at)) in self.groups.iter().zip(centres).enumerate() {
+            let kind = &self.types[g.type_index];
             for k in 0..g.count {
                 strategies.push(
                     registry
                         .create(&g.strategy, &g.params)
-                        .map_err(|e| group_error(gi, e.to_string()))?,
+                        .map_err(|e| (self.error)(gi, e.to_string()))?,
                 );
                 let position = placer.next_near(at, kind.radius_m).ok_or_else(|| {
-                    group_error(
+                    (self.error)(
                         gi,
                         format!(
                             "only {k} of its {} robots fit near ({}, {}): no free room for more",
@@ -198,17 +260,7 @@ impl ScenarioBuilder {
                 starts.push(position);
             }
         }
-        Ok(Scenario {
-            name,
-            map,
-            seed,
-            rounds,
-            types,
-            groups,
-            strategies,
-            starts,
-            max_radius_m,
-        })
+        Ok(Robots { strategies, starts })
     }
 }
 

@@ -13,7 +13,7 @@ use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, RobotRng, Strategy};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
-    BlockMemo, CellSet, Disc, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
+    BlockMemo, CellSet, Disc, Grid, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
     TreasureIndex,
 };
 use crate::world::{Action, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
@@ -247,118 +247,18 @@ pub struct PhaseTimes {
 impl Simulation {
     /// Set up a run of a validated scenario: place the robots where the scenario put them,
     /// hand each its strategy, build the indexes and the navigation graph.
-    #[allow(clippy::too_many_lines)] // The set-up's steps in order; split, they would only pass the parts around.
     pub fn new(scenario: Scenario) -> Result<Self> {
-        let ScenarioParts {
-            name,
-            map,
-            seed,
-            rounds,
-            types,
-            groups,
-            strategies,
-            starts,
-            max_radius_m,
-        } = scenario.into_parts();
-        let obstacles = &map.obstacles;
-        let grid = *obstacles.grid();
-        let mut treasure_index = TreasureIndex::new(grid.extent())?;
-        let mut treasures = Vec::with_capacity(map.treasures.len());
-        for t in &map.treasures {
-            let id = treasure_index.insert(t.position, t.quantity)?;
-            treasures.push(TreasureState {
-                id,
-                position: t.position,
-                initial: t.quantity,
-                buried: t.quantity,
-                loose: 0,
-                delivered: 0,
-                found_round: None,
-            });
-        }
-        let max_speed_m = types.iter().map(|t| t.speed_m_per_round).fold(0.0, f64::max);
-        let mut robots = Vec::with_capacity(starts.len());
-        let mut agents = Vec::with_capacity(starts.len());
-        let mut strategies = strategies.into_iter();
-        let mut starts = starts.into_iter();
-        for (gi, g) in groups.iter().enumerate() {
-            let kind = &types[g.type_index];
-            for _ in 0..g.count {
-                let (Some(strategy), Some(position)) = (strategies.next(), starts.next()) else {
-                    unreachable!("a scenario has a strategy and a start for every robot");
-                };
-                let id = RobotId::new(robots.len() as u32);
-                let needs = strategy.needs();
-                let (tr, rr) = strategy.retention();
-                robots.push(Robot::new(id, g.type_index, gi, position, kind));
-                agents.push(Agent {
-                    strategy,
-                    needs,
-                    mind: Mind::new(DataModule::new(needs.known_map.then(|| KnownMap::new(grid)), tr, rr)),
-                    action: Action::Idle,
-                    merged_from: HashMap::default(),
-                    planned_move: None,
-                    planned_near: Vec::new(),
-                    hearers: Vec::new(),
-                    failure: None,
-                });
-            }
-        }
-        let total_free_cells = obstacles.tree().count_cells(false);
-        let n = robots.len();
-        let radio_limited = types.iter().any(|t| t.radio_bytes_per_round < u64::MAX);
-        let robot_index_eager = agents.iter().any(|a| a.needs.robots);
-        let mut sim = Self {
-            name,
-            seed,
-            strategies_failed: 0,
-            decide_limit: Some(DEFAULT_DECIDE_LIMIT),
-            time_planning: false,
-            resolve_alone: true,
-            phase_times: PhaseTimes::default(),
-            rounds,
-            round: 0,
-            nav: LazyNavGraph::new(),
-            types: types.into(),
-            groups,
-            type_of: robots.iter().map(|r| r.type_index).collect(),
+        let mut parts = scenario.into_parts();
+        let (treasures, treasure_index) = place_treasures(&parts.map)?;
+        let (robots, agents) = place_robots(&mut parts);
+        let placed = Placed {
             robots,
             agents,
             treasures,
             treasure_index,
-            // Both visit robots in an order nothing depends on (perception and hearers are
-            // sorted by id, contact lists only asked whether anyone overlaps).
-            robot_index: RobotIndex::dense_when_compact(),
-            robot_index_eager,
-            turns: vec![Turn::default(); n],
-            inboxes_held: false,
-            body_index: RobotIndex::dense_when_compact(),
-            mailbag: Vec::new(),
-            inboxes: vec![Vec::new(); n],
-            fanout: Vec::new(),
-            step3_robots: Vec::new(),
-            explored: KnownMap::new(grid),
-            explored_free_cells: 0,
-            explored_views: vec![None; n],
-            explored_fresh: Vec::new(),
-            explored_memo: BlockMemo::default(),
-            total_free_cells,
-            report: RoundReport::default(),
-            max_radius_m,
-            max_speed_m,
-            radio_limited,
-            outgoing: Vec::new(),
-            near_scratch: Vec::new(),
-            bodies_now: vec![(DVec2::ZERO, 0.0); n],
-            map,
         };
-        sim.rebuild_robot_indexes();
-        // Strategies that plan routes would build the graph in their first round; build it
-        // here instead, so that set-up time is set-up time. Without them it is never built.
-        if sim.agents.iter().any(|a| a.needs.obstacles) {
-            sim.nav.get_or_build(&sim.map.obstacles);
-        }
-        sim.report.metrics = sim.metrics(0, 0, 0, sim.robot_memory_bytes());
+        let mut sim = Self::assemble(parts, placed);
+        sim.prepare_first_round();
         Ok(sim)
     }
 
@@ -572,6 +472,141 @@ impl Simulation {
             x ^= x >> 31;
         }
         x
+    }
+}
+
+/// A scenario's robots, agents and treasures, placed for the start of a run.
+struct Placed {
+    robots: Vec<Robot>,
+    agents: Vec<Agent>,
+    treasures: Vec<TreasureState>,
+    treasure_index: TreasureIndex,
+}
+
+/// The map's treasures as run state, indexed by position, with ids in the map's order.
+fn place_treasures(map: &MapData) -> Result<(Vec<TreasureState>, TreasureIndex)> {
+    let mut treasure_index = TreasureIndex::new(map.obstacles.grid().extent())?;
+    let mut treasures = Vec::with_capacity(map.treasures.len());
+    for t in &map.treasures {
+        let id = treasure_index.insert(t.position, t.quantity)?;
+        treasures.push(TreasureState {
+            id,
+            position: t.position,
+            initial: t.quantity,
+            buried: t.quantity,
+            loose: 0,
+            delivered: 0,
+            found_round: None,
+        });
+    }
+    Ok((treasures, treasure_index))
+}
+
+/// The scenario's robots at their starts, group by group, each with an agent holding its
+/// strategy (the strategies and starts are taken out of `parts`).
+fn place_robots(parts: &mut ScenarioParts) -> (Vec<Robot>, Vec<Agent>) {
+    let grid = *parts.map.obstacles.grid();
+    let mut robots = Vec::with_capacity(parts.starts.len());
+    let mut agents = Vec::with_capacity(parts.starts.len());
+    let mut strategies = std::mem::take(&mut parts.strategies).into_iter();
+    let mut starts = std::mem::take(&mut parts.starts).into_iter();
+    for (gi, g) in parts.groups.iter().enumerate() {
+        let kind = &parts.types[g.type_index];
+        for _ in 0..g.count {
+            let (Some(strategy), Some(position)) = (strategies.next(), starts.next()) else {
+                unreachable!("a scenario has a strategy and a start for every robot");
+            };
+            let id = RobotId::new(robots.len() as u32);
+            robots.push(Robot::new(id, g.type_index, gi, position, kind));
+            agents.push(new_agent(strategy, grid));
+        }
+    }
+    (robots, agents)
+}
+
+/// A robot's agent before its first round: its strategy, with a data module that keeps a
+/// known map if the strategy needs one.
+fn new_agent(strategy: Box<dyn Strategy>, grid: Grid) -> Agent {
+    let needs = strategy.needs();
+    let (tr, rr) = strategy.retention();
+    Agent {
+        strategy,
+        needs,
+        mind: Mind::new(DataModule::new(needs.known_map.then(|| KnownMap::new(grid)), tr, rr)),
+        action: Action::Idle,
+        merged_from: HashMap::default(),
+        planned_move: None,
+        planned_near: Vec::new(),
+        hearers: Vec::new(),
+        failure: None,
+    }
+}
+
+impl Simulation {
+    /// The simulation around the placed robots and treasures, before its first round.
+    fn assemble(parts: ScenarioParts, placed: Placed) -> Self {
+        let grid = *parts.map.obstacles.grid();
+        let n = placed.robots.len();
+        let total_free_cells = parts.map.obstacles.tree().count_cells(false);
+        let max_speed_m = parts.types.iter().map(|t| t.speed_m_per_round).fold(0.0, f64::max);
+        let radio_limited = parts.types.iter().any(|t| t.radio_bytes_per_round < u64::MAX);
+        let robot_index_eager = placed.agents.iter().any(|a| a.needs.robots);
+        Self {
+            name: parts.name,
+            seed: parts.seed,
+            strategies_failed: 0,
+            decide_limit: Some(DEFAULT_DECIDE_LIMIT),
+            time_planning: false,
+            resolve_alone: true,
+            phase_times: PhaseTimes::default(),
+            rounds: parts.rounds,
+            round: 0,
+            nav: LazyNavGraph::new(),
+            types: parts.types.into(),
+            groups: parts.groups,
+            type_of: placed.robots.iter().map(|r| r.type_index).collect(),
+            robots: placed.robots,
+            agents: placed.agents,
+            treasures: placed.treasures,
+            treasure_index: placed.treasure_index,
+            // Both visit robots in an order nothing depends on (perception and hearers are
+            // sorted by id, contact lists only asked whether anyone overlaps).
+            robot_index: RobotIndex::dense_when_compact(),
+            robot_index_eager,
+            turns: vec![Turn::default(); n],
+            inboxes_held: false,
+            body_index: RobotIndex::dense_when_compact(),
+            mailbag: Vec::new(),
+            inboxes: vec![Vec::new(); n],
+            fanout: Vec::new(),
+            step3_robots: Vec::new(),
+            explored: KnownMap::new(grid),
+            explored_free_cells: 0,
+            explored_views: vec![None; n],
+            explored_fresh: Vec::new(),
+            explored_memo: BlockMemo::default(),
+            total_free_cells,
+            report: RoundReport::default(),
+            max_radius_m: parts.max_radius_m,
+            max_speed_m,
+            radio_limited,
+            outgoing: Vec::new(),
+            near_scratch: Vec::new(),
+            bodies_now: vec![(DVec2::ZERO, 0.0); n],
+            map: parts.map,
+        }
+    }
+
+    /// Ready the run for its first round: index the robots, build the navigation graph if a
+    /// strategy plans routes, and report the metrics of the starting state.
+    fn prepare_first_round(&mut self) {
+        self.rebuild_robot_indexes();
+        // Strategies that plan routes would build the graph in their first round; build it
+        // here instead, so that set-up time is set-up time. Without them it is never built.
+        if self.agents.iter().any(|a| a.needs.obstacles) {
+            self.nav.get_or_build(&self.map.obstacles);
+        }
+        self.report.metrics = self.metrics(0, 0, 0, self.robot_memory_bytes());
     }
 }
 

@@ -835,29 +835,65 @@ pub fn merge(parts: &[PathBuf], output: &Path) -> Result<MergeSummary> {
     if parts.is_empty() {
         return Err(Error::InvalidParameter("nothing to merge: no part files given".into()));
     }
-    let mut header: Option<(csv::StringRecord, &Path)> = None;
-    let mut rows: Vec<(usize, csv::StringRecord)> = Vec::new();
-    let mut owner: BTreeMap<usize, &Path> = BTreeMap::new();
+    let mut read = MergeInput::default();
     for path in parts {
-        let at = |line: u64, message: String| Error::Config {
-            path: path.clone(),
-            line: usize::try_from(line).unwrap_or(0),
-            column: 1,
-            message,
-        };
+        read.add_part(path)?;
+    }
+    // Stable: rows of a run keep their order (rounds).
+    read.rows.sort_by_key(|(run, _)| *run);
+    let (header, _) = read.header.expect("at least one part");
+
+    let merged_manifest = merged_manifest(parts, &read.owner)?;
+
+    write_merged_csv(output, &header, &read.rows)?;
+    let runs_total = merged_manifest.as_ref().map(|m| m.runs_total);
+    if let Some(m) = &merged_manifest {
+        write_manifest(&manifest_path(output), m)?;
+    }
+    Ok(MergeSummary {
+        runs: read.owner.len(),
+        rows: read.rows.len(),
+        runs_total,
+    })
+}
+
+/// The parts of a merge read so far: the first part's header and path, every row with its
+/// run, and the part that holds each run.
+#[derive(Default)]
+struct MergeInput<'a> {
+    header: Option<(csv::StringRecord, &'a Path)>,
+    rows: Vec<(usize, csv::StringRecord)>,
+    owner: BTreeMap<usize, &'a Path>,
+}
+
+impl<'a> MergeInput<'a> {
+    /// Read the part at `path`: check its header, then take its rows.
+    fn add_part(&mut self, path: &'a Path) -> Result<()> {
         let file = std::fs::File::open(path).map_err(io_error(path))?;
         let mut reader = csv::ReaderBuilder::new().from_reader(std::io::BufReader::new(file));
         let h = reader
             .headers()
-            .map_err(|e| at(1, format!("not a sweep CSV: {e}")))?
+            .map_err(|e| part_error(path, 1, format!("not a sweep CSV: {e}")))?
             .clone();
+        self.check_header(h, path)?;
+        self.take_rows(&mut reader, path)
+    }
+
+    /// Check a part's header `h`: a sweep CSV's, with the same columns as the first part's
+    /// (which it becomes if this part is the first).
+    fn check_header(&mut self, h: csv::StringRecord, path: &'a Path) -> Result<()> {
         if h.get(0) != Some("run") {
-            return Err(at(1, "not a sweep CSV: the first column must be 'run'".into()));
+            return Err(part_error(
+                path,
+                1,
+                "not a sweep CSV: the first column must be 'run'".into(),
+            ));
         }
-        match &header {
-            None => header = Some((h, path)),
+        match &self.header {
+            None => self.header = Some((h, path)),
             Some((first, first_path)) if *first != h => {
-                return Err(at(
+                return Err(part_error(
+                    path,
                     1,
                     format!(
                         "its columns differ from those of {} (parts of different sweeps?)",
@@ -867,54 +903,65 @@ pub fn merge(parts: &[PathBuf], output: &Path) -> Result<MergeSummary> {
             }
             Some(_) => {}
         }
+        Ok(())
+    }
+
+    /// Take the rows of the part at `path`, refusing a run that an earlier part also holds.
+    fn take_rows(&mut self, reader: &mut csv::Reader<std::io::BufReader<std::fs::File>>, path: &'a Path) -> Result<()> {
         let mut seen_here = BTreeSet::new();
         for record in reader.records() {
             let record = record.map_err(|e| {
-                at(
+                part_error(
+                    path,
                     e.position().map_or(0, csv::Position::line),
                     format!("malformed CSV: {e}"),
                 )
             })?;
             let line = record.position().map_or(0, csv::Position::line);
             let run: usize = record.get(0).and_then(|r| r.parse().ok()).ok_or_else(|| {
-                at(
+                part_error(
+                    path,
                     line,
                     format!("run must be a whole number, got '{}'", record.get(0).unwrap_or("")),
                 )
             })?;
             if seen_here.insert(run)
-                && let Some(other) = owner.insert(run, path)
+                && let Some(other) = self.owner.insert(run, path)
             {
-                return Err(at(line, format!("run {run} is also in {}", other.display())));
+                return Err(part_error(
+                    path,
+                    line,
+                    format!("run {run} is also in {}", other.display()),
+                ));
             }
-            rows.push((run, record));
+            self.rows.push((run, record));
         }
+        Ok(())
     }
-    // Stable: rows of a run keep their order (rounds).
-    rows.sort_by_key(|(run, _)| *run);
-    let (header, _) = header.expect("at least one part");
+}
 
-    let merged_manifest = merged_manifest(parts, &owner)?;
+/// An error in the part at `path`, at `line` (0 if unknown).
+fn part_error(path: &Path, line: u64, message: String) -> Error {
+    Error::Config {
+        path: path.to_path_buf(),
+        line: usize::try_from(line).unwrap_or(0),
+        column: 1,
+        message,
+    }
+}
 
+/// Write the merged CSV to `output`: the header, then every row in the order given.
+fn write_merged_csv(output: &Path, header: &csv::StringRecord, rows: &[(usize, csv::StringRecord)]) -> Result<()> {
     let mut out = csv::Writer::from_writer(Vec::new());
     let write_error = |e: csv::Error| Error::Malformed(format!("{}: writing CSV: {e}", output.display()));
-    out.write_record(&header).map_err(write_error)?;
-    for (_, record) in &rows {
+    out.write_record(header).map_err(write_error)?;
+    for (_, record) in rows {
         out.write_record(record).map_err(write_error)?;
     }
     let bytes = out
         .into_inner()
         .map_err(|e| Error::Malformed(format!("{}: writing CSV: {}", output.display(), e.error())))?;
-    write_atomically(output, &bytes)?;
-    let runs_total = merged_manifest.as_ref().map(|m| m.runs_total);
-    if let Some(m) = &merged_manifest {
-        write_manifest(&manifest_path(output), m)?;
-    }
-    Ok(MergeSummary {
-        runs: owner.len(),
-        rows: rows.len(),
-        runs_total,
-    })
+    write_atomically(output, &bytes)
 }
 
 #[cfg(test)]

@@ -177,82 +177,13 @@ impl MapData {
     /// Decode bytes read from `path` (the path only names the source in errors).
     pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self> {
         let mut r = Reader { bytes, pos: 0, path };
-        let magic = r.take(8, "magic")?;
-        if magic != MAGIC {
-            return Err(r.error_at(0, "not a Smart Teams map file (wrong magic)"));
-        }
-        let version = r.u16("version")?;
-        if version != VERSION {
-            return Err(r.error_at(
-                8,
-                format!("unsupported format version {version} (this build reads version {VERSION})"),
-            ));
-        }
-        let flags = r.u16("flags")?;
-        if flags != 0 {
-            return Err(r.error_at(10, format!("unknown flags {flags:#06x}")));
-        }
-        let (ox, oy, cell) = (r.f64("origin x")?, r.f64("origin y")?, r.f64("cell size")?);
-        let (w, h) = (r.u32("width")?, r.u32("height")?);
-        let grid = Grid::new(DVec2::new(ox, oy), cell, w, h).map_err(|e| r.error_at(12, format!("bad header: {e}")))?;
+        let grid = r.header()?;
         let home_at = r.pos;
-        let home = match r.u8("home kind")? {
-            0 => HomeBase::Disc {
-                center: DVec2::new(r.f64("home x")?, r.f64("home y")?),
-                radius_m: r.f64("home radius")?,
-            },
-            1 => HomeBase::Rect(Aabb {
-                min: DVec2::new(r.f64("home min x")?, r.f64("home min y")?),
-                max: DVec2::new(r.f64("home max x")?, r.f64("home max y")?),
-            }),
-            k => return Err(r.error_at(home_at, format!("unknown home base kind {k}"))),
-        };
-        let count_at = r.pos;
-        let count = r.u32("treasure count")? as usize;
-        if count > r.remaining() / 20 {
-            return Err(r.error_at(
-                count_at,
-                format!("claims {count} treasures but only {} bytes follow", r.remaining()),
-            ));
-        }
-        let mut treasures = Vec::with_capacity(count);
-        for _ in 0..count {
-            let position = DVec2::new(r.f64("treasure x")?, r.f64("treasure y")?);
-            treasures.push(TreasureSpec {
-                position,
-                quantity: r.u32("treasure quantity")?,
-            });
-        }
-        let nodes_at = r.pos;
-        let nodes = r.u64("node count")?;
-        let tree_bytes = nodes.div_ceil(4);
-        if nodes == 0 || (nodes - 1) % 4 != 0 {
-            return Err(r.error_at(nodes_at, format!("node count {nodes} is not 4k+1")));
-        }
-        if tree_bytes > r.remaining() as u64 {
-            return Err(r.error_at(
-                nodes_at,
-                format!("truncated: the tree needs {tree_bytes} bytes, {} remain", r.remaining()),
-            ));
-        }
-        let tree_at = r.pos;
-        let packed = r.take(tree_bytes as usize, "tree")?;
-        let crc_at = r.pos;
-        let stored = r.u32("checksum")?;
-        if r.remaining() != 0 {
-            return Err(r.error_at(r.pos, format!("{} unexpected bytes after the checksum", r.remaining())));
-        }
-        let actual = crc32fast::hash(&bytes[..crc_at]);
-        if stored != actual {
-            return Err(r.error_at(
-                crc_at,
-                format!("checksum mismatch (stored {stored:#010x}, computed {actual:#010x}): the file is corrupt"),
-            ));
-        }
-        let tree = RegionQuadtree::decode_preorder(grid, packed, nodes)
-            .map_err(|(node, e)| r.error_at(tree_at + (node / 4) as usize, e))?;
-        let obstacles =
-            ObstacleMap::from_tree(tree).map_err(|e| r.error_at(tree_at, format!("invalid quadtree: {e}")))?;
+        let home = r.home()?;
+        let treasures = r.treasures()?;
+        let tree = r.packed_tree()?;
+        r.checksum()?;
+        let obstacles = r.obstacles(grid, &tree)?;
         let map = MapData {
             obstacles,
             home,
@@ -305,7 +236,126 @@ struct Reader<'a> {
     path: &'a Path,
 }
 
+/// The obstacle quadtree as the file stores it: its offset, its packed nodes and how many
+/// nodes there are.
+struct PackedTree<'a> {
+    at: usize,
+    packed: &'a [u8],
+    nodes: u64,
+}
+
 impl<'a> Reader<'a> {
+    /// Read the header (magic, version, flags) and the grid it describes.
+    fn header(&mut self) -> Result<Grid> {
+        let magic = self.take(8, "magic")?;
+        if magic != MAGIC {
+            return Err(self.error_at(0, "not a Smart Teams map file (wrong magic)"));
+        }
+        let version = self.u16("version")?;
+        if version != VERSION {
+            return Err(self.error_at(
+                8,
+                format!("unsupported format version {version} (this build reads version {VERSION})"),
+            ));
+        }
+        let flags = self.u16("flags")?;
+        if flags != 0 {
+            return Err(self.error_at(10, format!("unknown flags {flags:#06x}")));
+        }
+        let (ox, oy, cell) = (self.f64("origin x")?, self.f64("origin y")?, self.f64("cell size")?);
+        let (w, h) = (self.u32("width")?, self.u32("height")?);
+        Grid::new(DVec2::new(ox, oy), cell, w, h).map_err(|e| self.error_at(12, format!("bad header: {e}")))
+    }
+
+    /// Read the home base: its kind, then its disc or rectangle.
+    fn home(&mut self) -> Result<HomeBase> {
+        let home_at = self.pos;
+        let home = match self.u8("home kind")? {
+            0 => HomeBase::Disc {
+                center: DVec2::new(self.f64("home x")?, self.f64("home y")?),
+                radius_m: self.f64("home radius")?,
+            },
+            1 => HomeBase::Rect(Aabb {
+                min: DVec2::new(self.f64("home min x")?, self.f64("home min y")?),
+                max: DVec2::new(self.f64("home max x")?, self.f64("home max y")?),
+            }),
+            k => return Err(self.error_at(home_at, format!("unknown home base kind {k}"))),
+        };
+        Ok(home)
+    }
+
+    /// Read the treasures: their count, checked against the bytes left, then each one.
+    fn treasures(&mut self) -> Result<Vec<TreasureSpec>> {
+        let count_at = self.pos;
+        let count = self.u32("treasure count")? as usize;
+        if count > self.remaining() / 20 {
+            return Err(self.error_at(
+                count_at,
+                format!("claims {count} treasures but only {} bytes follow", self.remaining()),
+            ));
+        }
+        let mut treasures = Vec::with_capacity(count);
+        for _ in 0..count {
+            let position = DVec2::new(self.f64("treasure x")?, self.f64("treasure y")?);
+            treasures.push(TreasureSpec {
+                position,
+                quantity: self.u32("treasure quantity")?,
+            });
+        }
+        Ok(treasures)
+    }
+
+    /// Read the quadtree's node count, checked against its form and the bytes left, then
+    /// its packed nodes.
+    fn packed_tree(&mut self) -> Result<PackedTree<'a>> {
+        let nodes_at = self.pos;
+        let nodes = self.u64("node count")?;
+        let tree_bytes = nodes.div_ceil(4);
+        if nodes == 0 || (nodes - 1) % 4 != 0 {
+            return Err(self.error_at(nodes_at, format!("node count {nodes} is not 4k+1")));
+        }
+        if tree_bytes > self.remaining() as u64 {
+            return Err(self.error_at(
+                nodes_at,
+                format!(
+                    "truncated: the tree needs {tree_bytes} bytes, {} remain",
+                    self.remaining()
+                ),
+            ));
+        }
+        let at = self.pos;
+        let packed = self.take(tree_bytes as usize, "tree")?;
+        Ok(PackedTree { at, packed, nodes })
+    }
+
+    /// Read the checksum, which must end the file, and check it against every byte before
+    /// it.
+    fn checksum(&mut self) -> Result<()> {
+        let crc_at = self.pos;
+        let stored = self.u32("checksum")?;
+        if self.remaining() != 0 {
+            return Err(self.error_at(
+                self.pos,
+                format!("{} unexpected bytes after the checksum", self.remaining()),
+            ));
+        }
+        let actual = crc32fast::hash(&self.bytes[..crc_at]);
+        if stored != actual {
+            return Err(self.error_at(
+                crc_at,
+                format!("checksum mismatch (stored {stored:#010x}, computed {actual:#010x}): the file is corrupt"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Decode the packed quadtree on `grid` into the obstacle map.
+    fn obstacles(&self, grid: Grid, tree: &PackedTree<'_>) -> Result<ObstacleMap> {
+        let decoded = RegionQuadtree::decode_preorder(grid, tree.packed, tree.nodes)
+            .map_err(|(node, e)| self.error_at(tree.at + (node / 4) as usize, e))?;
+        ObstacleMap::from_tree(decoded).map_err(|e| self.error_at(tree.at, format!("invalid quadtree: {e}")))
+    }
+
     fn error_at(&self, offset: usize, problem: impl Into<String>) -> Error {
         Error::MapFile {
             path: self.path.to_path_buf(),

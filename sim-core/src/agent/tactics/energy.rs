@@ -77,6 +77,103 @@ impl EnergyManagement {
         let rounds = length_m / k.speed_m_per_round.max(1e-9) + 1.0;
         length_m * k.energy_per_m + rounds * (k.energy_idle + k.energy_per_sense)
     }
+
+    /// At home: wait there until recharged if it came back to recharge (or is low),
+    /// otherwise let the robot go and forget the last way home.
+    fn at_home(&mut self, ctx: &Ctx) -> Option<Action> {
+        let cap = ctx.kind.energy_capacity;
+        if ctx.me.energy < self.leave_at_fraction * cap && (self.returning || ctx.me.energy < 0.5 * cap) {
+            self.returning = true;
+            self.nav.clear();
+            return Some(Action::Idle);
+        }
+        self.returning = false;
+        // The next excursion measures its way home afresh.
+        self.home_route = None;
+        None
+    }
+
+    /// The way home from where the robot stands: a shortest route within the known map, or
+    /// one and a half times the straight line if there is none.
+    fn measure(ctx: &Ctx) -> WayHome {
+        let p = ctx.position();
+        let target = ctx.home().center();
+        let route = ctx
+            .terrain()
+            .and_then(|t| ctx.nav().route_within(t, p, target, SEARCH_BUDGET))
+            .unwrap_or_else(|| Route {
+                nodes: Vec::new(),
+                waypoints: vec![target],
+                length_m: 1.5 * p.distance(target),
+            });
+        WayHome {
+            round: ctx.round,
+            route,
+            odometer_m: ctx.me.stats.distance_m,
+        }
+    }
+
+    /// Away from home: measure the way home if this excursion has not yet, and turn back
+    /// once the energy left falls to what the way home costs plus the reserve.
+    fn check_way_home(&mut self, ctx: &Ctx) {
+        let cap = ctx.kind.energy_capacity;
+        let odometer = ctx.me.stats.distance_m;
+        // Walking one more round away costs up to two rounds of travel on the way back.
+        let margin = 2.0 * Self::cost(ctx, ctx.kind.speed_m_per_round);
+        let needed = |length_m: f64| Self::cost(ctx, length_m) + margin + self.reserve_fraction * cap;
+        let measured = self.home_route.get_or_insert_with(|| Self::measure(ctx));
+        if !self.returning && ctx.me.energy <= needed(measured.bound_m(odometer)) {
+            // Near the line: measure again, at most every `replan_every` rounds (in between,
+            // the bound decides).
+            if ctx.round >= measured.round + self.replan_every {
+                *measured = Self::measure(ctx);
+            }
+            if ctx.me.energy <= needed(measured.bound_m(odometer)) {
+                self.returning = true;
+                // Home from here, not from where the way was last measured.
+                if measured.round != ctx.round {
+                    *measured = Self::measure(ctx);
+                }
+                self.nav.follow(measured.route.clone());
+            }
+        }
+    }
+
+    /// Walk home along the measured way, planning again from here when moves are held back
+    /// twice in a row, and sliding along the obstacle after that.
+    fn walk_home(&mut self, ctx: &mut Ctx) -> Action {
+        let home = ctx.home();
+        let p = ctx.position();
+        self.held = if blocked(ctx) { self.held + 1 } else { 0 };
+        if self.held == 2 {
+            // The route was planned from elsewhere (or its next leg is too tight for this
+            // body): plan again from here.
+            self.nav.clear();
+            if let Some(route) = ctx
+                .terrain()
+                .and_then(|t| ctx.nav().route_within(t, p, home.center(), SEARCH_BUDGET))
+            {
+                self.home_route = Some(WayHome {
+                    round: ctx.round,
+                    route,
+                    odometer_m: ctx.me.stats.distance_m,
+                });
+            }
+        }
+        if self.nav.is_idle() {
+            let route = self.home_route.as_ref().expect("measured above").route.clone();
+            self.nav.follow(route);
+        }
+        let step = self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() });
+        if self.held >= 3
+            && let Action::MoveTo { to } = step
+        {
+            // Still held back: slide along whatever is in the way towards the waypoint.
+            let dir = BoundaryFollowing::heading(ctx, to - p).unwrap_or(to - p);
+            return ctx.move_by(dir * ctx.kind.speed_m_per_round);
+        }
+        step
+    }
 }
 
 impl Tactic for EnergyManagement {
@@ -87,86 +184,12 @@ impl Tactic for EnergyManagement {
     crate::serde_state!();
 
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
-        let home = ctx.home();
-        let p = ctx.position();
-        let cap = ctx.kind.energy_capacity;
-        if home.contains(p) {
-            if ctx.me.energy < self.leave_at_fraction * cap && (self.returning || ctx.me.energy < 0.5 * cap) {
-                self.returning = true;
-                self.nav.clear();
-                return Some(Action::Idle);
-            }
-            self.returning = false;
-            // The next excursion measures its way home afresh.
-            self.home_route = None;
-            return None;
+        if ctx.home().contains(ctx.position()) {
+            return self.at_home(ctx);
         }
-        let odometer = ctx.me.stats.distance_m;
-        let measure = |ctx: &Ctx| {
-            let target = home.center();
-            let route = ctx
-                .terrain()
-                .and_then(|t| ctx.nav().route_within(t, p, target, SEARCH_BUDGET))
-                .unwrap_or_else(|| Route {
-                    nodes: Vec::new(),
-                    waypoints: vec![target],
-                    length_m: 1.5 * p.distance(target),
-                });
-            WayHome {
-                round: ctx.round,
-                route,
-                odometer_m: odometer,
-            }
-        };
-        // Walking one more round away costs up to two rounds of travel on the way back.
-        let margin = 2.0 * Self::cost(ctx, ctx.kind.speed_m_per_round);
-        let needed = |length_m: f64| Self::cost(ctx, length_m) + margin + self.reserve_fraction * cap;
-        let measured = self.home_route.get_or_insert_with(|| measure(ctx));
-        if !self.returning && ctx.me.energy <= needed(measured.bound_m(odometer)) {
-            // Near the line: measure again, at most every `replan_every` rounds (in between,
-            // the bound decides).
-            if ctx.round >= measured.round + self.replan_every {
-                *measured = measure(ctx);
-            }
-            if ctx.me.energy <= needed(measured.bound_m(odometer)) {
-                self.returning = true;
-                // Home from here, not from where the way was last measured.
-                if measured.round != ctx.round {
-                    *measured = measure(ctx);
-                }
-                self.nav.follow(measured.route.clone());
-            }
-        }
+        self.check_way_home(ctx);
         if self.returning {
-            self.held = if blocked(ctx) { self.held + 1 } else { 0 };
-            if self.held == 2 {
-                // The route was planned from elsewhere (or its next leg is too tight for
-                // this body): plan again from here.
-                self.nav.clear();
-                if let Some(route) = ctx
-                    .terrain()
-                    .and_then(|t| ctx.nav().route_within(t, p, home.center(), SEARCH_BUDGET))
-                {
-                    self.home_route = Some(WayHome {
-                        round: ctx.round,
-                        route,
-                        odometer_m: odometer,
-                    });
-                }
-            }
-            if self.nav.is_idle() {
-                let route = self.home_route.as_ref().expect("measured above").route.clone();
-                self.nav.follow(route);
-            }
-            let step = self.nav.step(ctx).unwrap_or(Action::MoveTo { to: home.center() });
-            if self.held >= 3
-                && let Action::MoveTo { to } = step
-            {
-                // Still held back: slide along whatever is in the way towards the waypoint.
-                let dir = BoundaryFollowing::heading(ctx, to - p).unwrap_or(to - p);
-                return Some(ctx.move_by(dir * ctx.kind.speed_m_per_round));
-            }
-            return Some(step);
+            return Some(self.walk_home(ctx));
         }
         None
     }

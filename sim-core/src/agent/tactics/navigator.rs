@@ -7,7 +7,7 @@ use glam::DVec2;
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
 use crate::spatial::{
-    Aabb, BlockCells, Finger, Frontier, KnownMap, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
+    Aabb, BlockCells, Finger, Frontier, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
 };
 use crate::world::Action;
 
@@ -137,79 +137,144 @@ impl Navigator {
         let known = terrain.known;
         let nav = ctx.nav();
         let p = ctx.position();
-        let step_in = 0.5 * known.grid().cell_m();
-        let clear = |t: DVec2| avoid.iter().all(|a| a.distance(t) > avoid_radius_m);
-        // The goal test of a node asks its neighbours whether the known map touches them,
-        // and the search asks again right after, when it expands the node: the answers are
-        // kept in between (a "no" is not in the memo).
-        let touched: RefCell<Vec<(NavNodeId, bool)>> = RefCell::new(Vec::with_capacity(32));
         let start_hint = memo.route_end();
-        // The first target skipped for a claim: its piece, the distance walked to enter
-        // that piece, and the target.
-        let skipped: Cell<Option<(NavNodeId, f64, DVec2)>> = Cell::new(None);
-        let memo = RefCell::new(memo);
-        // The pieces asked about lie close together: descents of the known map start from
-        // where the last one passed.
-        let finger = RefCell::new(Finger::new(known.tree()));
-        let touches = |m: NavNodeId| memo.borrow_mut().touched_from(nav, known, &mut finger.borrow_mut(), m);
+        let search = FrontierSearch {
+            nav,
+            known,
+            frontier,
+            avoid,
+            avoid_radius_m,
+            max_detour_m,
+            p,
+            step_in: 0.5 * known.grid().cell_m(),
+            touched: RefCell::new(Vec::with_capacity(32)),
+            skipped: Cell::new(None),
+            memo: RefCell::new(memo),
+            // The pieces asked about lie close together: descents of the known map start
+            // from where the last one passed.
+            finger: RefCell::new(Finger::new(known.tree())),
+        };
         let route = nav.search_knowing_reached(
             p,
             start_hint,
             terrain,
-            |m| {
-                let hit = touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
-                hit.unwrap_or_else(|| touches(m))
-            },
-            |n, d, reached| {
-                touched.borrow_mut().clear();
-                // Pieces settle in the order of the distance walked to enter them, so this
-                // is the first piece beyond the detour allowed: the skipped target it is.
-                if let Some((n0, _, t0)) = skipped.get().filter(|s| d > s.1 + max_detour_m) {
-                    return Some((n0, t0));
-                }
-                if frontier.is_some_and(|f| !f.contains(n)) {
-                    return None;
-                }
-                let taken = |t: DVec2| {
-                    let ok = clear(t);
-                    if !ok && skipped.get().is_none() {
-                        skipped.set(Some((n, d, t)));
-                    }
-                    ok
-                };
-                if !memo.borrow_mut().covered_from(nav, known, &mut finger.borrow_mut(), n) {
-                    return nearest_unknown(known, &nav.bounds(n), p)
-                        .filter(|t| taken(*t))
-                        .map(|t| (n, t));
-                }
-                let mut cache = touched.borrow_mut();
-                for m in nav.neighbors(n) {
-                    // A node the search reached is touched (the search uses only those),
-                    // and never asked about again.
-                    if reached(m) {
-                        continue;
-                    }
-                    let t = touches(m);
-                    cache.push((m, t));
-                    if t {
-                        continue;
-                    }
-                    let portal = nav.portal(n, m);
-                    let inward = (nav.bounds(m).center() - portal).normalize_or_zero();
-                    let found = Some(portal + inward * step_in).filter(|t| taken(*t));
-                    if found.is_some() {
-                        // The search ends here: the other neighbours are not needed.
-                        return found.map(|t| (n, t));
-                    }
-                }
-                None
-            },
+            |m| search.usable(m),
+            |n, d, reached| search.goal(n, d, reached),
             SEARCH_BUDGET,
         );
         if let Some(r) = &route {
-            memo.into_inner().set_route_end(r.nodes.last().copied());
+            search.memo.into_inner().set_route_end(r.nodes.last().copied());
         }
         route
+    }
+}
+
+/// A frontier search under way (see [`Navigator::frontier_route_memo`]): what it looks
+/// for, and what its usable test and goal test share.
+struct FrontierSearch<'a, 'm> {
+    nav: &'a NavGraph,
+    known: &'a KnownMap,
+    frontier: Option<&'a Frontier>,
+    avoid: &'a [DVec2],
+    avoid_radius_m: f64,
+    max_detour_m: f64,
+    /// Where the robot stands.
+    p: DVec2,
+    /// How far past an edge a target across it lies.
+    step_in: f64,
+    /// The goal test of a node asks its neighbours whether the known map touches them,
+    /// and the search asks again right after, when it expands the node: the answers are
+    /// kept in between (a "no" is not in the memo).
+    touched: RefCell<Vec<(NavNodeId, bool)>>,
+    /// The first target skipped for a claim: its piece, the distance walked to enter
+    /// that piece, and the target.
+    skipped: Cell<Option<(NavNodeId, f64, DVec2)>>,
+    memo: RefCell<&'m mut PieceMemo>,
+    finger: RefCell<Finger<'a>>,
+}
+
+impl FrontierSearch<'_, '_> {
+    /// Whether the known map touches piece `m`.
+    #[inline]
+    fn touches(&self, m: NavNodeId) -> bool {
+        self.memo
+            .borrow_mut()
+            .touched_from(self.nav, self.known, &mut self.finger.borrow_mut(), m)
+    }
+
+    /// The search's usable test: whether the known map touches piece `m`, answered from the
+    /// last goal test's answers when it asked.
+    #[inline]
+    fn usable(&self, m: NavNodeId) -> bool {
+        let hit = self.touched.borrow().iter().find(|e| e.0 == m).map(|e| e.1);
+        hit.unwrap_or_else(|| self.touches(m))
+    }
+
+    /// Whether target `t` of piece `n`, entered after walking `d`, is clear of every claim;
+    /// the first target skipped is remembered.
+    #[inline]
+    fn taken(&self, n: NavNodeId, d: f64, t: DVec2) -> bool {
+        let ok = self.avoid.iter().all(|a| a.distance(t) > self.avoid_radius_m);
+        if !ok && self.skipped.get().is_none() {
+            self.skipped.set(Some((n, d, t)));
+        }
+        ok
+    }
+
+    /// The search's goal test of piece `n`, entered after walking `d`: the skipped target
+    /// once the detour allowed is used up, else the nearest unknown point of a piece the
+    /// known map does not cover, else a point across an edge into a piece it does not touch.
+    fn goal(&self, n: NavNodeId, d: f64, reached: &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)> {
+        self.touched.borrow_mut().clear();
+        // Pieces settle in the order of the distance walked to enter them, so this is the
+        // first piece beyond the detour allowed: the skipped target it is.
+        if let Some((n0, _, t0)) = self.skipped.get().filter(|s| d > s.1 + self.max_detour_m) {
+            return Some((n0, t0));
+        }
+        if self.frontier.is_some_and(|f| !f.contains(n)) {
+            return None;
+        }
+        if !self
+            .memo
+            .borrow_mut()
+            .covered_from(self.nav, self.known, &mut self.finger.borrow_mut(), n)
+        {
+            return nearest_unknown(self.known, &self.nav.bounds(n), self.p)
+                .filter(|t| self.taken(n, d, *t))
+                .map(|t| (n, t));
+        }
+        self.goal_across_edge(n, d, reached)
+    }
+
+    /// A target just across the edge from piece `n` into a neighbour the known map does not
+    /// touch, keeping the neighbours' answers for the search's expansion of `n`.
+    fn goal_across_edge(
+        &self,
+        n: NavNodeId,
+        d: f64,
+        reached: &dyn Fn(NavNodeId) -> bool,
+    ) -> Option<(NavNodeId, DVec2)> {
+        let mut cache = self.touched.borrow_mut();
+        for m in self.nav.neighbors(n) {
+            // A node the search reached is touched (the search uses only those), and never
+            // asked about again.
+            if reached(m) {
+                continue;
+            }
+            let t = self.touches(m);
+            cache.push((m, t));
+            if t {
+                continue;
+            }
+            let portal = self.nav.portal(n, m);
+            let inward = (self.nav.bounds(m).center() - portal).normalize_or_zero();
+            let found = Some(portal + inward * self.step_in).filter(|t| self.taken(n, d, *t));
+            if found.is_some() {
+                // The search ends here: the other neighbours are not needed.
+                return found.map(|t| (n, t));
+            }
+        }
+        None
     }
 }
 

@@ -388,89 +388,41 @@ impl Simulation {
         if outgoing.is_empty() {
             return;
         }
-        let n = self.robots.len();
-        // Each sender's broadcasts, as (index in `outgoing`, bytes): contiguous, as resolve
-        // runs in sender order; `span[s]` is sender s's part, and its range.
-        let mut span = vec![(0u32, 0u32, 0.0f64); n];
-        let mut broadcasts: Vec<(u32, u64)> = Vec::new();
-        let mut direct: Vec<(u32, u32)> = Vec::new();
-        for (k, o) in outgoing.iter().enumerate() {
-            let k = k as u32;
-            match o.message.to {
-                Recipient::Broadcast => {
-                    let end = u32::try_from(broadcasts.len() + 1).expect("fewer than 2^32 messages a round");
-                    if span[o.from].0 == span[o.from].1 {
-                        span[o.from].0 = end - 1;
-                        span[o.from].2 = o.range_m;
-                    }
-                    span[o.from].1 = end;
-                    broadcasts.push((k, o.bytes));
-                }
-                Recipient::Direct(target) => direct.push((target.get(), k)),
-            }
-        }
-        direct.sort_unstable();
+        let lists = sort_sends(&outgoing, self.robots.len());
         let max_range = outgoing.iter().map(|o| o.range_m).fold(0.0, f64::max);
-        let mut senders = RobotIndex::new();
-        senders.rebuild(
-            (0..n)
-                .filter(|&i| span[i].0 != span[i].1)
-                .map(|i| (self.robots[i].id, self.turns[i].start)),
-            max_range.clamp(1.0, 64.0),
-        );
-        // Beside the index's entries, in its order, each sender's range and broadcasts, so
-        // a receiver reads them in step with the entries rather than jumping about
-        // `outgoing`. The range was noted with the sender's first broadcast (all of a
-        // sender's sends have its type's range).
-        let by_entry: Vec<(f64, u32, u32)> = senders
-            .entries()
-            .iter()
-            .map(|e| {
-                let (b0, b1, range_m) = span[e.id.index()];
-                (range_m, b0, b1)
-            })
-            .collect();
-        // Receivers are independent (each reads the shared sends and writes its own inbox),
-        // so they run in parallel. Each worker also gathers which messages anyone accepted,
-        // so the bag is made without another pass over every pick.
+        let senders = self.index_senders(&lists.span, max_range);
+        let by_entry = sends_by_entry(&senders, &lists.span);
         let sends = Sends {
             outgoing: &outgoing,
-            broadcasts: &broadcasts,
+            broadcasts: &lists.broadcasts,
             by_entry: &by_entry,
-            direct: &direct,
+            direct: &lists.direct,
             senders: &senders,
             max_range,
             robots: &self.robots,
             types: &self.types,
             turns: &self.turns,
         };
-        let words = outgoing.len().div_ceil(64);
         // Budgeted sends skip the bag until the end: picks are indices into `outgoing`, and
         // into the bag once `outgoing` is moved there, which it starts empty for.
         debug_assert!(self.mailbag.is_empty());
-        let used = self
-            .inboxes
-            .par_iter_mut()
-            .enumerate()
-            .fold(
-                || (vec![0u64; words], vec![0u64; words]),
-                |(mut used, mut accepted), (r, inbox)| {
-                    sends.deliver_to(r, inbox, &mut used, &mut accepted);
-                    (used, accepted)
-                },
-            )
-            .map(|(used, _)| used)
-            .reduce(
-                || vec![0u64; words],
-                |mut a, b| {
-                    for (x, y) in a.iter_mut().zip(&b) {
-                        *x |= *y;
-                    }
-                    a
-                },
-            );
+        let used = sends.deliver_all(&mut self.inboxes);
         self.bag_outgoing(&mut outgoing, &used);
         self.outgoing = outgoing;
+    }
+
+    /// Index the robots that broadcast this round (those with a part in `span`) where they
+    /// sent from, in cells of the widest range.
+    #[inline]
+    fn index_senders(&self, span: &[(u32, u32, f64)], max_range: f64) -> RobotIndex {
+        let mut senders = RobotIndex::new();
+        senders.rebuild(
+            (0..self.robots.len())
+                .filter(|&i| span[i].0 != span[i].1)
+                .map(|i| (self.robots[i].id, self.turns[i].start)),
+            max_range.clamp(1.0, 64.0),
+        );
+        senders
     }
 
     /// Move `outgoing` into the bag, in order, so that the inboxes' picks (indices into
@@ -512,7 +464,93 @@ struct Sends<'a> {
     turns: &'a [Turn],
 }
 
+/// A round's budgeted sends, sorted for delivery.
+struct SendLists {
+    /// Per robot: its part of `broadcasts` (start, end) and its range, noted with its first
+    /// broadcast (all of a sender's sends have its type's range).
+    span: Vec<(u32, u32, f64)>,
+    /// The broadcasts as (index in `outgoing`, bytes), each sender's contiguous.
+    broadcasts: Vec<(u32, u64)>,
+    /// Direct messages as (receiver id, index in `outgoing`), sorted.
+    direct: Vec<(u32, u32)>,
+}
+
+/// Sort the round's budgeted sends (of `n` robots) into each sender's broadcasts and the
+/// direct messages by receiver.
+#[inline]
+fn sort_sends(outgoing: &[Outgoing], n: usize) -> SendLists {
+    // Each sender's broadcasts, as (index in `outgoing`, bytes): contiguous, as resolve
+    // runs in sender order; `span[s]` is sender s's part, and its range.
+    let mut span = vec![(0u32, 0u32, 0.0f64); n];
+    let mut broadcasts: Vec<(u32, u64)> = Vec::new();
+    let mut direct: Vec<(u32, u32)> = Vec::new();
+    for (k, o) in outgoing.iter().enumerate() {
+        let k = k as u32;
+        match o.message.to {
+            Recipient::Broadcast => {
+                let end = u32::try_from(broadcasts.len() + 1).expect("fewer than 2^32 messages a round");
+                if span[o.from].0 == span[o.from].1 {
+                    span[o.from].0 = end - 1;
+                    span[o.from].2 = o.range_m;
+                }
+                span[o.from].1 = end;
+                broadcasts.push((k, o.bytes));
+            }
+            Recipient::Direct(target) => direct.push((target.get(), k)),
+        }
+    }
+    direct.sort_unstable();
+    SendLists {
+        span,
+        broadcasts,
+        direct,
+    }
+}
+
+/// Beside the index's entries, in its order, each sender's range and broadcasts, so a
+/// receiver reads them in step with the entries rather than jumping about `outgoing`.
+#[inline]
+fn sends_by_entry(senders: &RobotIndex, span: &[(u32, u32, f64)]) -> Vec<(f64, u32, u32)> {
+    senders
+        .entries()
+        .iter()
+        .map(|e| {
+            let (b0, b1, range_m) = span[e.id.index()];
+            (range_m, b0, b1)
+        })
+        .collect()
+}
+
 impl Sends<'_> {
+    /// Fill every robot's inbox. Receivers are independent (each reads the shared sends and
+    /// writes its own inbox), so they run in parallel; each worker also gathers which
+    /// messages anyone accepted, so the bag is made without another pass over every pick.
+    /// Returns that bitset over `outgoing`.
+    #[inline]
+    fn deliver_all(&self, inboxes: &mut [Vec<u32>]) -> Vec<u64> {
+        let words = self.outgoing.len().div_ceil(64);
+        inboxes
+            .par_iter_mut()
+            .enumerate()
+            .fold(
+                || (vec![0u64; words], vec![0u64; words]),
+                |(mut used, mut accepted), (r, inbox)| {
+                    self.deliver_to(r, inbox, &mut used, &mut accepted);
+                    (used, accepted)
+                },
+            )
+            .map(|(used, _)| used)
+            .reduce(
+                || vec![0u64; words],
+                |mut a, b| {
+                    for (x, y) in a.iter_mut().zip(&b) {
+                        *x |= *y;
+                    }
+                    a
+                },
+            )
+    }
+
     /// Fill robot `r`'s inbox: messages addressed to it first, then broadcasts of senders in
     /// range in the index's fixed order, until the next would overflow its budget; the
     /// accepted ones in sender order, as unbudgeted delivery would put them. `accepted` is

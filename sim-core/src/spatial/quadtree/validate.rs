@@ -14,14 +14,41 @@ impl RegionQuadtree {
         self.problems().map_err(crate::Error::Malformed)
     }
 
+    /// The first broken invariant (see [`validate`](Self::validate)), if any.
     pub(crate) fn problems(&self) -> Result<(), String> {
+        let mut census = self.free_list_census()?;
+        self.mark_reached(&mut census)?;
+        self.count_problems(&census)?;
         let n = self.groups.len();
-        let nb = self.blocks.len();
-        let mut seen = vec![false; n];
-        let mut seen_block = vec![false; nb];
+        if self.keeps_hashes() {
+            if self.hashes.len() != n {
+                return Err(format!("{} content hashes kept for {n} groups", self.hashes.len()));
+            }
+            self.hash_problems(self.root)?;
+        }
+        let block_internal = census.block_internal;
+        if block_internal != self.block_internal {
+            return Err(format!(
+                "blocks hold {block_internal} internal nodes but the tree counts {}",
+                self.block_internal
+            ));
+        }
+        Ok(())
+    }
+
+    /// A census with the groups and blocks on the free lists marked, refusing an entry out
+    /// of range or listed twice.
+    fn free_list_census(&self) -> Result<Census, String> {
+        let mut census = Census {
+            seen: vec![false; self.groups.len()],
+            seen_block: vec![false; self.blocks.len()],
+            reached: 0,
+            reached_blocks: 0,
+            block_internal: 0,
+        };
         for (list, seen, what) in [
-            (&self.free_groups, &mut seen, "group"),
-            (&self.free_blocks, &mut seen_block, "block"),
+            (&self.free_groups, &mut census.seen, "group"),
+            (&self.free_blocks, &mut census.seen_block, "block"),
         ] {
             for &f in list {
                 let f = f as usize;
@@ -34,55 +61,82 @@ impl RegionQuadtree {
                 seen[f] = true;
             }
         }
+        Ok(census)
+    }
+
+    /// Walk the tree from the root, marking in `census` every group and block reached.
+    fn mark_reached(&self, census: &mut Census) -> Result<(), String> {
         let mut stack: Vec<(NodeRef, u8)> = vec![(self.root, self.grid.depth())];
-        let (mut reached, mut reached_blocks, mut block_internal) = (0usize, 0usize, 0usize);
         while let Some((node, level)) = stack.pop() {
             if is_leaf(node) {
                 continue;
             }
             if is_block(node) {
-                let b = (node - BLOCK_TAG) as usize;
-                if b >= nb {
-                    return Err(format!("node refers to block {b}, but there are {nb}"));
-                }
-                if !self.packs(level) {
-                    return Err(format!(
-                        "block {b} sits at level {level}, not at the packed level {BLOCK_LEVEL}"
-                    ));
-                }
-                if seen_block[b] {
-                    return Err(format!("block {b} is reached twice or is also on the free list"));
-                }
-                seen_block[b] = true;
-                reached_blocks += 1;
-                let bits = self.blocks[b];
-                if bits == 0 || bits == u64::MAX {
-                    return Err(format!("block {b} is uniform and should have been a leaf"));
-                }
-                block_internal += internal_nodes_in(bits);
+                self.reach_block(node, level, census)?;
                 continue;
             }
-            let i = node as usize;
-            if i >= n {
-                return Err(format!("node refers to group {i}, but there are {n}"));
-            }
-            if level == 0 {
-                return Err(format!("group {i} is an internal node below the finest level"));
-            }
-            if self.packed && level <= BLOCK_LEVEL {
-                return Err(format!("group {i} at level {level} should be packed in a block"));
-            }
-            if seen[i] {
-                return Err(format!("group {i} is reached twice or is also on the free list"));
-            }
-            seen[i] = true;
-            reached += 1;
-            let kids = self.groups[i];
-            if is_leaf(kids[0]) && kids.iter().all(|&k| k == kids[0]) {
-                return Err(format!("group {i} has four equal leaves and should have been merged"));
-            }
+            let kids = self.reach_group(node, level, census)?;
             stack.extend(kids.iter().map(|&k| (k, level - 1)));
         }
+        Ok(())
+    }
+
+    /// Mark the block that `node` refers to as reached at `level`, checking that it sits at
+    /// the packed level, is reached once and holds mixed bits.
+    fn reach_block(&self, node: NodeRef, level: u8, census: &mut Census) -> Result<(), String> {
+        let nb = self.blocks.len();
+        let b = (node - BLOCK_TAG) as usize;
+        if b >= nb {
+            return Err(format!("node refers to block {b}, but there are {nb}"));
+        }
+        if !self.packs(level) {
+            return Err(format!(
+                "block {b} sits at level {level}, not at the packed level {BLOCK_LEVEL}"
+            ));
+        }
+        if census.seen_block[b] {
+            return Err(format!("block {b} is reached twice or is also on the free list"));
+        }
+        census.seen_block[b] = true;
+        census.reached_blocks += 1;
+        let bits = self.blocks[b];
+        if bits == 0 || bits == u64::MAX {
+            return Err(format!("block {b} is uniform and should have been a leaf"));
+        }
+        census.block_internal += internal_nodes_in(bits);
+        Ok(())
+    }
+
+    /// Mark the group that `node` refers to as reached at `level`, checking where it sits,
+    /// that it is reached once and is not four equal leaves; returns its children.
+    fn reach_group(&self, node: NodeRef, level: u8, census: &mut Census) -> Result<[NodeRef; 4], String> {
+        let n = self.groups.len();
+        let i = node as usize;
+        if i >= n {
+            return Err(format!("node refers to group {i}, but there are {n}"));
+        }
+        if level == 0 {
+            return Err(format!("group {i} is an internal node below the finest level"));
+        }
+        if self.packed && level <= BLOCK_LEVEL {
+            return Err(format!("group {i} at level {level} should be packed in a block"));
+        }
+        if census.seen[i] {
+            return Err(format!("group {i} is reached twice or is also on the free list"));
+        }
+        census.seen[i] = true;
+        census.reached += 1;
+        let kids = self.groups[i];
+        if is_leaf(kids[0]) && kids.iter().all(|&k| k == kids[0]) {
+            return Err(format!("group {i} has four equal leaves and should have been merged"));
+        }
+        Ok(kids)
+    }
+
+    /// Check that every group and every block is either reached or free.
+    fn count_problems(&self, census: &Census) -> Result<(), String> {
+        let (n, nb) = (self.groups.len(), self.blocks.len());
+        let (reached, reached_blocks) = (census.reached, census.reached_blocks);
         if reached + self.free_groups.len() != n {
             return Err(format!(
                 "{} groups are neither reachable nor free ({reached} reachable, {} free, {n} in all)",
@@ -97,18 +151,6 @@ impl RegionQuadtree {
                 self.free_blocks.len()
             ));
         }
-        if self.keeps_hashes() {
-            if self.hashes.len() != n {
-                return Err(format!("{} content hashes kept for {n} groups", self.hashes.len()));
-            }
-            self.hash_problems(self.root)?;
-        }
-        if block_internal != self.block_internal {
-            return Err(format!(
-                "blocks hold {block_internal} internal nodes but the tree counts {}",
-                self.block_internal
-            ));
-        }
         Ok(())
     }
 
@@ -119,4 +161,14 @@ impl RegionQuadtree {
             panic!("malformed region quadtree: {e}");
         }
     }
+}
+
+/// What validation has met so far: the groups and blocks on a free list or reached from the
+/// root, how many of each were reached, and the internal nodes the reached blocks hold.
+struct Census {
+    seen: Vec<bool>,
+    seen_block: Vec<bool>,
+    reached: usize,
+    reached_blocks: usize,
+    block_internal: usize,
 }
