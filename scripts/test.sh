@@ -46,3 +46,14 @@ echo "== cargo clippy (ci profile, all targets, -D warnings)"
 cargo clippy --profile ci --workspace --all-targets --locked -- -D warnings
 echo "== cargo test (ci profile)"
 cargo test --profile ci --workspace --locked
+echo "== Python package: pip install ./python into target/python-venv, then its pytest suite"
+pyvenv=target/python-venv
+if ! "$pyvenv/bin/python" -c 'import numpy, pytest, gymnasium, pettingzoo, matplotlib' 2>/dev/null; then
+  python3 -m venv "$pyvenv"
+  "$pyvenv/bin/pip" install --quiet --disable-pip-version-check numpy pytest gymnasium pettingzoo matplotlib
+fi
+# Built as a user builds it (pip and maturin from pyproject.toml), in the `ci` profile so that
+# it reuses the workspace build above.
+MATURIN_PEP517_ARGS="--profile ci" "$pyvenv/bin/pip" install --quiet --disable-pip-version-check \
+  --force-reinstall --no-deps ./python
+SMARTTEAMS_BIN="$(pwd)/target/ci/smartteams" "$pyvenv/bin/python" -m pytest -q python/tests

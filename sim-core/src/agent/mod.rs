@@ -16,7 +16,7 @@ pub use ctx::{Ctx, Mind, RobotRng, StrategyOutput, WorldView};
 pub use params::Params;
 pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};
-pub use strategy::{Needs, Strategy, restore_state, save_state};
+pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, SEARCH_BUDGET, ShortestPath,
     Tactic, Team, Teaming, blocked,

@@ -89,6 +89,14 @@ impl Needs {
     }
 }
 
+/// Why a strategy cannot go on, as the payload of an unwind: a strategy that calls
+/// `std::panic::resume_unwind(Box::new(StrategyFailure(reason)))` in
+/// [`decide`](Strategy::decide) disables its robot alone, as a panic does, with `reason` in
+/// the event log and no panic message printed (a strategy written in another language
+/// reports its errors so).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct StrategyFailure(pub String);
+
 /// One robot's decision process.
 pub trait Strategy: Send {
     /// The perceptions this strategy uses (default: all).

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::perceive::{Snapshot, perceive};
 use super::resolve::{Bodies, move_within_means, publish_plan, resolve_alone, trim_to_obstacles, upkeep};
-use crate::agent::{Ctx, WorldView};
+use crate::agent::{Ctx, StrategyFailure, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
 use crate::world::{Action, Recipient, Robot, RobotType};
@@ -194,6 +194,9 @@ fn hearers(index: &RobotIndex, id: RobotId, at: DVec2, range_m: f64, out: &mut V
 
 /// What a panic said (its message, when it was a string).
 fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(StrategyFailure(reason)) = payload.downcast_ref::<StrategyFailure>() {
+        return format!("its strategy failed: {reason}");
+    }
     match (payload.downcast_ref::<&str>(), payload.downcast_ref::<String>()) {
         (Some(s), _) => format!("its strategy panicked: {s}"),
         (_, Some(s)) => format!("its strategy panicked: {s}"),

@@ -1,0 +1,40 @@
+//! The native module of the `smartteams` Python package: a thin layer over sim-core's public
+//! API (and viewer-bridge's, for recordings), as the `smartteams` binary is.
+//!
+//! - [`simulation`]: `smartteams.Simulation`, a run driven round by round, its state as
+//!   numpy arrays, checkpoints and recordings;
+//! - [`strategy`]: strategies written in Python (`register_strategy`), the `Robot` they
+//!   decide for and the actions they return;
+//! - [`env`]: the core of the learning environments of `smartteams/env.py`: robots moved by
+//!   the caller, observations and rewards in bulk;
+//! - [`grids`]: windows of known maps and obstacles as cell arrays.
+
+mod env;
+mod grids;
+mod simulation;
+mod strategy;
+
+use pyo3::prelude::*;
+
+pyo3::create_exception!(
+    smartteams,
+    SmartTeamsError,
+    pyo3::exceptions::PyException,
+    "A config, map, checkpoint or argument Smart Teams cannot use; the message is the one the \
+     `smartteams` command prints (with file, line and column where there are some)."
+);
+
+/// An error of Smart Teams as a Python exception with the same message.
+pub(crate) fn to_py(e: impl std::fmt::Display) -> PyErr {
+    SmartTeamsError::new_err(e.to_string())
+}
+
+/// The `smartteams._native` module.
+#[pymodule(name = "_native")]
+fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("SmartTeamsError", m.py().get_type::<SmartTeamsError>())?;
+    m.add_class::<simulation::Simulation>()?;
+    m.add_class::<env::EnvCore>()?;
+    strategy::add_to(m)?;
+    Ok(())
+}

@@ -1,0 +1,215 @@
+"""Strategies written in Python: named in XML configs, deterministic, contained when they
+fail, checkpointed."""
+
+import math
+
+import pytest
+import smartteams
+
+from conftest import write_config
+
+WALKERS = """<simulation name="walkers" seed="{seed}" rounds="{rounds}">
+  <map file="MAP"/>
+  <group name="walkers" count="8" type="explorer" strategy="{strategy}" start="home">
+    <param name="turn_probability" value="0.2"/>
+  </group>
+</simulation>
+"""
+
+
+class Walker:
+    """Walks straight, turning with a probability per round or when held back."""
+
+    needs = ["known_map"]
+
+    def __init__(self, params):
+        self.turn_probability = float(params.get("turn_probability", "0.1"))
+        self.heading = None
+
+    def decide(self, robot):
+        if self.heading is None or robot.last_outcome != "done" or robot.random() < self.turn_probability:
+            angle = robot.uniform(0.0, 2.0 * math.pi)
+            self.heading = (math.cos(angle), math.sin(angle))
+        return smartteams.Move(self.heading[0] * robot.speed_m, self.heading[1] * robot.speed_m)
+
+
+smartteams.register_strategy("py_walker", Walker)
+
+
+def walkers(tmp_path, seed=1, rounds=80, strategy="py_walker"):
+    return write_config(tmp_path, WALKERS.format(seed=seed, rounds=rounds, strategy=strategy), name=f"w{seed}.xml")
+
+
+def test_a_python_strategy_runs_from_an_xml_config(tmp_path):
+    assert ("py_walker", "written in Python (Walker)") in smartteams.strategies()
+    sim = smartteams.Simulation(str(walkers(tmp_path)))
+    sim.run()
+    robots = sim.robots()
+    assert (robots["distance_m"] > 10.0).all()
+    assert robots["alive"].all()
+    assert sim.metrics()["strategies_failed"][-1] == 0
+
+
+def test_python_strategies_give_the_same_run_whatever_the_thread_count(tmp_path):
+    config = str(walkers(tmp_path))
+    digests = set()
+    for threads in (1, 2, 2):
+        sim = smartteams.Simulation(config, threads=threads)
+        sim.run()
+        digests.add((sim.digest, tuple(sim.metrics()["distance_m"].tolist())))
+    assert len(digests) == 1
+    other = smartteams.Simulation(str(walkers(tmp_path, seed=2)))
+    other.run()
+    assert other.digest not in {d for d, _ in digests}
+
+
+class East:
+    needs = []
+
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        return smartteams.Move(10.0, 0.0)
+
+
+def test_a_move_longer_than_the_speed_is_one_speed_long(tmp_path):
+    smartteams.register_strategy("py_east", East)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="2"><map file="MAP"/>'
+        '<group count="1" type="explorer" strategy="py_east" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    before = sim.robots()
+    sim.run()
+    after = sim.robots()
+    # An explorer moves 1 m a round; home is clear, so two rounds take it 2 m east.
+    assert after["x"][0] - before["x"][0] == pytest.approx(2.0, abs=1e-12)
+    assert after["y"][0] == before["y"][0]
+
+
+class Talker:
+    made = []
+
+    def __init__(self, params):
+        self.heard = []
+        Talker.made.append(self)
+
+    def decide(self, robot):
+        self.heard.extend((m["from"], m["kind"], m["data"]) for m in robot.messages)
+        return [smartteams.Idle(), smartteams.Broadcast("hello", bytes([robot.id, robot.round % 256]))]
+
+
+def test_messages_sent_from_python_arrive_next_round(tmp_path):
+    Talker.made.clear()
+    smartteams.register_strategy("py_talker", Talker)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="3"><map file="MAP"/>'
+        '<group count="3" type="explorer" strategy="py_talker" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    sim.run()
+    assert len(Talker.made) == 3
+    # Robots stand at home within radio range: in rounds 2 and 3 each hears the other two's
+    # messages of the round before.
+    for me, talker in enumerate(Talker.made):
+        expected = sorted((other, "hello", bytes([other, r])) for r in (1, 2) for other in range(3) if other != me)
+        assert sorted(talker.heard) == expected
+    assert sim.metrics()["messages"].tolist() == [3, 3, 3]
+
+
+class Faulty:
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        if robot.id == 2 and robot.round == 5:
+            raise ValueError("boom at round 5")
+        return smartteams.Idle()
+
+
+def test_an_exception_in_decide_disables_that_robot_alone(tmp_path):
+    smartteams.register_strategy("py_faulty", Faulty)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="10"><map file="MAP"/>'
+        '<group count="4" type="explorer" strategy="py_faulty" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    sim.run()
+    assert sim.robots()["alive"].tolist() == [True, True, False, True]
+    assert sim.metrics()["strategies_failed"].tolist() == [0] * 4 + [1] * 6
+    events = [text for round_, text in sim.events() if round_ == 5]
+    assert len(events) == 1
+    assert events[0].startswith("robot 2 is disabled: its strategy failed: decide raised")
+    assert "Traceback" in events[0] and "ValueError: boom at round 5" in events[0]
+
+
+class Confused:
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        return "north"
+
+
+def test_a_wrong_return_value_disables_the_robot_with_a_clear_reason(tmp_path):
+    smartteams.register_strategy("py_confused", Confused)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="2"><map file="MAP"/>'
+        '<group count="1" type="explorer" strategy="py_confused" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    sim.run()
+    (text,) = [t for _, t in sim.events() if "disabled" in t]
+    assert "decide returned 'north'; expected an action" in text
+
+
+class Keeper:
+    kept = []
+
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        Keeper.kept.append(robot)
+        return smartteams.Idle()
+
+
+def test_robot_methods_work_only_inside_decide(tmp_path):
+    Keeper.kept.clear()
+    smartteams.register_strategy("py_keeper", Keeper)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="1"><map file="MAP"/>'
+        '<group count="1" type="explorer" strategy="py_keeper" start="home"/></simulation>',
+    )
+    smartteams.Simulation(str(config)).run()
+    (robot,) = Keeper.kept
+    assert robot.id == 0 and robot.round == 1
+    with pytest.raises(smartteams.SmartTeamsError, match="only while"):
+        robot.random()
+    with pytest.raises(smartteams.SmartTeamsError, match="only while"):
+        robot.broadcast("x", b"")
+
+
+def test_a_run_with_python_strategies_checkpoints_and_resumes(tmp_path):
+    config = str(walkers(tmp_path, rounds=60))
+    whole = smartteams.Simulation(config)
+    whole.run()
+    part = smartteams.Simulation(config)
+    part.step(25)
+    part.checkpoint(str(tmp_path / "w.ckpt"))
+    resumed = smartteams.Simulation.resume(str(tmp_path / "w.ckpt"))
+    resumed.run()
+    assert resumed.digest == whole.digest
+
+
+def test_register_strategy_refuses_builtin_names_and_non_callables():
+    with pytest.raises(smartteams.SmartTeamsError, match="built-in"):
+        smartteams.register_strategy("frontier", Walker)
+    with pytest.raises(smartteams.SmartTeamsError, match="not callable"):
+        smartteams.register_strategy("py_bad", 3)
