@@ -7,7 +7,7 @@ use sim_core::agent::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, TestWorld, blocked,
 };
 use sim_core::glam::DVec2;
-use sim_core::spatial::{Frontier, RobotId};
+use sim_core::spatial::RobotId;
 use sim_core::world::{Action, Inbox, Message, Outcome, Payload, Recipient, StrategyEvent};
 
 const EPS: f64 = 1e-9;
@@ -316,16 +316,8 @@ fn navigator_frontier_route_leaves_the_known_disc() {
     let p = w.robot.position;
     // The robot at (10.5, 10.5) knows a disc of 3 m around itself.
     w = w.knowing_disc(p, 3.0);
-    let mut frontier = Frontier::default();
     let ctx = w.ctx();
-    let nav = ctx.nav();
-    frontier.sync(nav, ctx.data.known.as_mut().unwrap());
-    let route = Navigator::frontier_route(&ctx, Some(&frontier), &[], 0.0, f64::INFINITY).expect("a frontier");
-    // Asking the set or the map finds the same route.
-    assert_eq!(
-        Navigator::frontier_route(&ctx, None, &[], 0.0, f64::INFINITY),
-        Some(route.clone())
-    );
+    let route = Navigator::frontier_route(&ctx, &[], 0.0, f64::INFINITY).expect("a frontier");
     let last = *route.waypoints.last().unwrap();
     let known = ctx.known().unwrap();
     let off_or_border = !known.is_known(last)
@@ -485,7 +477,7 @@ fn frontier_search_honours_claims_within_max_detour() {
     let ctx = w.ctx();
     let claim = [DVec2::new(17.5, 1.5)];
     let end = |avoid: &[DVec2], detour: f64| {
-        let r = Navigator::frontier_route(&ctx, None, avoid, 3.0, detour).expect("a frontier");
+        let r = Navigator::frontier_route(&ctx, avoid, 3.0, detour).expect("a frontier");
         *r.waypoints.last().unwrap()
     };
     let west = DVec2::new(18.5, 1.5);

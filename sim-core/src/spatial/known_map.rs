@@ -7,15 +7,13 @@ use std::cell::RefCell;
 
 use glam::DVec2;
 
-use crate::cache::prefetch;
 use crate::spatial::geometry::{Aabb, CellRows, Clipped, Disc, DiscBeyond, Shape};
 use crate::spatial::grid::Grid;
 use crate::spatial::known_window::{self, KnownWindow};
 use crate::spatial::obstacle_map::ObstacleMap;
 use crate::spatial::quadtree::RegionQuadtree;
-use crate::spatial::quadtree::{BlockCache, CellSet, Finger, PartialCells, Square};
-use crate::spatial::tile_log::TileLog;
-use crate::spatial::view_stencil::Stencils;
+use crate::spatial::quadtree::{CellSet, Finger, PartialCells};
+use crate::spatial::view_stencil::{Stencils, ViewStencil};
 
 thread_local! {
     /// The rows of a view being marked, in a buffer kept from call to call so that none is
@@ -31,35 +29,22 @@ pub struct KnownMap {
     known_cells: u64,
     /// The view disc [`mark_view`](Self::mark_view) marked last: all it holds is known.
     last_view: Option<Disc>,
-    /// That view's cells, when it was marked by its rows: all known.
-    last_rows: Option<Box<CellRows>>,
-    /// The cells of the blocks around the views marked by their rows, as the tree holds
-    /// them (checked by [`validate`](Self::validate)); cleared by every other change. Not
-    /// saved: a restored map starts without.
-    #[serde(skip)]
-    blocks: Option<Box<BlockCache>>,
     /// Known cells around the views marked through it (a part of the tree's: see
-    /// [`KnownWindow`]; checked by [`validate`](Self::validate)). Not saved, like `blocks`.
+    /// [`KnownWindow`]; checked by [`validate`](Self::validate)). Not saved: a restored map
+    /// starts without.
     #[serde(skip)]
     window: Option<Box<KnownWindow>>,
-    /// Which tiles changed when, once a reader asked for it ([`track_changes`](Self::track_changes));
-    /// not saved: a restored map starts a new log.
-    #[serde(skip)]
-    log: Option<Box<TileLog>>,
 }
 
-/// A copy without the cached blocks: copies are mostly maps sent to others, who never
-/// mark views in them (and a copy that does fills its own cache).
+/// A copy without the window: copies are mostly maps sent to others, who never mark views
+/// in them (and a copy that does loads its own).
 impl Clone for KnownMap {
     fn clone(&self) -> Self {
         Self {
             tree: self.tree.clone(),
             known_cells: self.known_cells,
             last_view: self.last_view,
-            last_rows: self.last_rows.clone(),
-            blocks: None,
             window: None,
-            log: self.log.clone(),
         }
     }
 }
@@ -71,10 +56,7 @@ impl KnownMap {
             tree: RegionQuadtree::uniform(grid, false),
             known_cells: 0,
             last_view: None,
-            last_rows: None,
-            blocks: None,
             window: None,
-            log: None,
         }
     }
 
@@ -85,10 +67,7 @@ impl KnownMap {
             tree,
             known_cells,
             last_view: None,
-            last_rows: None,
-            blocks: None,
             window: None,
-            log: None,
         }
     }
 
@@ -128,90 +107,22 @@ impl KnownMap {
             radius: radius_m,
         };
         let before = self.known_cells;
-        if let Some(log) = &mut self.log {
-            log.begin();
-        }
         // The same view as last time (a robot that did not move): all it holds is known.
         if self.last_view == Some(disc) {
             return false;
         }
-        // Each map's caches sit in allocations of their own, most likely out of the
-        // processor's caches by the time a robot's turn comes round again: their lines are
-        // fetched while the view's rows are worked out. A hint only: it changes no result.
+        // The window sits in an allocation of its own, most likely out of the processor's
+        // caches by the time the robot's turn comes round again: fetched while the view's
+        // rows are worked out.
         if let Some(window) = &self.window {
             window.prefetch();
-        } else {
-            if let Some(last) = &self.last_rows {
-                prefetch(&last.len);
-                prefetch(&last.rows[0]);
-                prefetch(&last.rows[8]);
-            }
-            if let Some(blocks) = &self.blocks {
-                blocks.prefetch();
-            }
         }
-        let clip = self.grid().extent();
-        let mut added = 0;
         let by_rows = VIEW.with_borrow_mut(|(rows, stencils)| {
-            let grid = self.tree.grid();
-            let stencil = stencils.get(radius_m, grid.cell_m());
-            let log = &mut self.log;
-            let mut report = |set: CellSet| {
-                added += set.cells();
-                if let Some(log) = log {
-                    log.stamp(set.square());
-                }
-                newly_known(set);
-            };
-            // A view of at most 32 cells a side, with its stencil: only its cells not known
-            // yet, the known ones left out through the window around it (see
-            // `known_window`) as its rows are made.
-            if let Some(stencil) = stencil
-                && KnownWindow::fits(&self.tree)
-                && let Some(view) = stencil.place(&disc, grid, &clip)
-                && let (lo, hi) = view.cells()
-                && hi.0 - lo.0 < known_window::MAX_VIEW_CELLS
-                && hi.1 - lo.1 < known_window::MAX_VIEW_CELLS
-            {
-                let window = self.window.get_or_insert_default();
-                window.cover(&self.tree, lo, hi);
-                if view.rows_except_into(grid, Some(window.known_rows()), rows)
-                    && let new = &rows.rows[..rows.len]
-                    && new.iter().any(|&row| row != 0)
-                {
-                    let filled = self.tree.fill_new_rows_cached(rows, None, true, None, &mut report);
-                    debug_assert!(filled, "a tree the window fits is packed");
-                    window.add_rows(rows.x0, rows.y0, new);
-                    // Dropped, not cleared: views of this map mostly keep to this path.
-                    self.blocks = None;
-                }
-                // The direct rows below leave out the last view's rows: not this one's.
-                self.last_rows = None;
-                return true;
-            }
-            // Otherwise a view up to 64 cells across: its cells worked out at once, then set
-            // block by block, no shape tests. Bigger views take the shape walk, which skips
-            // what the last view marked. Only the cells the last view did not hold: a
-            // walker's view moves a fraction of itself a round, so most rounds that is a thin
-            // crescent, or nothing.
-            let blocks = self.blocks.get_or_insert_default();
-            let by_rows = (stencil.is_some_and(|stencil| stencil.rows_into(&disc, grid, &clip, rows))
-                || disc.contained_rows_into(grid, &clip, rows))
-                && self
-                    .tree
-                    .fill_new_rows_cached(rows, self.last_rows.as_deref(), true, Some(blocks), &mut report);
-            if by_rows {
-                match &mut self.last_rows {
-                    Some(last) => last.assign(rows),
-                    None => self.last_rows = Some(Box::new(rows.clone())),
-                }
-            } else {
-                self.last_rows = None;
-            }
-            by_rows
+            let stencil = stencils.get(radius_m, self.grid().cell_m());
+            self.mark_view_rows(&disc, stencil, rows, &mut newly_known)
         });
-        self.known_cells += added;
         if !by_rows {
+            // Bigger views walk the tree, skipping what the last view marked.
             let beyond = DiscBeyond {
                 disc,
                 seen: self.last_view,
@@ -222,11 +133,51 @@ impl KnownMap {
         self.known_cells > before
     }
 
-    /// Drop the cached blocks: the tree is about to change otherwise than by a view's rows.
-    fn forget_blocks(&mut self) {
-        if let Some(blocks) = &mut self.blocks {
-            blocks.clear();
-        }
+    /// Mark a view of at most 60 cells across by its rows of cells (worked out at once, then
+    /// set by one descent per block): through the window of known cells when the view is at
+    /// most [`known_window::MAX_VIEW_CELLS`] across, otherwise directly. `false` (nothing
+    /// done) for a bigger view or a tree without blocks.
+    fn mark_view_rows(
+        &mut self,
+        disc: &Disc,
+        stencil: Option<&ViewStencil>,
+        rows: &mut CellRows,
+        newly_known: &mut impl FnMut(CellSet),
+    ) -> bool {
+        let grid = *self.tree.grid();
+        let clip = grid.extent();
+        let mut added = 0;
+        let mut report = |set: CellSet| {
+            added += set.cells();
+            newly_known(set);
+        };
+        let marked = if let Some(stencil) = stencil
+            && KnownWindow::fits(&self.tree)
+            && let Some(view) = stencil.place(disc, &grid, &clip)
+            && let (lo, hi) = view.cells()
+            && hi.0 - lo.0 < known_window::MAX_VIEW_CELLS
+            && hi.1 - lo.1 < known_window::MAX_VIEW_CELLS
+        {
+            // Its cells not known yet, left out through the window as its rows are made:
+            // most views of a walker add none.
+            let window = self.window.get_or_insert_default();
+            window.cover(&self.tree, lo, hi);
+            if view.rows_except_into(&grid, Some(window.known_rows()), rows)
+                && let new = &rows.rows[..rows.len]
+                && new.iter().any(|&row| row != 0)
+            {
+                let filled = self.tree.fill_new_rows_reporting(rows, true, &mut report);
+                debug_assert!(filled, "a tree the window fits is packed");
+                window.add_rows(rows.x0, rows.y0, new);
+            }
+            true
+        } else {
+            (stencil.is_some_and(|stencil| stencil.rows_into(disc, &grid, &clip, rows))
+                || disc.contained_rows_into(&grid, &clip, rows))
+                && self.tree.fill_new_rows_reporting(rows, true, &mut report)
+        };
+        self.known_cells += added;
+        marked
     }
 
     /// Mark as known every map cell lying wholly inside `shape`.
@@ -242,7 +193,6 @@ impl KnownMap {
     /// take the general path). Returns the block's known cells after (Z order) for a set of
     /// some of a block's cells (see [`BlockMemo`](crate::spatial::BlockMemo)).
     pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) -> Option<u64> {
-        self.forget_blocks();
         let sq = set.square();
         let square = self.grid().square(sq.x, sq.y, sq.level);
         if set.is_whole() && !self.grid().extent().contains_box(&square) {
@@ -250,15 +200,8 @@ impl KnownMap {
             return None;
         }
         let mut added = 0;
-        let log = &mut self.log;
-        if let Some(log) = log {
-            log.begin();
-        }
         let after = self.tree.fill_cells_reporting(set, true, |set| {
             added += set.cells();
-            if let Some(log) = log {
-                log.stamp(set.square());
-            }
             newly_known(set);
         });
         self.known_cells += added;
@@ -271,18 +214,10 @@ impl KnownMap {
         shape: &S,
         mut newly_known: impl FnMut(crate::spatial::quadtree::Square),
     ) {
-        self.forget_blocks();
         let clip = self.grid().extent();
         let mut added = 0;
-        let log = &mut self.log;
-        if let Some(log) = log {
-            log.begin();
-        }
         let mut report = |sq: crate::spatial::quadtree::Square| {
             added += sq.cells();
-            if let Some(log) = log {
-                log.stamp(sq);
-            }
             newly_known(sq);
         };
         // Clipping costs a box test at every node; most shapes lie inside the map anyway.
@@ -349,14 +284,7 @@ impl KnownMap {
     /// Add everything `other` knows (both over the same map). Returns whether anything new
     /// became known.
     pub fn merge(&mut self, other: &KnownMap) -> bool {
-        self.forget_blocks();
-        let added = match &mut self.log {
-            None => self.tree.union_counting(&other.tree),
-            Some(log) => {
-                log.begin();
-                self.tree.union_reporting(&other.tree, |sq: Square| log.stamp(sq))
-            }
-        };
+        let added = self.tree.union_counting(&other.tree);
         self.known_cells += added;
         added > 0
     }
@@ -366,19 +294,6 @@ impl KnownMap {
     /// them. Changes nothing else.
     pub fn complete_hashes(&mut self) {
         self.tree.complete_hashes();
-    }
-
-    /// Keep a log of which tiles change from now on (see [`TileLog`]); nothing if it is kept
-    /// already. Maps that nobody reads that way pay nothing for it.
-    pub fn track_changes(&mut self) {
-        if self.log.is_none() {
-            self.log = Some(Box::default());
-        }
-    }
-
-    /// The log of changed tiles, if kept.
-    pub fn change_log(&self) -> Option<&TileLog> {
-        self.log.as_deref()
     }
 
     /// Number of known cells (kept up to date, no traversal).
@@ -396,16 +311,11 @@ impl KnownMap {
         self.tree.count_cells_where(true, obstacles.tree(), false) as f64 * self.grid().cell_area_m2()
     }
 
-    /// Bytes held by the map itself (the change log aside: a restored run has none until a
-    /// reader asks, and this figure is part of the run's metrics, which must not depend on
+    /// Bytes held by the map's tree (the window aside: a restored run has none until it
+    /// marks a view, and this figure is part of the run's metrics, which must not depend on
     /// where a run was resumed).
     pub fn memory_bytes(&self) -> usize {
         self.tree.memory_bytes()
-    }
-
-    /// Bytes held by the change log, if kept.
-    pub fn change_log_bytes(&self) -> usize {
-        self.log.as_ref().map_or(0, |l| l.memory_bytes())
     }
 
     /// Number of quadtree leaves.
@@ -423,14 +333,6 @@ impl KnownMap {
         let counted = self.tree.count_cells(true);
         if counted != self.known_cells {
             return Err(format!("cached known cells {} ≠ {counted} counted", self.known_cells));
-        }
-        if let Some(rows) = &self.last_rows
-            && rows.len > rows.rows.len()
-        {
-            return Err(format!("the last view's {} rows exceed {}", rows.len, rows.rows.len()));
-        }
-        if let Some(blocks) = &self.blocks {
-            blocks.check(&self.tree)?;
         }
         if let Some(window) = &self.window {
             window.check(&self.tree)?;

@@ -12,7 +12,6 @@ mod nav;
 mod obstacle_map;
 mod quadtree;
 mod robot_index;
-mod tile_log;
 mod treasure_index;
 mod view_stencil;
 
@@ -24,12 +23,10 @@ pub use geometry::{
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
-pub use nav::{Frontier, LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
+pub use nav::{LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
 pub use obstacle_map::ObstacleMap;
-pub use quadtree::{
-    BitGrid, BlockCache, BlockMemo, CellSet, Components, Finger, PartialCells, Region, RegionQuadtree, Square,
-};
+pub use quadtree::{BitGrid, CellSet, Components, PartialCells, Region, RegionQuadtree, Square};
+pub(crate) use quadtree::{BlockMemo, Finger};
 pub(crate) use robot_index::Entry as IndexEntry;
 pub use robot_index::RobotIndex;
-pub use tile_log::{LogMark, TILE_LEVEL, TileLog};
 pub use treasure_index::{BUCKET, Treasure, TreasureIndex};

@@ -176,33 +176,11 @@ impl ObstacleMap {
         let exact = |t: f64| self.is_swept_disc_free(from, from + d * t, radius_m);
         // Segments (radius 0) are tested differently by the exact test: they take it always.
         let quick = radius_m > 0.0;
-        let mut near: Vec<Aabb> = Vec::new();
-        if quick {
-            // Slightly wider than any step's capsule, so no leaf a step could meet is missed
-            // (a step's capsule lies inside the whole move's).
-            let reach = Capsule {
-                a: from,
-                b: from + d,
-                radius: radius_m * (1.0 + 1e-6) + 1e-9,
-            };
-            // The blocked cells near a short move, or else the blocked leaves: a step meets
-            // a leaf exactly when it meets one of the leaf's cells.
-            let by_cells = self
-                .inside_map(&reach)
-                .then(|| {
-                    self.visit_blocked_cells_near(&reach.bounds(), |b| {
-                        near.push(b);
-                        ControlFlow::Continue(())
-                    })
-                })
-                .flatten();
-            if by_cells.is_none() {
-                let _ = self.tree.visit_leaves_in(&reach, true, |_, b| {
-                    near.push(b);
-                    ControlFlow::Continue(())
-                });
-            }
-        }
+        let near = if quick {
+            self.blocked_near_move(from, d, radius_m)
+        } else {
+            Vec::new()
+        };
         let r2 = radius_m * radius_m;
         // Distances this far from the radius decide a step whatever rounding the exact test's
         // own box and distance arithmetic does.
@@ -229,36 +207,13 @@ impl ObstacleMap {
             }
             nearest > clearly_clear || exact(t)
         };
-        // The bisection ends at the largest k / 2²⁴ (0 < k < 2²⁴) that `free` accepts, or 0,
-        // as a longer step sweeps a superset of a shorter one. So start where the disc's
-        // centre first comes within the radius of a near box, and test the steps around it;
-        // only if that takes long, bisect.
         if quick && !near.is_empty() {
-            const STEPS: f64 = (1u32 << 24) as f64;
-            const LAST: i64 = (1 << 24) - 1;
             let touch = near
                 .iter()
                 .map(|b| first_touch(from, d, radius_m, b))
                 .fold(1.0, f64::min);
-            let at = |k: i64| k as f64 / STEPS;
-            let mut k = ((touch * STEPS) as i64).clamp(0, LAST);
-            let mut tests = 0;
-            if k >= 1 && free(at(k)) {
-                while k < LAST && tests < 4 && free(at(k + 1)) {
-                    k += 1;
-                    tests += 1;
-                }
-                if k == LAST || tests < 4 {
-                    return at(k);
-                }
-            } else {
-                while k >= 1 && tests < 4 && !free(at(k)) {
-                    k -= 1;
-                    tests += 1;
-                }
-                if k == 0 || tests < 4 {
-                    return at(k);
-                }
+            if let Some(t) = bisection_end_near(touch, &free) {
+                return t;
             }
         }
         let (mut lo, mut hi) = (0.0, 1.0);
@@ -271,6 +226,35 @@ impl ObstacleMap {
             }
         }
         lo
+    }
+
+    /// The blocked cells (near a short move) or leaves that a disc of `radius_m` moving by
+    /// `d` from `from` could meet: a step meets a leaf exactly when it meets one of its cells.
+    fn blocked_near_move(&self, from: DVec2, d: DVec2, radius_m: f64) -> Vec<Aabb> {
+        let mut near = Vec::new();
+        // Slightly wider than any step's capsule, so no leaf a step could meet is missed (a
+        // step's capsule lies inside the whole move's).
+        let reach = Capsule {
+            a: from,
+            b: from + d,
+            radius: radius_m * (1.0 + 1e-6) + 1e-9,
+        };
+        let by_cells = self
+            .inside_map(&reach)
+            .then(|| {
+                self.visit_blocked_cells_near(&reach.bounds(), |b| {
+                    near.push(b);
+                    ControlFlow::Continue(())
+                })
+            })
+            .flatten();
+        if by_cells.is_none() {
+            let _ = self.tree.visit_leaves_in(&reach, true, |_, b| {
+                near.push(b);
+                ControlFlow::Continue(())
+            });
+        }
+        near
     }
 
     fn shape_free<S: Shape>(&self, shape: &S) -> bool {
@@ -400,4 +384,30 @@ fn first_touch(from: DVec2, d: DVec2, radius: f64, b: &Aabb) -> f64 {
         }
     }
     t
+}
+
+/// Where the 24-step bisection on `free` ends, found from `touch`, the fraction of the move
+/// at which the disc first comes within its radius of a near box: the bisection ends at the
+/// largest k / 2²⁴ (0 < k < 2²⁴) that `free` accepts, or 0, as a longer step sweeps a
+/// superset of a shorter one, so the steps around `touch` are tested. `None` if that takes
+/// more than a few tests (then bisect).
+fn bisection_end_near(touch: f64, free: &impl Fn(f64) -> bool) -> Option<f64> {
+    const STEPS: f64 = (1u32 << 24) as f64;
+    const LAST: i64 = (1 << 24) - 1;
+    let at = |k: i64| k as f64 / STEPS;
+    let mut k = ((touch * STEPS) as i64).clamp(0, LAST);
+    let mut tests = 0;
+    if k >= 1 && free(at(k)) {
+        while k < LAST && tests < 4 && free(at(k + 1)) {
+            k += 1;
+            tests += 1;
+        }
+        (k == LAST || tests < 4).then(|| at(k))
+    } else {
+        while k >= 1 && tests < 4 && !free(at(k)) {
+            k -= 1;
+            tests += 1;
+        }
+        (k == 0 || tests < 4).then(|| at(k))
+    }
 }

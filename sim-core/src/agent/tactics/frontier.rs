@@ -59,8 +59,8 @@ impl FrontierSeeking {
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let memo = &mut self.memo;
             let found = ctx.timed_planning(|| {
-                Navigator::frontier_route_memo(ctx, memo, None, &avoid(), avoid_radius_m, max_detour_m)
-                    .or_else(|| Navigator::frontier_route_memo(ctx, memo, None, &[], 0.0, f64::INFINITY))
+                Navigator::frontier_route_memo(ctx, memo, &avoid(), avoid_radius_m, max_detour_m)
+                    .or_else(|| Navigator::frontier_route_memo(ctx, memo, &[], 0.0, f64::INFINITY))
             });
             if let Some(route) = found {
                 self.target = route.waypoints.last().copied();

@@ -7,7 +7,7 @@ use glam::DVec2;
 use super::SEARCH_BUDGET;
 use crate::agent::ctx::Ctx;
 use crate::spatial::{
-    Aabb, BlockCells, Finger, Frontier, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
+    Aabb, BlockCells, Finger, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
 };
 use crate::world::Action;
 
@@ -97,28 +97,8 @@ impl Navigator {
     /// once it settles a piece entered more than `max_detour_m` beyond the piece of the
     /// first target it skipped, the route goes to that target after all (`f64::INFINITY`:
     /// no bound; the search goes on to the nearest target clear of every claim).
-    ///
-    /// With `frontier` (the robot's [`Frontier`], synced with its known map) the search
-    /// asks the set whether a node is a frontier before asking the map; without, it asks
-    /// the map of each node it reaches. The route is the same either way
-    /// (`navigator_frontier_route_leaves_the_known_disc`). The built-in explorers search
-    /// without: keeping the set costs more than it saves when the frontier is near, as it
-    /// mostly is (BENCHMARKS.md, "Navigation").
-    pub fn frontier_route(
-        ctx: &Ctx,
-        frontier: Option<&Frontier>,
-        avoid: &[DVec2],
-        avoid_radius_m: f64,
-        max_detour_m: f64,
-    ) -> Option<Route> {
-        Self::frontier_route_memo(
-            ctx,
-            &mut PieceMemo::default(),
-            frontier,
-            avoid,
-            avoid_radius_m,
-            max_detour_m,
-        )
+    pub fn frontier_route(ctx: &Ctx, avoid: &[DVec2], avoid_radius_m: f64, max_detour_m: f64) -> Option<Route> {
+        Self::frontier_route_memo(ctx, &mut PieceMemo::default(), avoid, avoid_radius_m, max_detour_m)
     }
 
     /// [`frontier_route`](Self::frontier_route) that remembers, in `memo`, which pieces the
@@ -128,7 +108,6 @@ impl Navigator {
     pub fn frontier_route_memo(
         ctx: &Ctx,
         memo: &mut PieceMemo,
-        frontier: Option<&Frontier>,
         avoid: &[DVec2],
         avoid_radius_m: f64,
         max_detour_m: f64,
@@ -141,7 +120,6 @@ impl Navigator {
         let search = FrontierSearch {
             nav,
             known,
-            frontier,
             avoid,
             avoid_radius_m,
             max_detour_m,
@@ -174,7 +152,6 @@ impl Navigator {
 struct FrontierSearch<'a, 'm> {
     nav: &'a NavGraph,
     known: &'a KnownMap,
-    frontier: Option<&'a Frontier>,
     avoid: &'a [DVec2],
     avoid_radius_m: f64,
     max_detour_m: f64,
@@ -230,9 +207,6 @@ impl FrontierSearch<'_, '_> {
         // first piece beyond the detour allowed: the skipped target it is.
         if let Some((n0, _, t0)) = self.skipped.get().filter(|s| d > s.1 + self.max_detour_m) {
             return Some((n0, t0));
-        }
-        if self.frontier.is_some_and(|f| !f.contains(n)) {
-            return None;
         }
         if !self
             .memo

@@ -12,9 +12,9 @@ use rayon::prelude::*;
 use super::perceive::{Snapshot, perceive};
 use super::resolve::{Bodies, move_within_means, publish_plan, resolve_alone, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, StrategyFailure, WorldView};
-use crate::engine::simulation::{Agent, PlannedMove, Simulation};
+use crate::engine::simulation::{Agent, PlannedMove, Simulation, Turn};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
-use crate::world::{Action, Recipient, Robot, RobotType};
+use crate::world::{Action, HomeBase, Recipient, Robot, RobotType};
 
 /// The most robots one parallel task takes. Rayon splits a slice in halves only while
 /// workers are idle, so uncapped, workers end up with a few large runs of robots; robots
@@ -28,98 +28,44 @@ impl Simulation {
     /// Steps 1 and 2, in parallel over robots. Returns whether some turn has news (see
     /// `Turn::news`).
     pub(super) fn perceive_and_decide(&mut self, round: u64) -> bool {
-        let world = WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types)
-            .with_time_planning(self.time_planning);
-        let planning_ns = AtomicU64::new(0);
-        let snapshot = Snapshot {
-            type_of: &self.type_of,
-            treasures: &self.treasures,
-            treasure_index: &self.treasure_index,
-            robot_index: &self.robot_index,
+        let step = Step2 {
+            round,
+            seed: self.seed,
+            world: WorldView::new(&self.map.obstacles, &self.nav, self.map.home, &self.types)
+                .with_time_planning(self.time_planning),
+            snapshot: Snapshot {
+                type_of: &self.type_of,
+                treasures: &self.treasures,
+                treasure_index: &self.treasure_index,
+                robot_index: &self.robot_index,
+            },
+            types: &self.types,
+            obstacles: &self.map.obstacles,
+            bodies: Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m),
+            limit: self.decide_limit,
+            // Without strategies that perceive robots the view-sized index is built only when
+            // someone broadcasts: their hearers are listed after this pass.
+            robot_index: self.robot_index_eager.then_some(&self.robot_index),
+            radio_limited: self.radio_limited,
+            home: self.map.home,
+            alone_allowed: self.resolve_alone,
+            planning_ns: AtomicU64::new(0),
+            pending: AtomicBool::new(false),
+            any_news: AtomicBool::new(false),
         };
-
-        let seed = self.seed;
-        let types = &self.types;
-        let obstacles = &self.map.obstacles;
-        let bodies = Bodies::new(&self.body_index, self.max_radius_m, self.max_speed_m);
-        let limit = self.decide_limit;
-        // Without strategies that perceive robots the view-sized index is built only when
-        // someone broadcasts: their hearers are listed after this pass.
-        let robot_index = self.robot_index_eager.then_some(&self.robot_index);
-        let radio_limited = self.radio_limited;
-        let home = self.map.home;
-        let alone_allowed = self.resolve_alone;
-        let pending = AtomicBool::new(false);
-        let any_news = AtomicBool::new(false);
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
             .zip(self.turns.par_iter_mut())
             .zip(self.bodies_now.par_iter_mut())
             .with_max_len(ROBOTS_PER_TASK)
-            .for_each(|(((agent, robot), turn), body)| {
-                turn.begin(robot.position, robot.alive);
-                agent.mind.output.begin_round();
-                agent.planned_move = None;
-                if robot.alive {
-                    let kind = &types[robot.type_index];
-                    turn.sensed_m = agent.needs.senses().then_some(kind.view_radius_m);
-                    perceive(agent, turn, robot, kind, &snapshot, round);
-                    let rng = Simulation::rng_for(seed, robot.id, round);
-                    let mut ctx = Ctx::new(round, robot, kind, world, rng, &mut agent.mind);
-                    // A strategy that panics takes down its robot, not the run: step 3
-                    // disables the robot and logs why. Nothing it did this round is kept.
-                    let strategy = &mut agent.strategy;
-                    // A coarse clock (a few milliseconds' resolution, cheaper than a precise
-                    // one) is ample for limits of tens of milliseconds.
-                    let started = limit.map(|_| coarsetime::Instant::now());
-                    let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
-                    let planned_ns = ctx.planning_ns();
-                    if planned_ns > 0 {
-                        planning_ns.fetch_add(planned_ns, Ordering::Relaxed);
-                    }
-                    turn.slow = started
-                        .map(|t| Duration::from(t.elapsed()))
-                        .filter(|&took| limit.is_some_and(|limit| took > limit));
-                    match decided {
-                        Ok(action) => {
-                            agent.action = action;
-                            publish_plan(robot, &agent.mind.output);
-                            agent.planned_move = plan_move(agent, robot, kind, obstacles, &bodies);
-                            agent.hearers.clear();
-                            let broadcasts = agent
-                                .mind
-                                .output
-                                .outbox()
-                                .iter()
-                                .any(|(to, _)| *to == Recipient::Broadcast);
-                            if broadcasts && !radio_limited {
-                                if let Some(index) = robot_index {
-                                    hearers(index, robot.id, turn.start, kind.comm_radius_m, &mut agent.hearers);
-                                } else {
-                                    turn.hearers_pending = true;
-                                    pending.store(true, Ordering::Relaxed);
-                                }
-                            }
-                            // Step 3 for a robot whose turn depends on nobody, while its data
-                            // are at hand.
-                            turn.alone = alone_allowed && resolve_alone(robot, agent, kind, &home);
-                        }
-                        Err(payload) => {
-                            agent.action = Action::Idle;
-                            agent.failure = Some(panic_message(payload.as_ref()));
-                        }
-                    }
-                } else {
-                    agent.action = Action::Idle;
-                }
-                *body = (robot.position, types[robot.type_index].radius_m);
-                turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
-                turn.news = !agent.mind.perception.treasures.is_empty() || !agent.mind.output.events().is_empty();
-                if turn.news {
-                    any_news.store(true, Ordering::Relaxed);
-                }
-            });
+            .for_each(|(((agent, robot), turn), body)| step.robot_turn(agent, robot, turn, body));
+        let Step2 {
+            planning_ns,
+            pending,
+            any_news,
+            ..
+        } = step;
         if pending.into_inner() {
             self.list_pending_hearers();
         }
@@ -190,6 +136,102 @@ fn hearers(index: &RobotIndex, id: RobotId, at: DVec2, range_m: f64, out: &mut V
             }
         }
     });
+}
+
+/// What every robot's steps 1 and 2 share in a round.
+struct Step2<'a> {
+    round: u64,
+    seed: u64,
+    world: WorldView<'a>,
+    snapshot: Snapshot<'a>,
+    types: &'a [RobotType],
+    obstacles: &'a ObstacleMap,
+    bodies: Bodies<'a>,
+    limit: Option<Duration>,
+    robot_index: Option<&'a RobotIndex>,
+    radio_limited: bool,
+    home: HomeBase,
+    alone_allowed: bool,
+    planning_ns: AtomicU64,
+    pending: AtomicBool,
+    any_news: AtomicBool,
+}
+
+impl Step2<'_> {
+    /// One robot's steps 1 and 2, and what the sequential steps will read of its turn.
+    #[inline]
+    fn robot_turn(&self, agent: &mut Agent, robot: &mut Robot, turn: &mut Turn, body: &mut (DVec2, f64)) {
+        turn.begin(robot.position, robot.alive);
+        agent.mind.output.begin_round();
+        agent.planned_move = None;
+        if robot.alive {
+            self.perceive_and_decide(agent, robot, turn);
+        } else {
+            agent.action = Action::Idle;
+        }
+        *body = (robot.position, self.types[robot.type_index].radius_m);
+        turn.known_bytes = agent.mind.data.known.as_ref().map_or(0, KnownMap::memory_bytes);
+        turn.news = !agent.mind.perception.treasures.is_empty() || !agent.mind.output.events().is_empty();
+        if turn.news {
+            self.any_news.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// A live robot perceives and its strategy decides; a panic disables it (step 3 logs
+    /// why), and nothing it did this round is kept.
+    #[inline]
+    fn perceive_and_decide(&self, agent: &mut Agent, robot: &mut Robot, turn: &mut Turn) {
+        let kind = &self.types[robot.type_index];
+        turn.sensed_m = agent.needs.senses().then_some(kind.view_radius_m);
+        perceive(agent, turn, robot, kind, &self.snapshot, self.round);
+        let rng = Simulation::rng_for(self.seed, robot.id, self.round);
+        let mut ctx = Ctx::new(self.round, robot, kind, self.world, rng, &mut agent.mind);
+        let strategy = &mut agent.strategy;
+        // A coarse clock (a few milliseconds' resolution, cheaper than a precise one) is
+        // ample for limits of tens of milliseconds.
+        let started = self.limit.map(|_| coarsetime::Instant::now());
+        let decided = std::panic::catch_unwind(AssertUnwindSafe(|| strategy.decide(&mut ctx)));
+        let planned_ns = ctx.planning_ns();
+        if planned_ns > 0 {
+            self.planning_ns.fetch_add(planned_ns, Ordering::Relaxed);
+        }
+        turn.slow = started
+            .map(|t| Duration::from(t.elapsed()))
+            .filter(|&took| self.limit.is_some_and(|limit| took > limit));
+        match decided {
+            Ok(action) => self.take(agent, robot, turn, kind, action),
+            Err(payload) => {
+                agent.action = Action::Idle;
+                agent.failure = Some(panic_message(payload.as_ref()));
+            }
+        }
+    }
+
+    /// What follows a decision in step 2: the move's obstacle test and contact list, the
+    /// hearers of its broadcasts, and the whole turn of a robot that depends on nobody.
+    #[inline]
+    fn take(&self, agent: &mut Agent, robot: &mut Robot, turn: &mut Turn, kind: &RobotType, action: Action) {
+        agent.action = action;
+        publish_plan(robot, &agent.mind.output);
+        agent.planned_move = plan_move(agent, robot, kind, self.obstacles, &self.bodies);
+        agent.hearers.clear();
+        let broadcasts = agent
+            .mind
+            .output
+            .outbox()
+            .iter()
+            .any(|(to, _)| *to == Recipient::Broadcast);
+        if broadcasts && !self.radio_limited {
+            if let Some(index) = self.robot_index {
+                hearers(index, robot.id, turn.start, kind.comm_radius_m, &mut agent.hearers);
+            } else {
+                turn.hearers_pending = true;
+                self.pending.store(true, Ordering::Relaxed);
+            }
+        }
+        // Step 3 for a robot whose turn depends on nobody, while its data are at hand.
+        turn.alone = self.alone_allowed && resolve_alone(robot, agent, kind, &self.home);
+    }
 }
 
 /// What a panic said (its message, when it was a string).

@@ -3,7 +3,9 @@
 
 use std::sync::Arc;
 
-use crate::agent::{SeenRobot, SeenTreasure};
+use glam::DVec2;
+
+use crate::agent::{DataModule, Perception, SeenRobot, SeenTreasure};
 use crate::cache::prefetch;
 use crate::engine::simulation::{Agent, MergedFrom, Simulation, Turn};
 use crate::spatial::{RobotId, RobotIndex, TreasureIndex};
@@ -103,8 +105,7 @@ pub(super) fn perceive(
     round: u64,
 ) {
     let needs = agent.needs;
-    let p = robot.position;
-    let view = kind.view_radius_m;
+    let (p, view) = (robot.position, kind.view_radius_m);
     let data = &mut agent.mind.data;
     let perception = &mut agent.mind.perception;
     turn.has_known = data.known.is_some();
@@ -114,105 +115,140 @@ pub(super) fn perceive(
     }
     perception.robots.clear();
     if needs.robots {
-        world.robot_index.for_each_within(p, view, |id, q| {
-            if id != robot.id {
-                perception.robots.push(SeenRobot {
-                    id,
-                    position: q,
-                    type_index: world.type_of[id.index()],
-                });
-            }
-        });
-        perception.robots.sort_by_key(|r| r.id);
-        // Only those the memory will keep: in a crowd a robot sees hundreds, and a bounded
-        // memory forgets all but the last few. Recording the rest too would leave the same
-        // memory: `recording_the_kept_tail_is_recording_all` (world/memory.rs).
-        for r in data.robots.kept_of(&perception.robots) {
-            data.robots.record(r.id, (r.position, round), round);
-        }
+        see_robots(data, perception, robot, view, world, round);
     }
     perception.treasures.clear();
     if needs.treasures {
-        world.treasure_index.for_each_in_disc(p, view, |t| {
-            let s = &world.treasures[t.id.index()];
-            if s.buried + s.loose > 0 {
-                perception.treasures.push(SeenTreasure {
-                    id: t.id,
-                    position: t.position,
-                    buried: s.buried,
-                    loose: s.loose,
-                });
-            }
-        });
-        perception.treasures.sort_by_key(|t| t.id);
-        // Remembered treasures that should be in view but are not have been emptied: record
-        // that as a fresh sighting, so older hearsay cannot bring them back.
-        // The first test scans the slab and usually fails; the walk keeps the list's order.
-        let emptied =
-            |s: &Sighting| s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure);
-        if data.treasures.any(emptied) {
-            let emptied: Vec<Sighting> = data
-                .treasures
-                .iter()
-                .filter(|(s, _)| emptied(s))
-                .map(|(s, _)| Sighting {
-                    buried: 0,
-                    loose: 0,
-                    round,
-                    ..*s
-                })
-                .collect();
-            for s in emptied {
-                data.treasures.record(s.treasure, s, round);
-            }
-        }
-        for t in &perception.treasures {
-            let s = Sighting {
-                treasure: t.id,
-                position: t.position,
-                buried: t.buried,
-                loose: t.loose,
-                round,
-            };
-            data.treasures.record(t.id, s, round);
-        }
+        see_treasures(data, perception, p, view, world, round);
     }
     if needs.messages {
-        let mut merged = 0;
-        for m in &perception.inbox {
-            match &*m.payload {
-                // A robot digests a bounded number of maps a round (first come, first
-                // served): in a crowd hundreds arrive at once. The bound is tested first:
-                // once it is reached, the rest cost no lookup (each a likely cache miss on
-                // sender and table).
-                Payload::KnownMap(_) if merged >= MAX_MAP_MERGES_PER_ROUND => {}
-                Payload::KnownMap(other) => {
-                    // Maps only grow: one no larger than the last merged from its sender is
-                    // contained in ours already.
-                    let cells = other.known_cells();
-                    let seen = || agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
-                    if let Some(known) = data.known.as_mut()
-                        && !seen()
-                    {
-                        merged += 1;
-                        turn.known_changed |= known.merge(other);
-                        remember_merge(&mut agent.merged_from, m.from, cells);
-                    }
-                }
-                Payload::Sightings(list) => {
-                    for s in list {
-                        let newer = data.treasures.get(s.treasure).is_none_or(|old| old.round < s.round);
-                        if newer {
-                            data.treasures.record(s.treasure, *s, round);
-                        }
-                    }
-                }
-                Payload::Position { .. } | Payload::Claim { .. } | Payload::Custom { .. } => {}
-            }
-        }
+        read_messages(agent, turn, round);
     }
+    let data = &mut agent.mind.data;
     data.treasures.evict(round);
     data.robots.evict(round);
+}
+
+/// The robots in view, by id, and the memory of robots seen.
+#[inline]
+fn see_robots(
+    data: &mut DataModule,
+    perception: &mut Perception,
+    robot: &Robot,
+    view: f64,
+    world: &Snapshot,
+    round: u64,
+) {
+    world.robot_index.for_each_within(robot.position, view, |id, q| {
+        if id != robot.id {
+            perception.robots.push(SeenRobot {
+                id,
+                position: q,
+                type_index: world.type_of[id.index()],
+            });
+        }
+    });
+    perception.robots.sort_by_key(|r| r.id);
+    // Only those the memory will keep: in a crowd a robot sees hundreds, and a bounded
+    // memory forgets all but the last few. Recording the rest too would leave the same
+    // memory: `recording_the_kept_tail_is_recording_all` (world/memory.rs).
+    for r in data.robots.kept_of(&perception.robots) {
+        data.robots.record(r.id, (r.position, round), round);
+    }
+}
+
+/// The treasures in view with something left, by id, and the memory of treasures: those in
+/// view recorded, those remembered in view but gone recorded as emptied.
+#[inline]
+fn see_treasures(
+    data: &mut DataModule,
+    perception: &mut Perception,
+    p: DVec2,
+    view: f64,
+    world: &Snapshot,
+    round: u64,
+) {
+    world.treasure_index.for_each_in_disc(p, view, |t| {
+        let s = &world.treasures[t.id.index()];
+        if s.buried + s.loose > 0 {
+            perception.treasures.push(SeenTreasure {
+                id: t.id,
+                position: t.position,
+                buried: s.buried,
+                loose: s.loose,
+            });
+        }
+    });
+    perception.treasures.sort_by_key(|t| t.id);
+    // Remembered treasures that should be in view but are not have been emptied: record
+    // that as a fresh sighting, so older hearsay cannot bring them back.
+    // The first test scans the slab and usually fails; the walk keeps the list's order.
+    let emptied =
+        |s: &Sighting| s.position.distance(p) <= view && !perception.treasures.iter().any(|t| t.id == s.treasure);
+    if data.treasures.any(emptied) {
+        let emptied: Vec<Sighting> = data
+            .treasures
+            .iter()
+            .filter(|(s, _)| emptied(s))
+            .map(|(s, _)| Sighting {
+                buried: 0,
+                loose: 0,
+                round,
+                ..*s
+            })
+            .collect();
+        for s in emptied {
+            data.treasures.record(s.treasure, s, round);
+        }
+    }
+    for t in &perception.treasures {
+        let s = Sighting {
+            treasure: t.id,
+            position: t.position,
+            buried: t.buried,
+            loose: t.loose,
+            round,
+        };
+        data.treasures.record(t.id, s, round);
+    }
+}
+
+/// This round's messages: maps merged (a bounded number), sightings heard recorded.
+#[inline]
+fn read_messages(agent: &mut Agent, turn: &mut Turn, round: u64) {
+    let data = &mut agent.mind.data;
+    let mut merged = 0;
+    for m in &agent.mind.perception.inbox {
+        match &*m.payload {
+            // A robot digests a bounded number of maps a round (first come, first
+            // served): in a crowd hundreds arrive at once. The bound is tested first:
+            // once it is reached, the rest cost no lookup (each a likely cache miss on
+            // sender and table).
+            Payload::KnownMap(_) if merged >= MAX_MAP_MERGES_PER_ROUND => {}
+            Payload::KnownMap(other) => {
+                // Maps only grow: one no larger than the last merged from its sender is
+                // contained in ours already.
+                let cells = other.known_cells();
+                let seen = || agent.merged_from.get(&m.from).is_some_and(|&c| c >= cells);
+                if let Some(known) = data.known.as_mut()
+                    && !seen()
+                {
+                    merged += 1;
+                    turn.known_changed |= known.merge(other);
+                    remember_merge(&mut agent.merged_from, m.from, cells);
+                }
+            }
+            Payload::Sightings(list) => {
+                for s in list {
+                    let newer = data.treasures.get(s.treasure).is_none_or(|old| old.round < s.round);
+                    if newer {
+                        data.treasures.record(s.treasure, *s, round);
+                    }
+                }
+            }
+            Payload::Position { .. } | Payload::Claim { .. } | Payload::Custom { .. } => {}
+        }
+    }
 }
 
 /// Note that a robot merged a map of `cells` known cells from `from`.

@@ -19,12 +19,10 @@ use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::{MAX_LEG_BLOCKS, ObstacleMap};
 use crate::spatial::quadtree::{Finger, Square};
 
-mod frontier;
 mod funnel;
 mod memo;
 mod pieces;
 
-pub use frontier::Frontier;
 use funnel::Portal;
 pub use memo::PieceMemo;
 pub use pieces::Piece;
@@ -211,6 +209,40 @@ struct Scratch {
     marks: Vec<(u32, u32)>,
     entry: Vec<(DVec2, f64, u32, u32)>,
     heap: BinaryHeap<Reverse<u128>>,
+}
+
+impl Scratch {
+    /// Make the scratch ready for a search of a graph of `nodes` nodes; returns the
+    /// search's stamp. Two stamps a search: `stamp` for a node reached, `stamp + 1` once
+    /// settled; a node's entry is read only once it carries the search's stamp (never 0).
+    fn begin(&mut self, nodes: usize) -> u32 {
+        if self.marks.len() != nodes {
+            // All zero bytes, so the allocator hands out pages the kernel maps only when a
+            // search first writes them: a thread's searches pay only for the part of a big
+            // graph they reach.
+            self.marks = vec![(0, 0); nodes];
+            self.stamp = 0;
+        }
+        self.stamp = self.stamp.wrapping_add(2);
+        if self.stamp == 0 {
+            for m in &mut self.marks {
+                m.0 = 0;
+            }
+            self.stamp = 2;
+        }
+        self.stamp
+    }
+}
+
+/// The nodes of a search's route from its start to node `n`, following each node's entry's
+/// parent (one allocation of the route's size).
+fn chain_to(entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)], n: u32) -> Vec<NavNodeId> {
+    let parent = |cur: u32| Some(entry[marks[cur as usize].1 as usize].3).filter(|&p| p != u32::MAX);
+    let len = std::iter::successors(Some(n), |&cur| parent(cur)).count();
+    let mut nodes = Vec::with_capacity(len + 1);
+    nodes.extend(std::iter::successors(Some(n), |&cur| parent(cur)).map(NavNodeId));
+    nodes.reverse();
+    nodes
 }
 
 thread_local! {
@@ -410,6 +442,13 @@ impl NavGraph {
             return Some(n);
         }
         self.neighbors(n).find(|&m| self.piece(m).holds(cell))
+    }
+
+    /// Whether node `n` is on the frontier of `known`: the known map touches it, and it is
+    /// partly unknown or borders a node not known at all.
+    pub fn is_frontier(&self, known: &KnownMap, n: NavNodeId) -> bool {
+        self.touched_by(known, n)
+            && (!self.covered_by(known, n) || self.neighbors(n).any(|m| !self.touched_by(known, m)))
     }
 
     /// Whether `known` knows some cell of node `n`.
@@ -684,29 +723,8 @@ impl NavGraph {
         let start = self.node_at_near(from, start_hint)?;
         SCRATCH.with(|cell| {
             let mut guard = cell.borrow_mut();
-            let Scratch {
-                stamp,
-                marks,
-                entry,
-                heap,
-            } = &mut *guard;
-            if marks.len() != self.pieces.len() {
-                // All zero bytes, so the allocator hands out pages the kernel maps only
-                // when a search first writes them: a thread's searches pay only for the
-                // part of a big graph they reach. A node's entry is read only once it
-                // carries the search's stamp (never 0).
-                *marks = vec![(0, 0); self.pieces.len()];
-                *stamp = 0;
-            }
-            // Two stamps a search: `stamp` for a node reached, `stamp + 1` once settled.
-            *stamp = stamp.wrapping_add(2);
-            if *stamp == 0 {
-                for m in marks.iter_mut() {
-                    m.0 = 0;
-                }
-                *stamp = 2;
-            }
-            let stamp = *stamp;
+            let stamp = guard.begin(self.pieces.len());
+            let Scratch { marks, entry, heap, .. } = &mut *guard;
             let settled_stamp = stamp + 1;
             // Where the search enters each node (portal or start), for edge costs, and the
             // distance walked to get there (buffers reused: every explorer plans a search
@@ -729,13 +747,7 @@ impl NavGraph {
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
                 if let Some((NavNodeId(n), goal)) = is_goal(node, d, &reached) {
-                    let parent = |cur: u32| Some(entry[marks[cur as usize].1 as usize].3).filter(|&p| p != u32::MAX);
-                    // The chain counted first: one allocation of the route's size.
-                    let len = std::iter::successors(Some(n), |&cur| parent(cur)).count();
-                    let mut nodes = Vec::with_capacity(len + 1);
-                    nodes.extend(std::iter::successors(Some(n), |&cur| parent(cur)).map(NavNodeId));
-                    nodes.reverse();
-                    return Some((nodes, goal));
+                    return Some((chain_to(entry, marks, n), goal));
                 }
                 if settled >= max_nodes {
                     return None;
@@ -811,7 +823,7 @@ impl NavGraph {
                 if Some(n) == goal {
                     return Some((n, to));
                 }
-                if !Frontier::is_frontier(self, known, n) {
+                if !self.is_frontier(known, n) {
                     return None;
                 }
                 // Leave the node at its point nearest to `to`, or else at the corner nearest

@@ -325,49 +325,6 @@ fn grow_known(known: &mut KnownMap, at: &mut DVec2, rng: &mut rand_chacha::ChaCh
     }
 }
 
-/// The frontier kept up to date by the known map's changed tiles equals the frontier worked
-/// out from scratch after every step of random runs of views (the kernel's marking), discs,
-/// boxes and merges with other robots' maps.
-#[test]
-fn incremental_frontier_equals_from_scratch() {
-    use rand::{Rng, SeedableRng};
-    for seed in 0..12u64 {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let (w, h) = (rng.random_range(40..100u32), rng.random_range(40..100u32));
-        let grid = Grid::new(DVec2::ZERO, 1.0, w, h).unwrap();
-        let density = rng.random_range(0.0..0.35);
-        let cells: Vec<bool> = (0..w * h).map(|_| rng.random_bool(density)).collect();
-        let clustered = rng.random_bool(0.5);
-        let map = ObstacleMap::from_fn(grid, |x, y| {
-            if clustered {
-                cells[((y / 4) * w + x / 4) as usize]
-            } else {
-                cells[(y * w + x) as usize]
-            }
-        });
-        let g = NavGraph::build(&map);
-        let mut known = KnownMap::new(grid);
-        let mut frontier = Frontier::default();
-        let mut at = DVec2::new(rng.random_range(0.0..f64::from(w)), rng.random_range(0.0..f64::from(h)));
-        for step in 0..120 {
-            grow_known(&mut known, &mut at, &mut rng);
-            // Not every step is read: searches come every few rounds.
-            if rng.random_bool(0.6) {
-                frontier.sync(&g, &mut known);
-                assert_eq!(
-                    frontier.nodes(),
-                    Frontier::from_scratch(&g, &known),
-                    "seed {seed}, step {step}"
-                );
-            }
-        }
-        // A copy of the map is another log: reading it starts from scratch, and agrees.
-        let mut copy = known.clone();
-        frontier.sync(&g, &mut copy);
-        assert_eq!(frontier.nodes(), Frontier::from_scratch(&g, &copy), "seed {seed}, copy");
-    }
-}
-
 /// A robot's memo of touched and covered pieces answers exactly as its map does, while the
 /// map grows by views, marks and merges, with more pieces than the memo has slots, each
 /// asked several times between changes.

@@ -2,8 +2,33 @@
 //! change nothing.
 
 use crate::spatial::quadtree::block::BLOCK_LEVEL;
-use crate::spatial::quadtree::block_cache::{NO_BLOCK, block_key, held_blocks};
-use crate::spatial::quadtree::{CellSet, RegionQuadtree, Square};
+use crate::spatial::quadtree::{CellSet, Square};
+
+/// A slot's key when it holds no block.
+const NO_BLOCK: u64 = u64::MAX;
+
+/// The key of the block whose south-west cell is `(x, y)`: `bx << 32 | by` in block
+/// coordinates.
+#[inline]
+fn block_key(x: u32, y: u32) -> u64 {
+    (u64::from(x >> BLOCK_LEVEL) << 32) | u64::from(y >> BLOCK_LEVEL)
+}
+
+/// The blocks that slots of `keys` (and `bits` beside them) hold, with their bits.
+#[cfg(test)]
+fn held_blocks<'a>(keys: &'a [u64], bits: &'a [u64]) -> impl Iterator<Item = (Square, u64)> + 'a {
+    keys.iter()
+        .zip(bits)
+        .filter(|(key, _)| **key != NO_BLOCK)
+        .map(|(&key, &bits)| {
+            let sq = Square {
+                x: ((key >> 32) as u32) << BLOCK_LEVEL,
+                y: (key as u32) << BLOCK_LEVEL,
+                level: BLOCK_LEVEL,
+            };
+            (sq, bits)
+        })
+}
 
 /// Blocks a side of the window of blocks the memo maps one to one (64 × 64 blocks: 512 ×
 /// 512 cells).
@@ -22,7 +47,7 @@ const SIDE_BITS: u32 = 6;
 ///
 /// It holds nothing, and allocates nothing, until the first [`put`](Self::put).
 #[derive(Clone, Debug, Default)]
-pub struct BlockMemo {
+pub(crate) struct BlockMemo {
     /// Block `(bx, by)` as `bx << 32 | by`, or [`NO_BLOCK`] (no slots yet: empty).
     keys: Vec<u64>,
     bits: Vec<u64>,
@@ -65,14 +90,10 @@ impl BlockMemo {
         (self.keys[slot], self.bits[slot]) = (key, bits);
     }
 
-    /// Heap bytes held.
-    pub fn memory_bytes(&self) -> usize {
-        (self.keys.capacity() + self.bits.capacity()) * std::mem::size_of::<u64>()
-    }
-
     /// Whether every cell held is set in `tree` (a description of the first block where
     /// one is not, otherwise).
-    pub fn check(&self, tree: &RegionQuadtree) -> Result<(), String> {
+    #[cfg(test)]
+    pub fn check(&self, tree: &super::RegionQuadtree) -> Result<(), String> {
         for (sq, bits) in held_blocks(&self.keys, &self.bits) {
             let actual = tree.block_bits_at(sq);
             if bits & !actual != 0 {

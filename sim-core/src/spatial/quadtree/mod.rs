@@ -22,11 +22,10 @@
 //! (shape visitors, ray casting, areas), `update` (fill, union), `validate`, `codec` (the
 //! map file's bit string), `block` (the packed bottom), `components` (connected free
 //! space), `hash` (content hashes for unions), `state` (the checkpoint form), and
-//! `directory`, `block_cache` and `block_memo` (shortcuts to blocks). Node references are
+//! `directory` and `block_memo` (shortcuts to blocks). Node references are
 //! internal to sim-core; users see squares, values and shapes.
 
 pub(crate) mod block;
-mod block_cache;
 mod block_memo;
 mod build;
 mod codec;
@@ -40,12 +39,11 @@ mod tests;
 mod update;
 mod validate;
 
-pub use block_cache::BlockCache;
-pub use block_memo::BlockMemo;
+pub(crate) use block_memo::BlockMemo;
 pub use build::{BitGrid, Region};
 pub use components::Components;
 pub(crate) use directory::Directory;
-pub use query::Finger;
+pub(crate) use query::Finger;
 pub use update::PartialCells;
 
 use crate::spatial::geometry::{Aabb, BlockCells};

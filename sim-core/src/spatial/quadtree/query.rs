@@ -8,6 +8,7 @@ use super::block::{self, BLOCK_LEVEL, Node};
 use super::directory::Directory;
 use super::{CellSet, NodeRef, Reach, RegionQuadtree, Square, Stack, is_block, is_leaf, tag_square, untag};
 use crate::spatial::geometry::{Aabb, Capsule, Overlap, Shape, clip_line, segment_box_distance_squared};
+use crate::spatial::grid::Grid;
 
 /// How many cells within rounding of a capsule's rim [`RegionQuadtree::capsule_meets_cells`]
 /// decides by the walk's own tests; with more it gives up (`None`).
@@ -435,56 +436,7 @@ impl RegionQuadtree {
         {
             self.visit_cells_in_blocks_via(dir, lo, hi, value, |_| true, &mut visit)?
         } else {
-            // A block farther than the radius by a part in a million holds no cell within a
-            // part in 10⁷ of it, whatever the rounding, so skipping it changes no answer; a
-            // row's blocks beyond the segment's reach there by a cell more are farther still.
-            let reach2 = r2 * (1.0 + 1e-6);
-            let near = |sq: Square| segment_box_distance_squared(a, b, &grid.square(sq.x, sq.y, sq.level)) <= reach2;
-            let reach = capsule.radius * (1.0 + 1e-6) + grid.cell_m() + bounds.rounding_margin();
-            let mut budget = max_blocks;
-            let mut flow = ControlFlow::Continue(());
-            for by in (lo.1 >> BLOCK_LEVEL)..=(hi.1 >> BLOCK_LEVEL) {
-                let (y0, y1) = ((by << BLOCK_LEVEL).max(lo.1), ((by << BLOCK_LEVEL) + 7).min(hi.1));
-                // The segment's part level with the row's cells, give or take the reach.
-                let (ylo, yhi) = (grid.corner(0, y0).y - reach, grid.corner(0, y1 + 1).y + reach);
-                let (t0, t1) = if (b.y - a.y).abs() <= 1e-3 * (b.x - a.x).abs() {
-                    // Nearly level (the division would magnify rounding): the whole axis, if
-                    // it comes within reach of the row.
-                    if a.y.max(b.y) < ylo || a.y.min(b.y) > yhi {
-                        continue;
-                    }
-                    (0.0, 1.0)
-                } else {
-                    let (ta, tb) = ((ylo - a.y) / (b.y - a.y), (yhi - a.y) / (b.y - a.y));
-                    (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
-                };
-                if t0 > t1 {
-                    continue;
-                }
-                let (xa, xb) = (a.x + (b.x - a.x) * t0, a.x + (b.x - a.x) * t1);
-                let span = Aabb {
-                    min: DVec2::new(xa.min(xb) - reach, grid.corner(0, y0).y),
-                    max: DVec2::new(xa.max(xb) + reach, grid.corner(0, y1 + 1).y),
-                };
-                let Some(((x0, _), (x1, _))) = grid.cells_touching(&span) else {
-                    continue;
-                };
-                let (x0, x1) = (x0.max(lo.0), x1.min(hi.0));
-                if x0 > x1 {
-                    continue;
-                }
-                let blocks = (x1 >> BLOCK_LEVEL) - (x0 >> BLOCK_LEVEL) + 1;
-                if blocks > budget {
-                    // Too long to read (no hit so far): the walk decides.
-                    return None;
-                }
-                budget -= blocks;
-                flow = self.visit_cells_in_blocks_via(dir, (x0, y0), (x1, y1), value, near, &mut visit)?;
-                if flow.is_break() {
-                    break;
-                }
-            }
-            flow
+            self.visit_capsule_rows(dir, capsule, (lo, hi), value, max_blocks, &mut visit)?
         };
         if flow.is_break() {
             Some(true)
@@ -497,6 +449,45 @@ impl RegionQuadtree {
                     .any(|&cell| self.walk_meets_cell(capsule, value, cell)),
             )
         }
+    }
+
+    /// The cells holding `value` of a long capsule's blocks, row of blocks by row of blocks,
+    /// only the blocks within its reach, for [`capsule_meets_cells_via`](Self::capsule_meets_cells_via):
+    /// `None` once more than `max_blocks` blocks would be read (no hit so far).
+    #[inline]
+    fn visit_capsule_rows(
+        &self,
+        dir: Option<&Directory>,
+        capsule: &Capsule,
+        (lo, hi): ((u32, u32), (u32, u32)),
+        value: bool,
+        max_blocks: u32,
+        visit: &mut impl FnMut(u32, u32) -> ControlFlow<()>,
+    ) -> Option<ControlFlow<()>> {
+        let (a, b, grid) = (capsule.a, capsule.b, self.grid);
+        // A block farther than the radius by a part in a million holds no cell within a part
+        // in 10⁷ of it, whatever the rounding, so skipping it changes no answer; a row's
+        // blocks beyond the segment's reach there by a cell more are farther still.
+        let reach2 = capsule.radius * capsule.radius * (1.0 + 1e-6);
+        let near = |sq: Square| segment_box_distance_squared(a, b, &grid.square(sq.x, sq.y, sq.level)) <= reach2;
+        let reach = capsule.radius * (1.0 + 1e-6) + grid.cell_m() + capsule.bounds().rounding_margin();
+        let mut budget = max_blocks;
+        for by in (lo.1 >> BLOCK_LEVEL)..=(hi.1 >> BLOCK_LEVEL) {
+            let (y0, y1) = ((by << BLOCK_LEVEL).max(lo.1), ((by << BLOCK_LEVEL) + 7).min(hi.1));
+            let Some((x0, x1)) = capsule_row_span(&grid, a, b, reach, (y0, y1), (lo.0, hi.0)) else {
+                continue;
+            };
+            let blocks = (x1 >> BLOCK_LEVEL) - (x0 >> BLOCK_LEVEL) + 1;
+            if blocks > budget {
+                return None;
+            }
+            budget -= blocks;
+            let flow = self.visit_cells_in_blocks_via(dir, (x0, y0), (x1, y1), value, near, &mut *visit)?;
+            if flow.is_break() {
+                return Some(flow);
+            }
+        }
+        Some(ControlFlow::Continue(()))
     }
 
     /// Whether the walk of [`any_leaf_in`](Self::any_leaf_in)`(shape, value)` reports a
@@ -901,4 +892,41 @@ impl<'a> Finger<'a> {
     pub fn square(&self) -> Square {
         self.square
     }
+}
+
+/// The cell columns `x0..=x1` (within `cols`) of the cell rows `y0..=y1` that the segment
+/// `a`–`b` comes within `reach` of: its part level with the rows, give or take the reach.
+/// `None` when it comes nowhere near them.
+#[inline]
+fn capsule_row_span(
+    grid: &Grid,
+    a: DVec2,
+    b: DVec2,
+    reach: f64,
+    (y0, y1): (u32, u32),
+    cols: (u32, u32),
+) -> Option<(u32, u32)> {
+    let (ylo, yhi) = (grid.corner(0, y0).y - reach, grid.corner(0, y1 + 1).y + reach);
+    let (t0, t1) = if (b.y - a.y).abs() <= 1e-3 * (b.x - a.x).abs() {
+        // Nearly level (the division would magnify rounding): the whole axis, if it comes
+        // within reach of the rows.
+        if a.y.max(b.y) < ylo || a.y.min(b.y) > yhi {
+            return None;
+        }
+        (0.0, 1.0)
+    } else {
+        let (ta, tb) = ((ylo - a.y) / (b.y - a.y), (yhi - a.y) / (b.y - a.y));
+        (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
+    };
+    if t0 > t1 {
+        return None;
+    }
+    let (xa, xb) = (a.x + (b.x - a.x) * t0, a.x + (b.x - a.x) * t1);
+    let span = Aabb {
+        min: DVec2::new(xa.min(xb) - reach, grid.corner(0, y0).y),
+        max: DVec2::new(xa.max(xb) + reach, grid.corner(0, y1 + 1).y),
+    };
+    let ((x0, _), (x1, _)) = grid.cells_touching(&span)?;
+    let (x0, x1) = (x0.max(cols.0), x1.min(cols.1));
+    (x0 <= x1).then_some((x0, x1))
 }

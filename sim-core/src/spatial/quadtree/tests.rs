@@ -326,7 +326,7 @@ fn rows_filled_block_by_block_match_a_grid() {
                 *row = if dense { full } else { rng.random::<u64>() & full };
             }
             let mut switched = BTreeSet::new();
-            let ok = tree.fill_new_rows_reporting(&rows, None, value, |set| {
+            let ok = tree.fill_new_rows_reporting(&rows, value, |set| {
                 set.for_each_cell(|x, y| assert!(switched.insert((x, y)), "case {case}.{call}: ({x}, {y}) twice"));
             });
             assert!(ok, "a packed tree fills rows");

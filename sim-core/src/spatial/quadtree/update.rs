@@ -2,7 +2,7 @@
 //! follows the size of the region it describes, not the number of updates made to it.
 
 use super::block::{self, BLOCK_LEVEL, Node};
-use super::{BlockCache, CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
+use super::{CellSet, FULL, NodeRef, RegionQuadtree, Square, is_block, is_leaf, leaf};
 use crate::spatial::geometry::{Aabb, CellRows, Overlap, Shape};
 use crate::spatial::grid::MAX_DEPTH;
 
@@ -166,38 +166,17 @@ impl RegionQuadtree {
         }
     }
 
-    /// Set the cells of `cells` that `seen` does not hold to `value`, calling `changed` with
-    /// each block's cells that switched: the rows cut into 8 × 8 block masks in one pass,
-    /// then one descent along coordinates per block with cells to set (integer steps, no
-    /// shapes), stopping at squares that hold `value` already. Trees with blocks only
-    /// (`false`, nothing done, otherwise).
+    /// Set the cells of `cells` to `value`, calling `changed` with each block's cells that
+    /// switched: the rows cut into 8 × 8 block masks in one pass, then one descent along
+    /// coordinates per block with cells to set (integer steps, no shapes), stopping at
+    /// squares that hold `value` already. Trees with blocks only (`false`, nothing done,
+    /// otherwise).
     ///
     /// For a robot's view: its cells come from
-    /// [`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows) and the last
-    /// view's are left out as the rows are cut, so marking is a few descents, not a shape
-    /// walk along the rim. Checked by `rows_filled_block_by_block_match_a_grid` and
-    /// `views_marked_by_blocks_are_the_walks_cells`.
-    pub fn fill_new_rows_reporting(
-        &mut self,
-        cells: &CellRows,
-        seen: Option<&CellRows>,
-        value: bool,
-        changed: impl FnMut(CellSet),
-    ) -> bool {
-        self.fill_new_rows_cached(cells, seen, value, None, changed)
-    }
-
-    /// [`fill_new_rows_reporting`](Self::fill_new_rows_reporting), skipping the blocks in
-    /// which `cache` shows nothing would change and keeping it up to date (see
-    /// [`BlockCache`]). The cache must hold this tree's cells where it holds a block.
-    pub fn fill_new_rows_cached(
-        &mut self,
-        cells: &CellRows,
-        seen: Option<&CellRows>,
-        value: bool,
-        mut cache: Option<&mut BlockCache>,
-        mut changed: impl FnMut(CellSet),
-    ) -> bool {
+    /// [`Disc::contained_rows`](crate::spatial::geometry::Disc::contained_rows), so marking
+    /// is a few descents, not a shape walk along the rim. Checked by
+    /// `rows_filled_block_by_block_match_a_grid` and `views_marked_by_blocks_are_the_walks_cells`.
+    pub fn fill_new_rows_reporting(&mut self, cells: &CellRows, value: bool, mut changed: impl FnMut(CellSet)) -> bool {
         if !self.packed {
             return false;
         }
@@ -213,10 +192,7 @@ impl RegionQuadtree {
             let mut masks = [0u64; 9];
             let mut any = 0u128;
             for y in (by << BLOCK_LEVEL).max(y0)..((by + 1) << BLOCK_LEVEL).min(y_end) {
-                let mut row = cells.rows[(y - y0) as usize];
-                if let Some(seen) = seen {
-                    row &= !seen.row_from(y, cells.x0);
-                }
+                let row = cells.rows[(y - y0) as usize];
                 if row == 0 {
                     continue;
                 }
@@ -238,15 +214,7 @@ impl RegionQuadtree {
                         y: by << BLOCK_LEVEL,
                         level: BLOCK_LEVEL,
                     };
-                    let cover = block::z_order(mask);
-                    let Some(cache) = cache.as_deref_mut() else {
-                        let _ = self.fill_block_cells(sq, cover, value, &mut changed);
-                        continue;
-                    };
-                    if cache.get(sq).is_none_or(|bits| filled_bits(bits, cover, value) != bits) {
-                        let bits = self.fill_block_cells(sq, cover, value, &mut changed);
-                        cache.put(sq, bits);
-                    }
+                    let _ = self.fill_block_cells(sq, block::z_order(mask), value, &mut changed);
                 }
             }
         }
