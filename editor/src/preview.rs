@@ -187,6 +187,6 @@ pub fn write_png(img: &RgbImage, path: &Path) -> Result<()> {
             path: path.to_path_buf(),
             cause,
         })?;
-    sim_core::world::write_atomically(path, &bytes)?;
+    sim_core::write_atomically(path, &bytes)?;
     Ok(())
 }

@@ -9,12 +9,12 @@ import pytest
 REPO = pathlib.Path(__file__).resolve().parents[2]
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def repo():
     return REPO
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def smartteams_bin():
     """The command-line binary, built by `scripts/test.sh` (SMARTTEAMS_BIN names it)."""
     path = os.environ.get("SMARTTEAMS_BIN") or str(REPO / "target" / "ci" / "smartteams")

@@ -49,6 +49,8 @@ pub mod io;
 
 mod cache;
 mod error;
+mod fs;
 
 pub use error::{Error, Result};
+pub use fs::write_atomically;
 pub use glam;

@@ -27,8 +27,8 @@ use crate::agent::StrategyRegistry;
 use crate::engine::Simulation;
 use crate::io::config::SimConfig;
 use crate::io::observer::{Observer, ObserverError};
-use crate::io::write_atomically;
 use crate::world::{RoundMetrics, RoundReport};
+use crate::write_atomically;
 use crate::{Error, Result};
 
 /// The checkpoint format this build writes and reads. Raised whenever what a checkpoint

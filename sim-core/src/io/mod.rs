@@ -15,25 +15,3 @@ pub use config::{GroupConfig, Outputs, SimConfig};
 pub use csv::{MetricsCsv, ROBOT_STATS_COLUMNS, write_robot_stats};
 pub use invariants::InvariantChecker;
 pub use observer::{Observer, ObserverError};
-
-use std::io::Write;
-use std::path::{Path, PathBuf};
-
-use crate::{Error, Result};
-
-/// Write `bytes` to `path` atomically and durably: to `<path>.tmp` (which the next write
-/// replaces, should a killed process leave one), flushed to disk, then renamed over `path`.
-/// A reader, a resumed run or a resumed sweep sees the old file or the new one, whole.
-pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    let io = |at: &Path| {
-        let at = at.to_path_buf();
-        move |cause| Error::Io { path: at, cause }
-    };
-    let mut file = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-    file.write_all(bytes).and_then(|()| file.sync_all()).map_err(io(&tmp))?;
-    drop(file);
-    std::fs::rename(&tmp, path).map_err(io(path))
-}

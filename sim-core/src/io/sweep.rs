@@ -34,8 +34,8 @@ use serde::{Deserialize, Serialize};
 use crate::agent::StrategyRegistry;
 use crate::engine::Simulation;
 use crate::io::config::{SimConfig, line_col};
-use crate::io::write_atomically;
 use crate::world::{METRICS_COLUMNS, MapData};
+use crate::write_atomically;
 use crate::{Error, Result};
 
 /// The most runs a sweep may ask for (a typo such as an extra zero should not start a

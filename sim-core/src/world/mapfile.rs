@@ -17,7 +17,7 @@
 //! count: each is checked against the bytes actually left before anything is allocated, and
 //! every failure names the byte offset and the problem.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::DVec2;
 
@@ -201,7 +201,7 @@ impl MapData {
             offset: 0,
             problem: format!("refusing to write an invalid map: {problem}"),
         })?;
-        write_atomically(path, &self.to_bytes())
+        crate::write_atomically(path, &self.to_bytes())
     }
 
     /// Read from `path`.
@@ -212,22 +212,6 @@ impl MapData {
         })?;
         Self::from_bytes(&bytes, path)
     }
-}
-
-/// Write `bytes` to `path` through a temporary file and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let io = |cause| Error::Io {
-        path: path.to_path_buf(),
-        cause,
-    };
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(format!(".tmp{}", std::process::id()));
-    let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
-    })
 }
 
 struct Reader<'a> {

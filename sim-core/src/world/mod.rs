@@ -9,7 +9,7 @@ mod metrics;
 mod model;
 mod report;
 
-pub use mapfile::{HomeBase, MAGIC, MapData, TreasureSpec, VERSION, write_atomically};
+pub use mapfile::{HomeBase, MAGIC, MapData, TreasureSpec, VERSION};
 pub use memory::{MemoryList, Retention};
 pub use messages::{Inbox, InboxIter, Message, Payload, Recipient, Sighting, Task};
 pub use metrics::{METRICS_COLUMNS, METRICS_COUNT, RoundMetrics};
