@@ -68,6 +68,20 @@ pub enum Error {
         /// The cause (part of the message, not a separate source, so it prints once).
         cause: std::io::Error,
     },
+    /// A sweep stopped on request before all its runs were played; the finished ones are
+    /// kept, and the same sweep resumes them.
+    #[error(
+        "stopped after {done} of {total} runs; the finished runs are kept in {}, and the same command resumes the sweep",
+        parts.display()
+    )]
+    Stopped {
+        /// Runs finished (those of earlier attempts included).
+        done: usize,
+        /// Runs of the sweep (or its shard).
+        total: usize,
+        /// Where the finished runs are kept.
+        parts: PathBuf,
+    },
 }
 
 /// sim-core's result type.

@@ -320,8 +320,11 @@ impl ResumeArgs {
 /// with their causes (`{:#}`) and give exit status 1.
 pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = crate::stop::install() {
+        eprintln!("warning: {e:#}; Ctrl-C will end runs without keeping their outputs");
+    }
     match dispatch(cli, registry) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -329,13 +332,13 @@ pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
     }
 }
 
-fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
+fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
     match cli.command {
         Command::Strategies => {
             for (name, description) in registry.describe() {
                 println!("{name:14} {description}");
             }
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
         Command::Tactics => {
             println!(
@@ -345,7 +348,7 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             for (name, description) in registry.tactics().describe() {
                 println!("{name:14} {description}");
             }
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
         Command::View(args) => {
             let stem = args
@@ -357,10 +360,13 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             };
             crate::run::view_map(&args.map, &target)?;
             println!("{}: shown in {target}", args.map.display());
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
         Command::Sweep(args) => {
-            let summary = crate::sweep::sweep(&args, registry, !args.quiet && std::io::stderr().is_terminal())?;
+            let summary = match crate::sweep::sweep(&args, registry, !args.quiet && std::io::stderr().is_terminal()) {
+                Ok(summary) => summary,
+                Err(e) => return stopped_sweep(&e).ok_or(e),
+            };
             if !args.quiet {
                 println!(
                     "{}: {} runs of {} ({} resumed), {} rows; manifest {}",
@@ -375,9 +381,9 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
             if let Some(fig) = &args.plot {
                 plot(std::slice::from_ref(&summary.output), fig, (1400, 900))?;
             }
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
-        Command::Plot(args) => plot(&args.inputs, &args.output, args.size),
+        Command::Plot(args) => plot(&args.inputs, &args.output, args.size).map(|()| ExitCode::SUCCESS),
         Command::Merge(args) => {
             let summary = crate::sweep::merge_parts(&args)?;
             let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));
@@ -387,7 +393,7 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
                 summary.runs,
                 summary.rows
             );
-            Ok(())
+            Ok(ExitCode::SUCCESS)
         }
         Command::Run(args) => {
             let (quiet, what) = (args.output.quiet, format!("running {}", args.config.display()));
@@ -400,11 +406,31 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<()> {
     }
 }
 
-/// Execute a resolved run and print its summary (unless quiet).
-fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, what: &str) -> Result<()> {
+/// The exit status of a sweep that `e` says a stop signal ended (the finished runs are
+/// kept: the message says where), after saying so; `None` for any other error.
+fn stopped_sweep(e: &anyhow::Error) -> Option<ExitCode> {
+    let signal = crate::stop::requested()?;
+    let stopped = e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<sim_core::Error>(),
+            Some(sim_core::Error::Stopped { .. })
+        )
+    });
+    if !stopped {
+        return None;
+    }
+    println!("{e:#} (interrupted by {})", signal.name());
+    Some(ExitCode::from(signal.exit_status()))
+}
+
+/// Execute a resolved run and print its summary (unless quiet; a run stopped by a signal
+/// always says where it stopped). Its exit status: 0, or 130 / 143 after a stop signal.
+fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, what: &str) -> Result<ExitCode> {
     let summary = execute(run, registry, &mut []).with_context(|| what.to_owned())?;
-    if !quiet {
+    if !quiet || summary.interrupted.is_some() {
         println!("{summary}");
     }
-    Ok(())
+    Ok(summary
+        .interrupted
+        .map_or(ExitCode::SUCCESS, |s| ExitCode::from(s.exit_status())))
 }

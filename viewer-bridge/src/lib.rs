@@ -23,5 +23,6 @@ pub mod plot;
 pub mod progress;
 pub mod rerun_observer;
 pub mod run;
+pub mod stop;
 pub mod sweep;
 pub mod viewer;

@@ -17,6 +17,7 @@ use sim_core::world::{Event, MapData, RoundReport};
 
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
+use crate::stop::Signal;
 use crate::viewer::ViewerTarget;
 
 /// Everything a run needs, checked before it starts.
@@ -79,6 +80,8 @@ pub struct Summary {
     pub recording: Option<RecordingSummary>,
     /// Decisions that took longer than the limit, and the slowest (robot, round, time).
     pub slow_decisions: (u64, Option<(RobotId, u64, Duration)>),
+    /// The signal that stopped the run before its last round, if one did.
+    pub interrupted: Option<Signal>,
 }
 
 /// What the recording of a run holds and cost.
@@ -114,6 +117,14 @@ impl std::fmt::Display for Summary {
             played as f64 / secs.max(1e-9),
             self.setup.as_secs_f64()
         )?;
+        if let Some(signal) = self.interrupted {
+            writeln!(
+                f,
+                "  interrupted at round {} by {} (what was played is kept)",
+                self.rounds,
+                signal.name()
+            )?;
+        }
         writeln!(
             f,
             "  explored          {:.1} % of the free area",
@@ -177,12 +188,20 @@ pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut d
     let t0 = Instant::now();
     let result = run_rounds(&mut sim, &pool, &mut outputs.observers(extra));
     let elapsed = t0.elapsed();
-    // Whatever happened, keep the outputs of the rounds that were played.
+    // Whatever happened, keep the outputs of the rounds that were played; a run stopped by
+    // a signal also writes its checkpoint, whatever the round.
+    if matches!(result, Ok(Some(_)))
+        && let Some(c) = outputs.checkpoints.as_mut()
+    {
+        c.write_now(&sim)?;
+    }
     outputs.keep(run, &sim)?;
-    result
+    let interrupted = result
         .map_err(|e| anyhow::anyhow!("{e}"))
         .with_context(|| format!("run stopped at round {}", sim.round()))?;
-    Ok(outputs.summary(run, &sim, resumed, setup, elapsed))
+    let mut summary = outputs.summary(run, &sim, resumed, setup, elapsed);
+    summary.interrupted = interrupted;
+    Ok(summary)
 }
 
 /// The simulation of a run: continued from the checkpoint `resumed`, or set up from the config.
@@ -301,6 +320,7 @@ impl Outputs {
                 logging_thread: r.worker_busy(),
             }),
             slow_decisions: (self.faults.slow, self.faults.slowest),
+            interrupted: None,
         }
     }
 }
@@ -370,16 +390,23 @@ pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
     Ok(())
 }
 
-/// The run loop with the decide phase on `pool`; observers are called on this thread.
+/// Play the remaining rounds, notifying the observers, until the last round or a stop
+/// signal ([`crate::stop`]): the round in progress is finished, and the observers are told
+/// the run ended either way. Returns the signal, if one stopped the run.
 fn run_rounds(
     sim: &mut Simulation,
     pool: &rayon::ThreadPool,
     observers: &mut [&mut dyn Observer],
-) -> Result<(), sim_core::io::ObserverError> {
+) -> Result<Option<Signal>, sim_core::io::ObserverError> {
     for o in observers.iter_mut() {
         o.on_start(sim)?;
     }
+    let mut stopped = None;
     while sim.round() < sim.total_rounds() {
+        if let Some(signal) = crate::stop::requested() {
+            stopped = Some(signal);
+            break;
+        }
         pool.install(|| {
             sim.step();
         });
@@ -390,5 +417,5 @@ fn run_rounds(
     for o in observers.iter_mut() {
         o.on_finish(sim)?;
     }
-    Ok(())
+    Ok(stopped)
 }

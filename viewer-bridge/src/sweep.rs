@@ -8,7 +8,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use sim_core::agent::StrategyRegistry;
-use sim_core::io::sweep::{MergeSummary, Shard, Sweep, SweepSummary, merge, run_sweep};
+use sim_core::io::sweep::{MergeSummary, Shard, Sweep, SweepSummary, merge, run_sweep_until};
 
 /// Arguments of `smartteams sweep`.
 #[derive(Debug, clap::Args)]
@@ -97,18 +97,26 @@ pub fn sweep(args: &SweepArgs, registry: &StrategyRegistry, progress: bool) -> R
     });
     let started = std::time::Instant::now();
     let summary = pool.install(|| {
-        run_sweep(&sweep, registry, shard, &args.output, &|p| {
-            if let Some(bar) = &bar {
-                bar.set_length(p.total as u64);
-                bar.set_position(p.done as u64);
-                // Estimated finish from this attempt's pace (resumed runs cost nothing).
-                let fresh = p.done - p.resumed;
-                if fresh > 0 {
-                    let left = started.elapsed().mul_f64((p.total - p.done) as f64 / fresh as f64);
-                    bar.set_message(format!("(about {:.0} s to go)", left.as_secs_f64()));
+        let stop = || crate::stop::requested().is_some();
+        run_sweep_until(
+            &sweep,
+            registry,
+            shard,
+            &args.output,
+            &|p| {
+                if let Some(bar) = &bar {
+                    bar.set_length(p.total as u64);
+                    bar.set_position(p.done as u64);
+                    // Estimated finish from this attempt's pace (resumed runs cost nothing).
+                    let fresh = p.done - p.resumed;
+                    if fresh > 0 {
+                        let left = started.elapsed().mul_f64((p.total - p.done) as f64 / fresh as f64);
+                        bar.set_message(format!("(about {:.0} s to go)", left.as_secs_f64()));
+                    }
                 }
-            }
-        })
+            },
+            &stop,
+        )
     });
     if let Some(bar) = &bar {
         bar.finish_and_clear();

@@ -311,6 +311,18 @@ impl CheckpointWriter {
     pub fn written(&self) -> u64 {
         self.written
     }
+
+    /// Write a checkpoint of `sim` now, whatever the round (a run stopped early keeps what
+    /// it played), unless the last one written holds this round already.
+    pub fn write_now(&mut self, sim: &Simulation) -> Result<()> {
+        let round = sim.round();
+        if round == 0 || (self.written > 0 && round.is_multiple_of(self.every_rounds)) {
+            return Ok(());
+        }
+        write_checkpoint(&self.path, &self.source, self.every_rounds, &self.metrics, sim)?;
+        self.written += 1;
+        Ok(())
+    }
 }
 
 impl Observer for CheckpointWriter {

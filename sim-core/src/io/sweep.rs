@@ -595,7 +595,14 @@ impl Sweep {
     }
 
     /// Play run `run` headless: its CSV rows (no header) and rounds played.
-    fn play(&self, run: usize, registry: &StrategyRegistry, maps: &HashMap<PathBuf, Arc<MapData>>) -> Result<Vec<u8>> {
+    /// Run `run` and its CSV rows, or `None` if `stop` asked for a stop before its last round.
+    fn play(
+        &self,
+        run: usize,
+        registry: &StrategyRegistry,
+        maps: &HashMap<PathBuf, Arc<MapData>>,
+        stop: &(dyn Fn() -> bool + Sync),
+    ) -> Result<Option<Vec<u8>>> {
         let (config, map_path) = self.config(run);
         let within = |e: Error| self.error_at((0, 0), format!("{}: {e}", self.describe(run)));
         let map = maps.get(&map_path).cloned().ok_or_else(|| {
@@ -612,6 +619,9 @@ impl Sweep {
         let mut out = csv::Writer::from_writer(Vec::new());
         let csv_error = |e: csv::Error| within(Error::Malformed(format!("writing CSV: {e}")));
         while sim.round() < sim.total_rounds() {
+            if stop() {
+                return Ok(None);
+            }
             let report = sim.step();
             out.write_record(
                 prefix
@@ -622,6 +632,7 @@ impl Sweep {
             .map_err(csv_error)?;
         }
         out.into_inner()
+            .map(Some)
             .map_err(|e| within(Error::Malformed(format!("writing CSV: {}", e.error()))))
     }
 }
@@ -655,6 +666,20 @@ pub fn run_sweep(
     shard: Shard,
     output: &Path,
     progress: &(dyn Fn(SweepProgress) + Sync),
+) -> Result<SweepSummary> {
+    run_sweep_until(sweep, registry, shard, output, progress, &|| false)
+}
+
+/// [`run_sweep`], stopping when `stop` says so (it is asked before each round): the runs in
+/// progress are dropped at the end of their round, those finished are kept for a resumed
+/// sweep, and the answer is [`Error::Stopped`].
+pub fn run_sweep_until(
+    sweep: &Sweep,
+    registry: &StrategyRegistry,
+    shard: Shard,
+    output: &Path,
+    progress: &(dyn Fn(SweepProgress) + Sync),
+    stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<SweepSummary> {
     sweep.check(registry)?;
     let runs: Vec<usize> = (0..sweep.run_count()).filter(|&r| shard.holds(r)).collect();
@@ -696,8 +721,13 @@ pub fn run_sweep(
     };
     report(resumed);
     pending.par_iter().try_for_each(|&run| -> Result<()> {
+        if stop() {
+            return Ok(());
+        }
         let started = Instant::now();
-        let rows = sweep.play(run, registry, &maps)?;
+        let Some(rows) = sweep.play(run, registry, &maps, stop)? else {
+            return Ok(());
+        };
         write_atomically(
             &seconds_file(run),
             format!("{}\n", started.elapsed().as_secs_f64()).as_bytes(),
@@ -707,6 +737,14 @@ pub fn run_sweep(
         Ok(())
     })?;
 
+    let done = done.into_inner();
+    if done < runs.len() {
+        return Err(Error::Stopped {
+            done,
+            total: runs.len(),
+            parts,
+        });
+    }
     // All there: assemble in run order.
     let (rows, manifest) = assemble(sweep, shard, &runs, &part, &seconds_file, output)?;
     std::fs::remove_dir_all(&parts).map_err(io_error(&parts))?;
