@@ -28,17 +28,37 @@ echo "SMARTTEAMS_RERUN_PYTHON=$SMARTTEAMS_RERUN_PYTHON"
 # (tests/src/skip.rs). Other skips are noted in the log and listed at the end.
 require=rerun
 if [ -n "${SMARTTEAMS_DATA:-}" ]; then require="$require,data"; fi
-export SMARTTEAMS_REQUIRE="${SMARTTEAMS_REQUIRE:-$require}"
 mkdir -p target
+# A one-node Slurm for the cluster tests (viewer-bridge/tests/slurm.rs), stopped at the end;
+# only where it cannot be installed (no root or apt-get) do they skip, and say so.
+slurm_started=
+if [ -z "${SLURM_CONF:-}" ]; then
+  if bash scripts/slurm-local.sh start; then
+    eval "$(bash scripts/slurm-local.sh env)"
+    slurm_started=1
+    require="$require,slurm"
+  else
+    status=$?
+    if [ "$status" -ne 3 ]; then
+      echo "scripts/slurm-local.sh start failed ($status); see target/slurm/*.log" >&2
+      exit "$status"
+    fi
+    echo "note: Slurm cannot be installed here: the cluster tests will skip"
+  fi
+else
+  require="$require,slurm"
+fi
+export SMARTTEAMS_REQUIRE="${SMARTTEAMS_REQUIRE:-$require}"
 export SMARTTEAMS_SKIP_LOG="$(pwd)/target/test-skips.log"
 : > "$SMARTTEAMS_SKIP_LOG"
-report_skips() {
+finish() {
   local n
+  if [ -n "$slurm_started" ]; then bash scripts/slurm-local.sh stop; fi
   n=$(wc -l < "$SMARTTEAMS_SKIP_LOG")
   echo "== skipped tests: $n (required to run: $SMARTTEAMS_REQUIRE)"
   if [ "$n" -gt 0 ]; then sed 's/^/   /' "$SMARTTEAMS_SKIP_LOG"; fi
 }
-trap report_skips EXIT
+trap finish EXIT
 echo "SMARTTEAMS_REQUIRE=$SMARTTEAMS_REQUIRE"
 echo "== cargo fmt --check"
 cargo fmt --all -- --check

@@ -35,11 +35,17 @@ fn wait_until(child: &mut Child, what: &str, ready: impl Fn() -> bool) {
         assert!(t0.elapsed() < Duration::from_mins(1), "never {what}");
         std::thread::sleep(Duration::from_millis(20));
     }
-    assert!(child.try_wait().unwrap().is_none(), "it ended before it could be stopped");
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "it ended before it could be stopped"
+    );
 }
 
 fn signal(child: &Child, name: &str) {
-    let ok = Command::new("kill").args([name, &child.id().to_string()]).status().unwrap();
+    let ok = Command::new("kill")
+        .args([name, &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(ok.success());
 }
 
@@ -58,7 +64,16 @@ fn sigint_keeps_every_round_played_and_a_recording_that_verifies() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mut run = smartteams(d)
-        .args(["run", &demo(), "--rounds", "100000", "--rrd", "stopped.rrd", "--metrics", "m.csv"])
+        .args([
+            "run",
+            &demo(),
+            "--rounds",
+            "100000",
+            "--rrd",
+            "stopped.rrd",
+            "--metrics",
+            "m.csv",
+        ])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -100,13 +115,30 @@ fn sigterm_writes_a_checkpoint_that_resumes_to_the_uninterrupted_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let whole = smartteams(d)
-        .args(["run", &demo(), "--rounds", "3000", "--no-viewer", "-q", "--metrics", "whole.csv"])
+        .args([
+            "run",
+            &demo(),
+            "--rounds",
+            "3000",
+            "--no-viewer",
+            "-q",
+            "--metrics",
+            "whole.csv",
+        ])
         .output()
         .unwrap();
     assert!(whole.status.success());
     // A checkpoint every 1,000 rounds: the stop's own checkpoint is what resumes.
     let mut run = smartteams(d)
-        .args(["run", &demo(), "--rounds", "3000", "--no-viewer", "--metrics", "cut.csv"])
+        .args([
+            "run",
+            &demo(),
+            "--rounds",
+            "3000",
+            "--no-viewer",
+            "--metrics",
+            "cut.csv",
+        ])
         .args(["--checkpoint", "cut.ckpt", "--checkpoint-every", "1000"])
         .stdout(Stdio::piped())
         .spawn()
@@ -152,7 +184,10 @@ fn a_sweep_stopped_by_sigterm_resumes_to_the_uninterrupted_bytes() {
     let d = dir.path();
     let sweep = write_sweep(d);
     let sweep = sweep.to_str().unwrap();
-    let whole = smartteams(d).args(["sweep", sweep, "-o", "whole.csv", "--quiet"]).output().unwrap();
+    let whole = smartteams(d)
+        .args(["sweep", sweep, "-o", "whole.csv", "--quiet"])
+        .output()
+        .unwrap();
     assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
     let mut run = smartteams(d)
         .args(["sweep", sweep, "-o", "cut.csv", "--quiet", "--threads", "1"])
@@ -161,8 +196,11 @@ fn a_sweep_stopped_by_sigterm_resumes_to_the_uninterrupted_bytes() {
         .unwrap();
     let finished = |p: &Path| {
         std::fs::read_dir(p).map_or(0, |r| {
-            r.filter(|e| e.as_ref().is_ok_and(|e| e.path().extension().is_some_and(|x| x == "csv")))
-                .count()
+            r.filter(|e| {
+                e.as_ref()
+                    .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "csv"))
+            })
+            .count()
         })
     };
     wait_until(&mut run, "it finished a run", || finished(&d.join("cut.csv.parts")) > 0);
@@ -193,9 +231,21 @@ fn a_second_signal_ends_the_run_at_once() {
     let d = dir.path();
     // Ten thousand robots recorded to a file: a round and the recording's close take long
     // enough that the second signal comes before the clean stop is over.
-    let config = common::workspace().join("configs/bench-10000.xml").display().to_string();
+    let config = common::workspace()
+        .join("configs/bench-10000.xml")
+        .display()
+        .to_string();
     let mut run = smartteams(d)
-        .args(["run", &config, "--rounds", "100000", "--metrics", "m.csv", "--rrd", "r.rrd"])
+        .args([
+            "run",
+            &config,
+            "--rounds",
+            "100000",
+            "--metrics",
+            "m.csv",
+            "--rrd",
+            "r.rrd",
+        ])
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();

@@ -249,3 +249,49 @@ fn bad_sweep_files_are_refused_with_file_line_and_column() {
         assert!(!d.join("out.csv").exists());
     }
 }
+
+/// `configs/sweep-slurm.sh`'s rule: each task, once its shard is written, merges every
+/// part there is; the merge refuses while a shard is missing, so whatever the order the
+/// shards finish in, only the last task's merge succeeds, with the single machine's bytes.
+#[test]
+fn the_last_task_to_finish_merges_whatever_the_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sweep = write_sweep(d, 3, 20);
+    let sweep = sweep.to_str().unwrap();
+    ok(&smartteams(d, &["sweep", sweep, "-o", "whole.csv", "-q"]));
+    let whole = std::fs::read(d.join("whole.csv")).unwrap();
+    for i in 0..3 {
+        let shard = format!("{i}/3");
+        let out = format!("shard{i}.csv");
+        ok(&smartteams(d, &["sweep", sweep, "-o", &out, "--shard", &shard, "-q"]));
+    }
+    for order in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
+        let results = tempfile::tempdir_in(d).unwrap();
+        let r = results.path();
+        for (k, &i) in order.iter().enumerate() {
+            // Task i finishes: its shard (CSV and manifest) appears, then it tries to merge.
+            for ext in ["csv", "manifest.json"] {
+                std::fs::copy(d.join(format!("shard{i}.{ext}")), r.join(format!("out.part{i}.{ext}"))).unwrap();
+            }
+            let mut parts: Vec<String> = std::fs::read_dir(r)
+                .unwrap()
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.starts_with("out.part") && n.ends_with(".csv"))
+                .collect();
+            parts.sort();
+            let mut args = vec!["merge"];
+            args.extend(parts.iter().map(String::as_str));
+            args.extend(["-o", "out.csv"]);
+            let merged = smartteams(r, &args);
+            if k < 2 {
+                assert!(!merged.status.success(), "{order:?}: merged with {parts:?}");
+                assert!(!r.join("out.csv").exists());
+            } else {
+                ok(&merged);
+                assert_eq!(std::fs::read(r.join("out.csv")).unwrap(), whole, "{order:?}");
+            }
+        }
+    }
+}

@@ -683,30 +683,8 @@ pub fn run_sweep_until(
 ) -> Result<SweepSummary> {
     sweep.check(registry)?;
     let runs: Vec<usize> = (0..sweep.run_count()).filter(|&r| shard.holds(r)).collect();
-    // Each map once, shared by the runs that use it.
-    let mut maps = HashMap::new();
-    for &run in &runs {
-        let (_, path) = sweep.config(run);
-        if let std::collections::hash_map::Entry::Vacant(slot) = maps.entry(path) {
-            let map = MapData::load(slot.key())?;
-            slot.insert(Arc::new(map));
-        }
-    }
-    let parts = parts_dir(output);
-    let key_file = parts.join("sweep.key");
-    let key = format!("{:08x} {}\n", sweep.fingerprint, sweep.path.display());
-    if parts.is_dir() {
-        let found = std::fs::read_to_string(&key_file).unwrap_or_default();
-        if found != key {
-            return Err(Error::InvalidParameter(format!(
-                "{} holds runs of another sweep (or another version of this one); remove it to start afresh",
-                parts.display()
-            )));
-        }
-    } else {
-        std::fs::create_dir_all(&parts).map_err(io_error(&parts))?;
-        write_atomically(&key_file, key.as_bytes())?;
-    }
+    let maps = load_maps(sweep, &runs)?;
+    let parts = open_parts(sweep, output)?;
     let part = |run: usize| parts.join(format!("run-{run:07}.csv"));
     let seconds_file = |run: usize| parts.join(format!("run-{run:07}.seconds"));
     let pending: Vec<usize> = runs.iter().copied().filter(|&r| !part(r).is_file()).collect();
@@ -756,6 +734,40 @@ pub fn run_sweep_until(
         output: output.to_path_buf(),
         manifest,
     })
+}
+
+/// The maps of `runs`, each loaded once and shared by the runs that use it.
+fn load_maps(sweep: &Sweep, runs: &[usize]) -> Result<HashMap<PathBuf, Arc<MapData>>> {
+    let mut maps = HashMap::new();
+    for &run in runs {
+        let (_, path) = sweep.config(run);
+        if let std::collections::hash_map::Entry::Vacant(slot) = maps.entry(path) {
+            let map = MapData::load(slot.key())?;
+            slot.insert(Arc::new(map));
+        }
+    }
+    Ok(maps)
+}
+
+/// The folder of `output`'s finished runs: made (with the sweep's key) for a new attempt,
+/// checked to be this sweep's for a resumed one.
+fn open_parts(sweep: &Sweep, output: &Path) -> Result<PathBuf> {
+    let parts = parts_dir(output);
+    let key_file = parts.join("sweep.key");
+    let key = format!("{:08x} {}\n", sweep.fingerprint, sweep.path.display());
+    if parts.is_dir() {
+        let found = std::fs::read_to_string(&key_file).unwrap_or_default();
+        if found != key {
+            return Err(Error::InvalidParameter(format!(
+                "{} holds runs of another sweep (or another version of this one); remove it to start afresh",
+                parts.display()
+            )));
+        }
+    } else {
+        std::fs::create_dir_all(&parts).map_err(io_error(&parts))?;
+        write_atomically(&key_file, key.as_bytes())?;
+    }
+    Ok(parts)
 }
 
 /// Join the parts of `runs` into `output` (header, then the runs in order) and write the
