@@ -8,6 +8,7 @@
 
 mod common;
 
+use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
@@ -72,7 +73,8 @@ fn logs(dir: &Path) -> String {
     let mut text = String::new();
     for e in std::fs::read_dir(dir).unwrap().flatten() {
         if e.file_name().to_string_lossy().starts_with("slurm-") {
-            text += &format!(
+            let _ = write!(
+                text,
                 "--- {}\n{}",
                 e.path().display(),
                 std::fs::read_to_string(e.path()).unwrap_or_default()
