@@ -278,7 +278,7 @@ fn the_last_task_to_finish_merges_whatever_the_order() {
                 .unwrap()
                 .flatten()
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with("out.part") && n.ends_with(".csv"))
+                .filter(|n| n.starts_with("out.part") && Path::new(n).extension().is_some_and(|x| x == "csv"))
                 .collect();
             parts.sort();
             let mut args = vec!["merge"];
