@@ -730,3 +730,48 @@ fn bad_viewer_options_are_clear_errors() {
     let err = run(&["--connect=127.0.0.1:1"]);
     assert!(err.contains("no Rerun viewer listens"), "{err}");
 }
+
+/// Ctrl-C on a run streaming to a live viewer ends the stream as the end of a run does:
+/// the viewer gets every round up to the one the run stopped at.
+#[cfg(unix)]
+#[test]
+fn a_stopped_run_ends_its_live_stream_normally() {
+    let Some(python) = python("a_stopped_run_ends_its_live_stream_normally") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let saved = dir.path().join("stopped.rrd");
+    let (mut rx, port) = receiver(&python, &saved);
+    let mut run = demo_run(100_000)
+        .arg(format!("--connect=127.0.0.1:{port}"))
+        .arg("--metrics")
+        .arg(dir.path().join("m.csv"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &run.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let out = run.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let round: u64 = stdout
+        .split("interrupted at round ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let s = wait_for_round(&python, &saved, round);
+    rx.kill().unwrap();
+    rx.wait().unwrap();
+    let metrics = s["scalars"]["/metrics/exploration/explored_fraction"]
+        .as_object()
+        .unwrap();
+    assert_eq!(metrics.len() as u64, round, "the metrics of every round played arrived");
+}
