@@ -133,6 +133,23 @@ fn links_are_the_pending_deliveries() {
     }
 }
 
+/// Sampling every k-th link from the inboxes gives what stepping through all of them gives.
+#[test]
+fn links_every_is_links_step_by() {
+    for budget in [u64::MAX, 70] {
+        let mut sim = chatters(budget);
+        for _ in 0..3 {
+            sim.step();
+            for stride in [1, 2, 3, 7, 11, 50, 1000] {
+                let pair = |l: sim_core::world::Link| (l.from.get(), l.to.get());
+                let all: Vec<_> = sim.links().step_by(stride).map(pair).collect();
+                let every: Vec<_> = sim.links_every(stride).map(pair).collect();
+                assert_eq!(every, all, "budget {budget}, stride {stride}");
+            }
+        }
+    }
+}
+
 /// Messages without budgets are put in the inboxes after step 3, yet a receiver takes a
 /// message only if it was alive when the message was sent. Robot 5 runs dry in its own turn
 /// of round 1 (its upkeep is all its energy), before it sends: it hears robots 0 to 4,

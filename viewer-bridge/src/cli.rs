@@ -1,6 +1,6 @@
 //! The `smartteams` command line: raw arguments → validated [`RunConfig`] → [`execute`].
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -428,7 +428,8 @@ fn stopped_sweep(e: &anyhow::Error) -> Option<ExitCode> {
 fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, what: &str) -> Result<ExitCode> {
     let summary = execute(run, registry, &mut []).with_context(|| what.to_owned())?;
     if !quiet || summary.interrupted.is_some() {
-        println!("{summary}");
+        // A closed pipe (`smartteams run … | head -1`) is not an error of the run.
+        let _ = writeln!(std::io::stdout(), "{summary}");
     }
     Ok(summary
         .interrupted

@@ -23,7 +23,7 @@
 use sim_core::engine::Simulation;
 use sim_core::glam::DVec2;
 use sim_core::io::{Observer, ObserverError};
-use sim_core::spatial::Aabb;
+use sim_core::spatial::{Aabb, RegionQuadtree};
 use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, RoundMetrics, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
@@ -148,14 +148,10 @@ pub struct RerunObserver {
     frames: Option<crossbeam_channel::Sender<Frame>>,
     progress: std::sync::Arc<Progress>,
     worker: Option<std::thread::JoinHandle<rerun::RecordingStreamResult<std::time::Duration>>>,
-    explored: Option<Raster>,
     last_explored_round: Option<u64>,
     last_known_round: Option<u64>,
     /// Robots whose known map changed since their region was last logged.
     known_dirty: Vec<bool>,
-    /// Each robot's coarse region as last logged: a finer change that leaves it the same is
-    /// not logged again.
-    known_logged: Vec<Vec<Aabb>>,
     logged_rounds: u64,
     skipped_rounds: u64,
     /// Wall time spent in this observer on the simulation's thread.
@@ -181,11 +177,9 @@ impl RerunObserver {
             frames: None,
             progress: std::sync::Arc::new(Progress::new()),
             worker: None,
-            explored: None,
             last_explored_round: None,
             last_known_round: None,
             known_dirty: Vec::new(),
-            known_logged: Vec::new(),
             logged_rounds: 0,
             skipped_rounds: 0,
             busy: std::time::Duration::ZERO,
@@ -231,101 +225,60 @@ impl RerunObserver {
         round.is_multiple_of(self.opts.log_every) || round >= total
     }
 
-    /// A copy of what the world shows after this round.
+    /// A copy of what the world shows after this round: rows and copies, so that the
+    /// logging thread does the rest (rasters, coarse regions, sorting links) beside the next
+    /// round.
     fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
         let final_round = sim.round() >= sim.total_rounds();
         World {
             robots: robot_rows(sim),
             treasures: treasure_rows(sim),
             paths: planned_paths(sim),
-            links: report.map(|_| drawn_links(sim, self.opts.max_links)),
+            links: report
+                .map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), self.opts.max_links)),
             explored: self.explored_if_due(sim, final_round),
             known: self.known_if_due(sim, final_round),
             cell_m: sim.obstacles().grid().cell_m(),
         }
     }
 
-    /// The collective explored raster and its transform, every `explored_every` rounds and at
-    /// the final round (`None` in between).
-    fn explored_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<(rerun::Transform3D, rerun::Image)> {
+    /// A copy of the collective explored map's tree, every `explored_every` rounds and at the
+    /// final round (`None` in between).
+    fn explored_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<RegionQuadtree> {
         let round = sim.round();
-        if final_round
+        let due = final_round
             || self
                 .last_explored_round
-                .is_none_or(|r| round >= r + self.opts.explored_every)
-        {
-            self.last_explored_round = Some(round);
-            let raster = self
-                .explored
-                .get_or_insert_with(|| Raster::for_grid(sim.obstacles().grid(), layers::MAX_EXPLORED_PX));
-            raster.fill_from(sim.explored().tree(), true);
-            Some((
-                raster.transform_2d(),
-                rerun::Image::from_l8(raster.to_l8(), [raster.width, raster.height]),
-            ))
-        } else {
-            None
+                .is_none_or(|r| round >= r + self.opts.explored_every);
+        if !due {
+            return None;
         }
+        self.last_explored_round = Some(round);
+        Some(sim.explored().tree().clone())
     }
 
-    /// The changed known regions, every `known_every` rounds and at the final round (none in
-    /// between or when known regions are off).
-    fn known_if_due(&mut self, sim: &Simulation, final_round: bool) -> Vec<KnownRegion> {
+    /// Copies of the known maps that changed since they were last logged, every
+    /// `known_every` rounds and at the final round (`None` in between or when known regions
+    /// are off).
+    fn known_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<Vec<ChangedKnown>> {
         let round = sim.round();
         match self.opts.known_every {
             Some(every) if final_round || self.last_known_round.is_none_or(|r| round >= r + every) => {
                 self.last_known_round = Some(round);
-                self.changed_known_regions(sim)
+                let mut changed = Vec::new();
+                for robot in sim.robots() {
+                    let dirty = self.known_dirty.get_mut(robot.id.index());
+                    if let Some(d) = dirty.filter(|d| **d) {
+                        *d = false;
+                        if let Some(map) = sim.known_map(robot.id) {
+                            changed.push((robot.id.index(), map.tree().clone()));
+                        }
+                    }
+                }
+                Some(changed)
             }
-            _ => Vec::new(),
+            _ => None,
         }
-    }
-
-    /// The known regions to log: those of dirty robots whose coarse region changed, as an
-    /// entity each or, in large swarms, as the whole region set of each type with a change.
-    fn changed_known_regions(&mut self, sim: &Simulation) -> Vec<KnownRegion> {
-        let per_robot = sim.robots().len() <= self.opts.known_per_robot_max;
-        let mut known = Vec::new();
-        let mut type_changed = vec![false; sim.types().len()];
-        for robot in sim.robots() {
-            let i = robot.id.index();
-            if !self.known_dirty.get(i).copied().unwrap_or(false) {
-                continue;
-            }
-            self.known_dirty[i] = false;
-            let Some(map) = sim.known_map(robot.id) else { continue };
-            let boxes = layers::coarse_known_boxes(map.tree());
-            if self.known_logged[i] == boxes {
-                continue;
-            }
-            self.known_logged[i].clone_from(&boxes);
-            if per_robot {
-                known.push(KnownRegion {
-                    entity: format!("world/known/{}", robot.id.get()).into(),
-                    class: class_of(sim, robot.type_index, true),
-                    boxes,
-                    robots: Vec::new(),
-                });
-            } else {
-                type_changed[robot.type_index] = true;
-            }
-        }
-        for (t, kind) in sim.types().iter().enumerate().filter(|&(t, _)| type_changed[t]) {
-            let mut boxes = Vec::new();
-            let mut robots = Vec::new();
-            for robot in sim.robots().iter().filter(|r| r.type_index == t) {
-                let region = &self.known_logged[robot.id.index()];
-                boxes.extend_from_slice(region);
-                robots.extend(std::iter::repeat_n(robot.id.get(), region.len()));
-            }
-            known.push(KnownRegion {
-                entity: rerun::EntityPath::new(vec!["world".into(), "known".into(), kind.name.as_str().into()]),
-                class: class_of(sim, t, true),
-                boxes,
-                robots,
-            });
-        }
-        known
     }
 
     /// Hand `frame` to the logging thread, waiting or leaving its world out when the thread
@@ -395,12 +348,18 @@ struct World {
     treasures: Vec<TreasureRow>,
     /// (class id, 2D points from the robot along its path).
     paths: Vec<(u16, Vec<[f32; 2]>)>,
-    /// 2D end points of the round's drawn links (none at the start).
-    links: Option<Vec<[[f32; 2]; 2]>>,
-    explored: Option<(rerun::Transform3D, rerun::Image)>,
-    known: Vec<KnownRegion>,
+    /// The round's sampled deliveries as (sender, receiver), before thinning (none at the
+    /// start): see [`sample_pairs`].
+    links: Option<Vec<(u32, u32)>>,
+    /// The collective explored map, on rounds its raster is due.
+    explored: Option<RegionQuadtree>,
+    /// The known maps that changed, on rounds known regions are due.
+    known: Option<Vec<ChangedKnown>>,
     cell_m: f64,
 }
+
+/// A robot (by index) whose known map changed, and a copy of its tree.
+type ChangedKnown = (usize, RegionQuadtree);
 
 struct RobotRow {
     id: u32,
@@ -478,35 +437,49 @@ fn planned_paths(sim: &Simulation) -> Vec<(u16, Vec<[f32; 2]>)> {
         .collect()
 }
 
-/// The 2D end points of at most `max` of the round's message links ([`sample_links`]).
-fn drawn_links(sim: &Simulation, max: usize) -> Vec<[[f32; 2]; 2]> {
-    let pos = |id: u32| sim.robots().get(id as usize).map(|r| to_2d(r.position));
-    sample_links(sim.links(), sim.link_count(), max)
-        .into_iter()
-        .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
-        .collect()
-}
-
-/// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
-/// evenly over them: a dense swarm delivers O(n²) messages a round, so deliveries are first
-/// thinned by a stride, then the distinct pairs by even spacing. Deterministic. `count` is
-/// how many `links` yields.
-pub fn sample_links(links: impl Iterator<Item = Link>, count: usize, max: usize) -> Vec<(u32, u32)> {
+/// Every `stride`-th delivery of the round, as (sender, receiver), from `every(stride)`,
+/// with the stride that leaves about `2 max` of the `count` deliveries: a dense swarm
+/// delivers O(n²) messages a round. The first step of [`sample_links`]; cheap enough for the
+/// simulation's thread.
+pub fn sample_pairs<I: Iterator<Item = Link>>(
+    every: impl FnOnce(usize) -> I,
+    count: usize,
+    max: usize,
+) -> Vec<(u32, u32)> {
     if max == 0 {
         return Vec::new();
     }
     let stride = count.div_ceil(2 * max).max(1);
-    let mut pairs: Vec<(u32, u32)> = links
-        .step_by(stride)
-        .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
+    every(stride).map(|l| (l.from.get(), l.to.get())).collect()
+}
+
+/// Up to `max` distinct undirected pairs (lower id first) of `pairs`, spread evenly over
+/// them. The second step of [`sample_links`], on the logging thread.
+pub fn thin_pairs(pairs: &[(u32, u32)], max: usize) -> Vec<(u32, u32)> {
+    // As one word each, lower id high: sorted as the pairs are, compared in one step.
+    let mut keys: Vec<u64> = pairs
+        .iter()
+        .map(|&(a, b)| (u64::from(a.min(b)) << 32) | u64::from(a.max(b)))
         .collect();
-    pairs.sort_unstable();
-    pairs.dedup();
-    if pairs.len() > max {
-        let n = pairs.len();
-        pairs = (0..max).map(|i| pairs[i * n / max]).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    if keys.len() > max {
+        let n = keys.len();
+        keys = (0..max).map(|i| keys[i * n / max]).collect();
     }
-    pairs
+    keys.into_iter().map(|k| ((k >> 32) as u32, k as u32)).collect()
+}
+
+/// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
+/// evenly over them: deliveries are first thinned by a stride, then the distinct pairs by
+/// even spacing. Deterministic. `count` is how many links there are, `every(stride)` every
+/// `stride`-th of them from the first.
+pub fn sample_links<I: Iterator<Item = Link>>(
+    every: impl FnOnce(usize) -> I,
+    count: usize,
+    max: usize,
+) -> Vec<(u32, u32)> {
+    thin_pairs(&sample_pairs(every, count, max), max)
 }
 
 /// The class id of a robot of type `type_index` (disabled robots share one extra class).
@@ -551,15 +524,15 @@ fn log_annotations(rec: &rerun::RecordingStream, sim: &Simulation) -> rerun::Rec
     rec.log_static("world3d", &ctx)
 }
 
-/// The logging thread: log every frame until the queue closes; returns its busy time.
+/// The logging thread: each frame's metrics, events and world as Rerun archetypes.
+/// Returns its busy time.
 fn log_frames(
     rec: &rerun::RecordingStream,
     frames: &crossbeam_channel::Receiver<Frame>,
-    type_names: &[String],
+    mut logger: Logger,
     progress: &Progress,
 ) -> rerun::RecordingStreamResult<std::time::Duration> {
     let mut busy = std::time::Duration::ZERO;
-    let mut robot_columns = RobotColumns::default();
     for frame in frames {
         let t0 = std::time::Instant::now();
         // Rerun's time cursor is per thread: this thread sets its own.
@@ -569,29 +542,116 @@ fn log_frames(
         }
         log_events(rec, &frame.events)?;
         if let Some(world) = &frame.world {
-            log_robots(rec, &world.robots, type_names, &mut robot_columns)?;
-            log_treasures(rec, &world.treasures, world.cell_m)?;
-            log_paths(rec, &world.paths)?;
-            if let Some(links) = &world.links {
-                log_links(rec, links)?;
-            }
-            if let Some((transform, image)) = &world.explored {
-                rec.log(
-                    "world/explored",
-                    &[
-                        transform as &dyn rerun::AsComponents,
-                        &image.clone().with_opacity(0.3).with_draw_order(draw_order::EXPLORED),
-                    ],
-                )?;
-            }
-            for region in &world.known {
-                log_known_region(rec, region)?;
-            }
+            logger.log_world(rec, world)?;
         }
         busy += t0.elapsed();
         progress.tick();
     }
     Ok(busy)
+}
+
+/// What the logging thread keeps from frame to frame, and what it needs of the run.
+struct Logger {
+    type_names: Vec<String>,
+    grid: sim_core::spatial::Grid,
+    max_links: usize,
+    known_per_robot_max: usize,
+    robot_columns: RobotColumns,
+    /// Each robot's coarse region as last logged: a finer change that leaves it the same is
+    /// not logged again.
+    known_logged: Vec<Vec<Aabb>>,
+    explored: Option<Raster>,
+}
+
+impl Logger {
+    fn new(sim: &Simulation, opts: &LogOptions) -> Self {
+        Self {
+            type_names: sim.types().iter().map(|t| t.name.clone()).collect(),
+            grid: *sim.obstacles().grid(),
+            max_links: opts.max_links,
+            known_per_robot_max: opts.known_per_robot_max,
+            robot_columns: RobotColumns::default(),
+            known_logged: vec![Vec::new(); sim.robots().len()],
+            explored: None,
+        }
+    }
+
+    /// Log one round's world.
+    fn log_world(&mut self, rec: &rerun::RecordingStream, world: &World) -> rerun::RecordingStreamResult<()> {
+        log_robots(rec, &world.robots, &self.type_names, &mut self.robot_columns)?;
+        log_treasures(rec, &world.treasures, world.cell_m)?;
+        log_paths(rec, &world.paths)?;
+        if let Some(pairs) = &world.links {
+            let pos = |id: u32| world.robots.get(id as usize).map(|r| to_2d(r.position));
+            let links: Vec<[[f32; 2]; 2]> = thin_pairs(pairs, self.max_links)
+                .into_iter()
+                .filter_map(|(a, b)| Some([pos(a)?, pos(b)?]))
+                .collect();
+            log_links(rec, &links)?;
+        }
+        if let Some(tree) = &world.explored {
+            let raster = self
+                .explored
+                .get_or_insert_with(|| Raster::for_grid(&self.grid, layers::MAX_EXPLORED_PX));
+            raster.fill_from(tree, true);
+            let image = rerun::Image::from_l8(raster.to_l8(), [raster.width, raster.height]);
+            rec.log(
+                "world/explored",
+                &[
+                    &raster.transform_2d() as &dyn rerun::AsComponents,
+                    &image.with_opacity(0.3).with_draw_order(draw_order::EXPLORED),
+                ],
+            )?;
+        }
+        if let Some(changed) = &world.known {
+            for region in self.known_regions(changed, &world.robots) {
+                log_known_region(rec, &region)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The known regions to log: those of the changed robots whose coarse region changed, as
+    /// an entity each or, in large swarms, as the whole region set of each type with a change.
+    fn known_regions(&mut self, changed: &[ChangedKnown], robots: &[RobotRow]) -> Vec<KnownRegion> {
+        let per_robot = robots.len() <= self.known_per_robot_max;
+        let mut known = Vec::new();
+        let mut type_changed = vec![false; self.type_names.len()];
+        for (i, tree) in changed {
+            let boxes = layers::coarse_known_boxes(tree);
+            if self.known_logged[*i] == boxes {
+                continue;
+            }
+            self.known_logged[*i].clone_from(&boxes);
+            let robot = &robots[*i];
+            if per_robot {
+                known.push(KnownRegion {
+                    entity: format!("world/known/{}", robot.id).into(),
+                    class: robot.type_index as u16,
+                    boxes,
+                    robots: Vec::new(),
+                });
+            } else {
+                type_changed[robot.type_index] = true;
+            }
+        }
+        for (t, name) in self.type_names.iter().enumerate().filter(|&(t, _)| type_changed[t]) {
+            let mut boxes = Vec::new();
+            let mut owners = Vec::new();
+            for robot in robots.iter().filter(|r| r.type_index == t) {
+                let region = &self.known_logged[robot.id as usize];
+                boxes.extend_from_slice(region);
+                owners.extend(std::iter::repeat_n(robot.id, region.len()));
+            }
+            known.push(KnownRegion {
+                entity: rerun::EntityPath::new(vec!["world".into(), "known".into(), name.as_str().into()]),
+                class: t as u16,
+                boxes,
+                robots: owners,
+            });
+        }
+        known
+    }
 }
 
 /// The robots' columns as the logging thread last logged them. Rerun shows every component
@@ -782,13 +842,36 @@ fn log_paths(rec: &rerun::RecordingStream, paths: &[(u16, Vec<[f32; 2]>)]) -> re
 }
 
 fn log_links(rec: &rerun::RecordingStream, links: &[[[f32; 2]; 2]]) -> rerun::RecordingStreamResult<()> {
-    rec.log(
-        "world/links",
-        &rerun::LineStrips2D::new(links.iter().copied())
-            .with_colors([rerun::Color::from_unmultiplied_rgba(120, 220, 255, 140)])
-            .with_radii([rerun::Radius::new_ui_points(0.75)])
-            .with_draw_order(draw_order::LINKS),
-    )
+    let style = rerun::LineStrips2D::update_fields()
+        .with_colors([rerun::Color::from_unmultiplied_rgba(120, 220, 255, 140)])
+        .with_radii([rerun::Radius::new_ui_points(0.75)])
+        .with_draw_order(draw_order::LINKS);
+    rec.log("world/links", &[&segments(links) as &dyn rerun::AsComponents, &style])
+}
+
+/// The `LineStrip2D` column of two-point strips, built as one arrow array: the
+/// archetype's builder makes a vector per strip, thousands a round.
+fn segments(links: &[[[f32; 2]; 2]]) -> rerun::SerializedComponentBatch {
+    use rerun::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array, ListArray};
+    use rerun::external::arrow::buffer::OffsetBuffer;
+    use rerun::external::arrow::datatypes::DataType;
+    use std::sync::Arc;
+
+    let coords: Float32Array = links
+        .iter()
+        .flat_map(|[a, b]| [a[0], a[1], b[0], b[1]])
+        .collect::<Vec<f32>>()
+        .into();
+    let DataType::FixedSizeList(point_field, 2) = <rerun::datatypes::Vec2D as rerun::Loggable>::arrow_datatype() else {
+        unreachable!("a Vec2D is two floats")
+    };
+    let DataType::List(strip_field) = <rerun::components::LineStrip2D as rerun::Loggable>::arrow_datatype() else {
+        unreachable!("a LineStrip2D is a list of Vec2D")
+    };
+    let points = FixedSizeListArray::new(point_field, 2, Arc::new(coords), None);
+    let offsets = OffsetBuffer::from_lengths(std::iter::repeat_n(2, links.len()));
+    let strips = ListArray::new(strip_field, offsets, Arc::new(points), None);
+    rerun::SerializedComponentBatch::new(Arc::new(strips) as ArrayRef, rerun::LineStrips2D::descriptor_strips())
 }
 
 /// A round's metric values in [`metric_entities`] order.
@@ -835,20 +918,22 @@ impl Observer for RerunObserver {
         log_series_styles(&self.rec)?;
         log_robot_styles(&self.rec)?;
         self.known_dirty = vec![true; sim.robots().len()];
-        self.known_logged = vec![Vec::new(); sim.robots().len()];
 
         let (tx, rx) = match self.when_behind {
             WhenBehind::Wait => crossbeam_channel::bounded(QUEUE_ROUNDS),
             WhenBehind::SkipWorld => crossbeam_channel::unbounded(),
         };
         let rec = self.rec.clone();
-        let type_names: Vec<String> = sim.types().iter().map(|t| t.name.clone()).collect();
+        let logger = Logger::new(sim, &self.opts);
         let progress = std::sync::Arc::clone(&self.progress);
         progress.tick();
         self.worker = Some(
             std::thread::Builder::new()
                 .name("rerun-observer".into())
-                .spawn(move || log_frames(&rec, &rx, &type_names, &progress))?,
+                .spawn(move || {
+                    crate::viewer::lower_priority();
+                    log_frames(&rec, &rx, logger, &progress)
+                })?,
         );
         self.frames = Some(tx);
         let world = self.snapshot_world(sim, None);
@@ -924,7 +1009,11 @@ impl Observer for RerunObserver {
             }
         }
         // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
-        if let Err(e) = self.rec.flush_with_timeout(FINISH_TIMEOUT) {
+        let flushed = match self.when_behind {
+            WhenBehind::Wait => self.rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string()),
+            WhenBehind::SkipWorld => self.flush_live(),
+        };
+        if let Err(e) = flushed {
             eprintln!("warning: could not flush the Rerun stream: {e}");
             if self.when_behind == WhenBehind::SkipWorld {
                 self.abandon_stream();
@@ -932,6 +1021,25 @@ impl Observer for RerunObserver {
         }
         self.busy += t0.elapsed();
         Ok(())
+    }
+}
+
+impl RerunObserver {
+    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`]: Rerun's own flush waits for
+    /// ever on a viewer that takes no data (its batcher is stuck sending), so it runs on a
+    /// thread of its own, left behind if it does not finish.
+    fn flush_live(&self) -> Result<(), String> {
+        let (done, flushed) = crossbeam_channel::bounded(1);
+        let rec = self.rec.clone();
+        let spawned = std::thread::Builder::new().name("rerun-flush".into()).spawn(move || {
+            let _ = done.send(rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string()));
+        });
+        if let Err(e) = spawned {
+            return Err(format!("cannot start the flush: {e}"));
+        }
+        flushed
+            .recv_timeout(FINISH_TIMEOUT + std::time::Duration::from_secs(1))
+            .unwrap_or_else(|_| Err("the viewer took no data".to_owned()))
     }
 }
 
@@ -962,11 +1070,14 @@ mod tests {
     fn few_links_are_all_drawn_once() {
         let links = [link(3, 1), link(1, 3), link(2, 5), link(5, 2), link(2, 5)];
         assert_eq!(
-            sample_links(links.iter().copied(), links.len(), 10),
+            sample_links(|k| links.iter().copied().step_by(k), links.len(), 10),
             vec![(1, 3), (2, 5)]
         );
-        assert_eq!(sample_links(links.iter().copied(), links.len(), 0), vec![]);
-        assert_eq!(sample_links(std::iter::empty(), 0, 10), vec![]);
+        assert_eq!(
+            sample_links(|k| links.iter().copied().step_by(k), links.len(), 0),
+            vec![]
+        );
+        assert_eq!(sample_links(|_| std::iter::empty(), 0, 10), vec![]);
     }
 
     #[test]
@@ -978,7 +1089,7 @@ mod tests {
             .map(|l| (l.from.get().min(l.to.get()), l.from.get().max(l.to.get())))
             .collect();
         assert_eq!(all.len(), 19_900);
-        let sample = sample_links(links.iter().copied(), links.len(), 1_000);
+        let sample = sample_links(|k| links.iter().copied().step_by(k), links.len(), 1_000);
         assert!(sample.len() <= 1_000 && sample.len() >= 900, "{} pairs", sample.len());
         let distinct: BTreeSet<_> = sample.iter().copied().collect();
         assert_eq!(distinct.len(), sample.len(), "no pair twice");
@@ -995,6 +1106,9 @@ mod tests {
         }
         assert!(sample.iter().filter(|&&(a, _)| a == 0).count() < 100);
         // Deterministic.
-        assert_eq!(sample, sample_links(links.iter().copied(), links.len(), 1_000));
+        assert_eq!(
+            sample,
+            sample_links(|k| links.iter().copied().step_by(k), links.len(), 1_000)
+        );
     }
 }

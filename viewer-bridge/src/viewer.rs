@@ -91,6 +91,30 @@ pub fn open(
     let builder = rerun::RecordingStreamBuilder::new(APPLICATION_ID)
         .recording_name(name)
         .with_blueprint(blueprint);
+    // Rerun's threads (batching, encoding, writing) inherit the priority of the thread that
+    // opens the stream: a low one, so that they take the cores the rounds leave idle.
+    let rec = std::thread::scope(|s| {
+        s.spawn(|| {
+            lower_priority();
+            open_stream(builder, target)
+        })
+        .join()
+        .unwrap_or_else(|p| std::panic::resume_unwind(p))
+    })?;
+    // Wall-clock times would make two recordings of the same run differ; rounds are the time.
+    rec.set_log_time_enabled(false);
+    rec.set_log_tick_enabled(false);
+    Ok(rec)
+}
+
+/// Lower the calling thread's scheduling priority to the least (nice 19 on Linux): logging
+/// runs beside the rounds without taking their cores. Where that is not allowed, nothing.
+pub fn lower_priority() {
+    let _ = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
+}
+
+/// The stream of `builder` to `target`.
+fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) -> Result<rerun::RecordingStream> {
     let rec = match target {
         ViewerTarget::Rrd(path) => {
             // Rerun's own error repeats itself three times over; say it once.
@@ -132,9 +156,6 @@ pub fn open(
             })
             .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?,
     };
-    // Wall-clock times would make two recordings of the same run differ; rounds are the time.
-    rec.set_log_time_enabled(false);
-    rec.set_log_tick_enabled(false);
     Ok(rec)
 }
 
