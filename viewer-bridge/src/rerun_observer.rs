@@ -154,8 +154,10 @@ pub struct RerunObserver {
     known_dirty: Vec<bool>,
     logged_rounds: u64,
     skipped_rounds: u64,
-    /// Wall time spent in this observer on the simulation's thread.
+    /// Wall time spent in this observer on the simulation's thread during the rounds.
     busy: std::time::Duration,
+    /// Wall time the end of the run waited for the logging thread and the stream.
+    closing: std::time::Duration,
     /// Wall time the logging thread spent logging (known once it has finished).
     worker_busy: std::time::Duration,
 }
@@ -183,6 +185,7 @@ impl RerunObserver {
             logged_rounds: 0,
             skipped_rounds: 0,
             busy: std::time::Duration::ZERO,
+            closing: std::time::Duration::ZERO,
             worker_busy: std::time::Duration::ZERO,
         }
     }
@@ -209,9 +212,16 @@ impl RerunObserver {
         self.skipped_rounds
     }
 
-    /// Wall time spent logging on the simulation's thread so far (copying each logged round).
+    /// Wall time spent logging on the simulation's thread during the rounds so far (copying
+    /// each logged round, and waiting when the logging thread is behind).
     pub fn busy(&self) -> std::time::Duration {
         self.busy
+    }
+
+    /// Wall time the end of the run waited for the logging thread to finish and the stream
+    /// to be flushed (known after [`Observer::on_finish`]).
+    pub fn closing(&self) -> std::time::Duration {
+        self.closing
     }
 
     /// Wall time the logging thread spent building and logging archetypes (known after
@@ -1019,7 +1029,7 @@ impl Observer for RerunObserver {
                 self.abandon_stream();
             }
         }
-        self.busy += t0.elapsed();
+        self.closing = t0.elapsed();
         Ok(())
     }
 }

@@ -95,6 +95,8 @@ pub struct RecordingSummary {
     pub skipped_rounds: u64,
     /// Time the simulation thread spent copying rounds for the logger.
     pub sim_thread: Duration,
+    /// Time the end of the run waited for the logging thread and the stream to finish.
+    pub closing: Duration,
     /// Time the logging thread spent building and logging archetypes.
     pub logging_thread: Duration,
 }
@@ -159,11 +161,12 @@ impl std::fmt::Display for Summary {
         if let Some(r) = &self.recording {
             write!(
                 f,
-                "\n  recording         {} ({} rounds of world state; logging {:.2} s on the simulation thread, {:.2} s on the logging thread)",
+                "\n  recording         {} ({} rounds of world state; logging {:.2} s on the simulation thread, {:.2} s on the logging thread, {:.2} s closing)",
                 r.target,
                 r.logged_rounds,
                 r.sim_thread.as_secs_f64(),
-                r.logging_thread.as_secs_f64()
+                r.logging_thread.as_secs_f64(),
+                r.closing.as_secs_f64()
             )?;
             if r.skipped_rounds > 0 {
                 write!(
@@ -317,6 +320,7 @@ impl Outputs {
                 logged_rounds: r.logged_rounds(),
                 skipped_rounds: r.skipped_rounds(),
                 sim_thread: r.busy(),
+                closing: r.closing(),
                 logging_thread: r.worker_busy(),
             }),
             slow_decisions: (self.faults.slow, self.faults.slowest),
