@@ -240,14 +240,20 @@ impl RerunObserver {
     /// round.
     fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
         let final_round = sim.round() >= sim.total_rounds();
+        let robots = robot_rows(sim);
+        let treasures = treasure_rows(sim);
+        let paths = planned_paths(sim);
+        let links =
+            report.map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), self.opts.max_links));
+        let explored = self.explored_if_due(sim, final_round);
+        let known = self.known_if_due(sim, final_round);
         World {
-            robots: robot_rows(sim),
-            treasures: treasure_rows(sim),
-            paths: planned_paths(sim),
-            links: report
-                .map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), self.opts.max_links)),
-            explored: self.explored_if_due(sim, final_round),
-            known: self.known_if_due(sim, final_round),
+            robots,
+            treasures,
+            paths,
+            links,
+            explored,
+            known,
             cell_m: sim.obstacles().grid().cell_m(),
         }
     }
@@ -356,8 +362,7 @@ struct Frame {
 struct World {
     robots: Vec<RobotRow>,
     treasures: Vec<TreasureRow>,
-    /// (class id, 2D points from the robot along its path).
-    paths: Vec<(u16, Vec<[f32; 2]>)>,
+    paths: Paths,
     /// The round's sampled deliveries as (sender, receiver), before thinning (none at the
     /// start): see [`sample_pairs`].
     links: Option<Vec<(u32, u32)>>,
@@ -432,19 +437,27 @@ fn treasure_rows(sim: &Simulation) -> Vec<TreasureRow> {
         .collect()
 }
 
-/// The planned path of every live robot that has one: its class id and the 2D points from
-/// the robot along the path.
-fn planned_paths(sim: &Simulation) -> Vec<(u16, Vec<[f32; 2]>)> {
-    sim.robots()
-        .iter()
-        .filter(|r| r.alive && !r.path.is_empty())
-        .map(|r| {
-            let points = std::iter::once(to_2d(r.position))
-                .chain(r.path.iter().map(|&p| to_2d(p)))
-                .collect();
-            (r.type_index as u16, points)
-        })
-        .collect()
+/// The planned paths of the live robots that have one, as one list of points: a vector per
+/// path would cost an allocation per robot each logged round on the simulation thread.
+#[derive(Default)]
+struct Paths {
+    /// Class id of each path.
+    classes: Vec<u16>,
+    /// Number of points of each path.
+    lengths: Vec<usize>,
+    /// The 2D points of every path in turn, each from the robot along its path.
+    points: Vec<[f32; 2]>,
+}
+
+fn planned_paths(sim: &Simulation) -> Paths {
+    let mut paths = Paths::default();
+    for r in sim.robots().iter().filter(|r| r.alive && !r.path.is_empty()) {
+        paths.classes.push(r.type_index as u16);
+        paths.lengths.push(r.path.len() + 1);
+        paths.points.push(to_2d(r.position));
+        paths.points.extend(r.path.iter().map(|&p| to_2d(p)));
+    }
+    paths
 }
 
 /// Every `stride`-th delivery of the round, as (sender, receiver), from `every(stride)`,
@@ -674,6 +687,7 @@ struct RobotColumns {
     alive: Vec<bool>,
     loads: Vec<u32>,
     goals: Vec<Option<DVec2>>,
+    outcomes: Vec<Outcome>,
     /// Labels ("id" or "id +load"), rebuilt with the loads.
     labels: Vec<String>,
 }
@@ -744,15 +758,17 @@ fn log_robots(
             .with_component_from_data("goal_x", f64s(&mut robots.iter().map(|r| r.goal.map(|g| g.x))))
             .with_component_from_data("goal_y", f64s(&mut robots.iter().map(|r| r.goal.map(|g| g.y))));
     }
+    if RobotColumns::update(&mut last.outcomes, robots.iter().map(|r| r.outcome)) {
+        detail = detail.with_component_from_data(
+            "outcome",
+            Arc::new(StringArray::from_iter_values(robots.iter().map(|r| outcome(r.outcome)))),
+        );
+    }
     let detail = detail
         .with_component_from_data("energy", f64s(&mut robots.iter().map(|r| Some(r.energy))))
         .with_component_from_data(
             "action",
             Arc::new(StringArray::from_iter_values(robots.iter().map(|r| r.action))),
-        )
-        .with_component_from_data(
-            "outcome",
-            Arc::new(StringArray::from_iter_values(robots.iter().map(|r| outcome(r.outcome)))),
         )
         .with_component_from_data("x", f64s(&mut robots.iter().map(|r| Some(r.position.x))))
         .with_component_from_data("y", f64s(&mut robots.iter().map(|r| Some(r.position.y))));
@@ -839,16 +855,15 @@ fn log_treasures(
     )
 }
 
-fn log_paths(rec: &rerun::RecordingStream, paths: &[(u16, Vec<[f32; 2]>)]) -> rerun::RecordingStreamResult<()> {
-    rec.log(
-        "world/paths",
-        &rerun::LineStrips2D::new(paths.iter().map(|(_, points)| points.iter().copied()))
-            .with_class_ids(paths.iter().map(|(class, _)| *class))
-            // No class (type) name on paths: it clutters the map, and robots carry labels.
-            .with_show_labels(false)
-            .with_radii([rerun::Radius::new_ui_points(1.0)])
-            .with_draw_order(draw_order::PATHS),
-    )
+fn log_paths(rec: &rerun::RecordingStream, paths: &Paths) -> rerun::RecordingStreamResult<()> {
+    let style = rerun::LineStrips2D::update_fields()
+        .with_class_ids(paths.classes.iter().copied())
+        // No class (type) name on paths: it clutters the map, and robots carry labels.
+        .with_show_labels(false)
+        .with_radii([rerun::Radius::new_ui_points(1.0)])
+        .with_draw_order(draw_order::PATHS);
+    let strips = strips(&paths.points, paths.lengths.iter().copied());
+    rec.log("world/paths", &[&strips as &dyn rerun::AsComponents, &style])
 }
 
 fn log_links(rec: &rerun::RecordingStream, links: &[[[f32; 2]; 2]]) -> rerun::RecordingStreamResult<()> {
@@ -859,19 +874,20 @@ fn log_links(rec: &rerun::RecordingStream, links: &[[[f32; 2]; 2]]) -> rerun::Re
     rec.log("world/links", &[&segments(links) as &dyn rerun::AsComponents, &style])
 }
 
-/// The `LineStrip2D` column of two-point strips, built as one arrow array: the
-/// archetype's builder makes a vector per strip, thousands a round.
+/// The `LineStrip2D` column of two-point strips.
 fn segments(links: &[[[f32; 2]; 2]]) -> rerun::SerializedComponentBatch {
+    strips(links.as_flattened(), std::iter::repeat_n(2, links.len()))
+}
+
+/// The `LineStrip2D` column of strips of `lengths` points taken in turn from `points`, built
+/// as one arrow array: the archetype's builder makes a vector per strip, thousands a round.
+fn strips(points: &[[f32; 2]], lengths: impl Iterator<Item = usize>) -> rerun::SerializedComponentBatch {
     use rerun::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array, ListArray};
     use rerun::external::arrow::buffer::OffsetBuffer;
     use rerun::external::arrow::datatypes::DataType;
     use std::sync::Arc;
 
-    let coords: Float32Array = links
-        .iter()
-        .flat_map(|[a, b]| [a[0], a[1], b[0], b[1]])
-        .collect::<Vec<f32>>()
-        .into();
+    let coords = Float32Array::from(points.as_flattened().to_vec());
     let DataType::FixedSizeList(point_field, 2) = <rerun::datatypes::Vec2D as rerun::Loggable>::arrow_datatype() else {
         unreachable!("a Vec2D is two floats")
     };
@@ -879,7 +895,7 @@ fn segments(links: &[[[f32; 2]; 2]]) -> rerun::SerializedComponentBatch {
         unreachable!("a LineStrip2D is a list of Vec2D")
     };
     let points = FixedSizeListArray::new(point_field, 2, Arc::new(coords), None);
-    let offsets = OffsetBuffer::from_lengths(std::iter::repeat_n(2, links.len()));
+    let offsets = OffsetBuffer::from_lengths(lengths);
     let strips = ListArray::new(strip_field, offsets, Arc::new(points), None);
     rerun::SerializedComponentBatch::new(Arc::new(strips) as ArrayRef, rerun::LineStrips2D::descriptor_strips())
 }
