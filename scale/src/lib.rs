@@ -16,6 +16,7 @@
 pub mod fig4;
 pub mod kernel;
 pub mod paths;
+pub mod scaling;
 /// Charts (shared with `smartteams plot`).
 pub use viewer_bridge::plot;
 

@@ -20,13 +20,14 @@ struct Cli {
     /// Rounds to time after set-up.
     #[arg(long, default_value_t = 200, global = true)]
     rounds: u64,
-    /// Worker threads (0: one per core).
-    #[arg(long, default_value_t = 0, global = true)]
-    threads: usize,
+    /// Worker threads (0: one per core); for `scaling`, a list (default 1,2).
+    #[arg(long, global = true, value_delimiter = ',')]
+    threads: Vec<usize>,
 }
 
+/// The scenarios that play rounds and time them.
 #[derive(Subcommand, Debug)]
-enum Scenario {
+enum Timed {
     /// Dense random walkers on a white-noise map.
     RandomWalk {
         /// Walkers.
@@ -83,6 +84,25 @@ enum Scenario {
         /// walk to one no team mate claims); unbounded if not given.
         #[arg(long)]
         max_detour_m: Option<f64>,
+    },
+    /// A Smart Teams XML config (for example `configs/bench-1000.xml`), its rounds played
+    /// with no outputs.
+    Config {
+        /// The config file.
+        file: std::path::PathBuf,
+    },
+}
+
+#[derive(Subcommand, Debug)]
+enum Scenario {
+    #[command(flatten)]
+    Timed(Timed),
+    /// Where a scenario's round time goes on 1 thread, which steps run on one thread only,
+    /// the sequential share and what Amdahl's law allows at 4, 16 and 64 cores, with the
+    /// measured speed-up at each of `--threads` (default 1,2).
+    Scaling {
+        #[command(subcommand)]
+        scenario: Timed,
     },
     /// Curves: `swarm` rounds per second and peak memory against robots (100 → 10,000) and
     /// against leaves (10⁵ → 10⁷), and the speed-up from 1 to 2 threads. Each point runs in
@@ -186,17 +206,34 @@ fn run(cli: &Cli) -> Result<()> {
             compare_cells,
             seed,
         } => nav_graph(map, queries, robot_radius_m, compare_cells, seed),
-        Scenario::RandomWalk { .. } | Scenario::Swarm { .. } | Scenario::Kernel { .. } => time_scenario(cli),
+        Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
+        Scenario::Scaling { ref scenario } => {
+            let threads = if cli.threads.is_empty() {
+                vec![1, 2]
+            } else {
+                cli.threads.clone()
+            };
+            scaling(scenario, cli.rounds, &threads)
+        }
     }
 }
 
-/// Generate the map and robots of a timed scenario, time `cli.rounds` rounds on
-/// `cli.threads` workers, and print the measurement.
-fn time_scenario(cli: &Cli) -> Result<()> {
+/// The one `--threads` value of a scenario other than `scaling` (0 when not given).
+fn one_thread_count(threads: &[usize]) -> Result<usize> {
+    match threads {
+        [] => Ok(0),
+        [n] => Ok(*n),
+        _ => anyhow::bail!("--threads takes one value here (a list is for `scaling`)"),
+    }
+}
+
+/// Generate the map and robots of a timed scenario, time `rounds` rounds on `threads`
+/// workers, and print the measurement.
+fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
     let t0 = Instant::now();
-    let (name, scenario, csv_row) = build_scenario(&cli.scenario)?;
+    let (name, scenario, csv_row) = build_scenario(timed)?;
     let generate_s = t0.elapsed().as_secs_f64();
-    let mut m = measure(scenario, cli.rounds, cli.threads)?;
+    let mut m = measure(scenario, rounds, threads)?;
     m.generate_s = generate_s;
     if csv_row {
         println!("{}", m.csv_row().join(","));
@@ -206,11 +243,32 @@ fn time_scenario(cli: &Cli) -> Result<()> {
     Ok(())
 }
 
+/// The scaling report of a timed scenario: one run per thread count, each on a scenario
+/// built afresh (same seed, same map).
+fn scaling(timed: &Timed, rounds: u64, threads: &[usize]) -> Result<()> {
+    let mut runs = Vec::new();
+    let mut name = "";
+    for &n in threads {
+        let (scenario_name, scenario, _) = build_scenario(timed)?;
+        name = scenario_name;
+        let m = measure(scenario, rounds, n)?;
+        eprintln!("scaling: {n} thread(s): {:.1} rounds/s", m.rounds_per_s());
+        runs.push((n, m));
+    }
+    print_scaling(name, &runs);
+    let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, m)| m.digest).collect();
+    anyhow::ensure!(
+        digests.len() == 1,
+        "the runs' digests differ between thread counts: the round is not deterministic"
+    );
+    Ok(())
+}
+
 /// A timed scenario with its generated map: its name, the scenario, and whether the
 /// measurement is printed as a CSV row.
-fn build_scenario(scenario: &Scenario) -> Result<(&'static str, sim_core::engine::Scenario, bool)> {
+fn build_scenario(scenario: &Timed) -> Result<(&'static str, sim_core::engine::Scenario, bool)> {
     Ok(match *scenario {
-        Scenario::RandomWalk {
+        Timed::RandomWalk {
             robots,
             side_m,
             density,
@@ -225,7 +283,7 @@ fn build_scenario(scenario: &Scenario) -> Result<(&'static str, sim_core::engine
             };
             ("random-walk", rw.scenario()?, false)
         }
-        Scenario::Swarm {
+        Timed::Swarm {
             robots,
             side_m,
             mesas,
@@ -249,7 +307,7 @@ fn build_scenario(scenario: &Scenario) -> Result<(&'static str, sim_core::engine
             };
             ("swarm", swarm.scenario()?, csv_row)
         }
-        Scenario::Kernel {
+        Timed::Kernel {
             robots,
             seed,
             max_detour_m,
@@ -261,8 +319,10 @@ fn build_scenario(scenario: &Scenario) -> Result<(&'static str, sim_core::engine
             };
             ("kernel", kernel.scenario(&Kernel::map())?, false)
         }
-        Scenario::Fig4 { .. } | Scenario::Curves { .. } | Scenario::AnyAngle { .. } | Scenario::NavGraph { .. } => {
-            unreachable!("not a timed scenario")
+        Timed::Config { ref file } => {
+            let config = sim_core::io::SimConfig::load(file)?;
+            let registry = sim_core::agent::StrategyRegistry::with_builtins();
+            ("config", config.scenario(&registry)?, false)
         }
     })
 }
@@ -295,6 +355,63 @@ fn print_measurement(name: &str, m: &scale::Measurement) {
         "  planning (routes and frontiers, CPU time summed over threads): {:.3} s, {:.3} µs per robot-round",
         p.planning.as_secs_f64(),
         m.planning_us_per_robot_round()
+    );
+}
+
+/// The scaling report: per step, its time on each thread count and whether it runs on one
+/// thread; then the sequential share on the first run and Amdahl's bounds.
+fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)]) {
+    use scale::scaling::{amdahl, karp_flatt, phases, sequential_share};
+    let Some((first_threads, first)) = runs.first() else {
+        return;
+    };
+    let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, m)| m.digest).collect();
+    println!(
+        "scaling: {name}, {} robots, {} rounds; digest {}",
+        first.robots,
+        first.rounds,
+        if digests.len() == 1 {
+            format!("{:016x} on every thread count", first.digest)
+        } else {
+            format!("DIFFERS between thread counts: {digests:016x?}")
+        }
+    );
+    let base = phases(&first.phases);
+    let by_run: Vec<_> = runs.iter().map(|(_, m)| phases(&m.phases)).collect();
+    print!("  {:<34}", "step");
+    for (n, _) in runs {
+        print!("{:>12}", format!("{n} thr (s)"));
+    }
+    println!("  runs on");
+    for (k, phase) in base.iter().enumerate() {
+        print!("  {:<34}", phase.name);
+        for list in &by_run {
+            print!("{:>12.3}", list[k].time.as_secs_f64());
+        }
+        println!("  {}", if phase.one_thread { "one thread" } else { "all workers" });
+    }
+    print!("  {:<34}", "round (wall)");
+    for (_, m) in runs {
+        print!("{:>12.3}", m.rounds_s);
+    }
+    println!();
+    for (n, m) in &runs[1..] {
+        let speedup = first.rounds_s / m.rounds_s;
+        // The Karp-Flatt metric needs a one-thread baseline.
+        let serial = karp_flatt(speedup, *n)
+            .filter(|_| *first_threads == 1)
+            .map_or(String::new(), |e| {
+                format!(" (Karp-Flatt serial fraction {:.1} %)", 100.0 * e)
+            });
+        println!("  {first_threads} -> {n} threads: {speedup:.2}x{serial}");
+    }
+    let s = sequential_share(&base);
+    println!(
+        "  sequential share on {first_threads} thread(s): s = {:.1} %; Amdahl allows at most {:.1}x on 4 cores, {:.1}x on 16, {:.1}x on 64",
+        100.0 * s,
+        amdahl(s, 4),
+        amdahl(s, 16),
+        amdahl(s, 64)
     );
 }
 

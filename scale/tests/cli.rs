@@ -96,3 +96,50 @@ fn a_swarm_that_cannot_fit_at_home_is_a_clear_error() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.starts_with("error: ") && err.contains("at most"), "{err}");
 }
+
+/// The scaling report runs the scenario at each thread count asked, with one digest, and
+/// its steps' times add up to the round's (the partition is the report's invariant).
+#[test]
+fn scaling_report_lists_every_thread_count_and_one_digest() {
+    let out = bench(&[
+        "--rounds",
+        "40",
+        "--threads",
+        "1,2",
+        "scaling",
+        "random-walk",
+        "--robots",
+        "1000",
+        "--side-m",
+        "256",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("on every thread count"), "{text}");
+    assert!(text.contains("1 thr (s)") && text.contains("2 thr (s)"), "{text}");
+    assert!(text.contains("1 -> 2 threads: "), "{text}");
+    let share: f64 = text
+        .split("s = ")
+        .nth(1)
+        .and_then(|rest| rest.split(" %").next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("no sequential share in {text}"));
+    assert!((0.0..=100.0).contains(&share), "{text}");
+    // The first figure of each row is the one-thread time.
+    let first_figure = |line: &str| line.split_whitespace().find_map(|w| w.parse::<f64>().ok());
+    let steps: f64 = text
+        .lines()
+        .filter(|l| l.ends_with("one thread") || l.ends_with("all workers"))
+        .filter_map(first_figure)
+        .sum();
+    let wall = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("round (wall)"))
+        .and_then(first_figure)
+        .unwrap_or_else(|| panic!("no round time in {text}"));
+    // Each of the 10 rows is rounded to the millisecond.
+    assert!(
+        steps <= wall + 0.006 && steps >= wall * 0.8 - 0.006,
+        "{steps} against {wall}: {text}"
+    );
+}

@@ -238,6 +238,21 @@ pub struct PhaseTimes {
     /// Everything else: moving last round's messages into inboxes, crediting discoveries,
     /// rebuilding the robot indexes, metrics.
     pub other: Duration,
+    /// Of `resolve`: the turns taken in id order (one thread).
+    pub in_order: Duration,
+    /// Of `resolve`: putting the unbudgeted sends in the inboxes (parallel by receiver).
+    pub fan_out: Duration,
+    /// Beside `resolve`, on another worker when there is one: marking the collective
+    /// explored map (one thread).
+    pub explored: Duration,
+    /// Of `other`: moving last round's messages into the receivers' perception (one thread).
+    pub inboxes: Duration,
+    /// Of `other`: crediting first sightings and the strategies' events (one thread).
+    pub discoveries: Duration,
+    /// Of `other`: rebuilding the robot indexes (two, side by side).
+    pub indexes: Duration,
+    /// Of `other`: crediting explored cells and computing the metrics (one thread).
+    pub metrics: Duration,
     /// Of steps 1 and 2, the time strategies spent planning routes and frontiers through
     /// [`Ctx::timed_planning`](crate::agent::Ctx::timed_planning), summed over threads (CPU
     /// time, not wall time): zero unless [`Simulation::with_time_planning`] is on.

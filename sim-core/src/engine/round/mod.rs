@@ -45,13 +45,17 @@ impl Simulation {
         // The steps timed apart this round (the rest is `other`).
         let mut apart = Duration::ZERO;
         // 1 + 2: perceive and decide, in parallel.
+        let t = Instant::now();
         self.deliver_messages();
+        self.phase_times.inboxes += t.elapsed();
         let t = Instant::now();
         let any_news = self.perceive_and_decide(round);
         let took = t.elapsed();
         self.phase_times.perceive_decide += took;
         apart += took;
+        let t = Instant::now();
         self.record_discoveries(round, any_news);
+        self.phase_times.discoveries += t.elapsed();
         // 3: resolve, in id order, while another thread marks the collective explored map
         // (it reads only the start of the round).
         let mut explored = ExploredUpdate::take(self);
@@ -60,13 +64,22 @@ impl Simulation {
         // Both sides read the turns; neither writes them.
         let turns = std::mem::take(&mut self.turns);
         let t = Instant::now();
-        let ((messages, bytes), ()) =
-            rayon::join(|| self.resolve(round, &turns), || explored.run(&map.obstacles, &turns));
+        let ((messages, bytes), explored_took) = rayon::join(
+            || self.resolve(round, &turns),
+            || {
+                let t = Instant::now();
+                explored.run(&map.obstacles, &turns);
+                t.elapsed()
+            },
+        );
         let took = t.elapsed();
         self.phase_times.resolve += took;
+        self.phase_times.explored += explored_took;
         apart += took;
         self.turns = turns;
+        let t = Instant::now();
         explored.finish(self, event_at);
+        let mut metrics_took = t.elapsed();
         if self.radio_limited {
             let t = Instant::now();
             self.deliver_within_budget();
@@ -74,10 +87,15 @@ impl Simulation {
             self.phase_times.deliver += took;
             apart += took;
         }
+        let t = Instant::now();
         self.rebuild_robot_indexes();
+        self.phase_times.indexes += t.elapsed();
         // 4: observe (the caller hands the report to the observers).
+        let t = Instant::now();
         let known_bytes = self.turns.iter().map(|t| t.known_bytes).sum();
         self.report.metrics = self.metrics(round, messages, bytes, known_bytes);
+        metrics_took += t.elapsed();
+        self.phase_times.metrics += metrics_took;
         self.phase_times.other += started.elapsed().saturating_sub(apart);
         &self.report
     }

@@ -28,6 +28,7 @@ impl Simulation {
     /// in parallel; the rest have theirs here, in id order. The result is that of one pass
     /// in id order: `turns_resolved_alone_give_the_id_order_run` (tests/kernel.rs).
     pub(super) fn resolve(&mut self, round: u64, turns: &[Turn]) -> (u64, u64) {
+        let started = std::time::Instant::now();
         let (mut messages, mut bytes) = (0, 0);
         // Held apart from `self` so the loop can mutate the simulation while it reads a type
         // (one reference-count update a round, not one a robot).
@@ -88,7 +89,10 @@ impl Simulation {
             end_of_turn(&mut self.robots[i], kind, &home, (action, outcome));
         }
         self.step3_robots = pending;
+        let t = std::time::Instant::now();
+        self.phase_times.in_order += t.duration_since(started);
         self.fan_out(turns);
+        self.phase_times.fan_out += t.elapsed();
         (messages, bytes)
     }
 
