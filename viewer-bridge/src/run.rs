@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use sim_core::agent::StrategyRegistry;
-use sim_core::engine::Simulation;
+use sim_core::engine::{Simulation, with_hot_workers};
 use sim_core::io::Observer;
 use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
@@ -181,15 +181,22 @@ impl std::fmt::Display for Summary {
 }
 
 /// Run a resolved config with the built-in observers plus `extra` (viewers).
-pub fn execute(run: &RunConfig, registry: &StrategyRegistry, extra: &mut [&mut dyn Observer]) -> Result<Summary> {
+pub fn execute(
+    run: &RunConfig,
+    registry: &StrategyRegistry,
+    extra: &mut [&mut (dyn Observer + Send)],
+) -> Result<Summary> {
     let started = Instant::now();
     let resumed = run.checkpoint.as_ref().and_then(|c| c.resume_from.as_deref());
     let mut sim = build_simulation(run, registry, resumed)?;
     let setup = started.elapsed();
     let mut outputs = Outputs::open(run, &sim, resumed)?;
     let pool = start_workers(run.threads)?;
+    // With nothing to log, the workers keep their cores between rounds (see
+    // `with_hot_workers`); a recording's logging thread needs a core of its own.
+    let hot = outputs.rerun.is_none() && extra.is_empty();
     let t0 = Instant::now();
-    let result = run_rounds(&mut sim, &pool, &mut outputs.observers(extra));
+    let result = run_rounds(&mut sim, &pool, hot, &mut outputs.observers(extra));
     let elapsed = t0.elapsed();
     // Whatever happened, keep the outputs of the rounds that were played; a run stopped by
     // a signal also writes its checkpoint, whatever the round.
@@ -265,8 +272,8 @@ impl Outputs {
     }
 
     /// The observers in the order they are called: the built-in ones, then `extra`.
-    fn observers<'a>(&'a mut self, extra: &'a mut [&mut dyn Observer]) -> Vec<&'a mut dyn Observer> {
-        let mut observers: Vec<&mut dyn Observer> = vec![&mut self.faults];
+    fn observers<'a>(&'a mut self, extra: &'a mut [&mut (dyn Observer + Send)]) -> Vec<&'a mut (dyn Observer + Send)> {
+        let mut observers: Vec<&mut (dyn Observer + Send)> = vec![&mut self.faults];
         if let Some(m) = self.metrics.as_mut() {
             observers.push(m);
         }
@@ -394,13 +401,41 @@ pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
     Ok(())
 }
 
-/// Play the remaining rounds, notifying the observers, until the last round or a stop
-/// signal ([`crate::stop`]): the round in progress is finished, and the observers are told
-/// the run ended either way. Returns the signal, if one stopped the run.
+/// Play the remaining rounds on `pool`, notifying the observers, until the last round or a
+/// stop signal ([`crate::stop`]): the round in progress is finished, and the observers are
+/// told the run ended either way. Returns the signal, if one stopped the run.
+///
+/// `hot`: the whole loop runs on the pool with its workers kept awake between parallel
+/// steps ([`with_hot_workers`]), as `smartteams-bench` runs; otherwise each round wakes
+/// them. The results are the same.
 fn run_rounds(
     sim: &mut Simulation,
     pool: &rayon::ThreadPool,
-    observers: &mut [&mut dyn Observer],
+    hot: bool,
+    observers: &mut [&mut (dyn Observer + Send)],
+) -> Result<Option<Signal>, sim_core::io::ObserverError> {
+    if hot {
+        pool.install(|| {
+            with_hot_workers(|| {
+                play_rounds(sim, observers, |sim| {
+                    sim.step();
+                })
+            })
+        })
+    } else {
+        play_rounds(sim, observers, |sim| {
+            pool.install(|| {
+                sim.step();
+            });
+        })
+    }
+}
+
+/// The loop of [`run_rounds`], each round played by `step`.
+fn play_rounds(
+    sim: &mut Simulation,
+    observers: &mut [&mut (dyn Observer + Send)],
+    mut step: impl FnMut(&mut Simulation),
 ) -> Result<Option<Signal>, sim_core::io::ObserverError> {
     for o in observers.iter_mut() {
         o.on_start(sim)?;
@@ -411,9 +446,7 @@ fn run_rounds(
             stopped = Some(signal);
             break;
         }
-        pool.install(|| {
-            sim.step();
-        });
+        step(sim);
         for o in observers.iter_mut() {
             o.on_round(sim, sim.report())?;
         }
