@@ -274,7 +274,7 @@ impl Simulation {
 
     /// The robots now: a dict of 1-D arrays, one element per robot in id order: `id`,
     /// `group`, `type`, `x`, `y`, `energy`, `load`, `alive`, `known_area_m2`,
-    /// `distance_m`, `explored_m2`, `units_dug`, `units_delivered`.
+    /// `distance_m`, `explored_m2`, `overlap_m`, `units_dug`, `units_delivered`.
     fn robots<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         robots_dict(py, &self.run.sim)
     }
@@ -461,6 +461,7 @@ fn robots_dict<'py>(py: Python<'py>, sim: &sim_core::engine::Simulation) -> PyRe
     column(&out, "known_area_m2", each(&known))?;
     column(&out, "distance_m", each(&|r| r.stats.distance_m))?;
     column(&out, "explored_m2", each(&|r| r.stats.explored_m2))?;
+    column(&out, "overlap_m", each(&|r| r.stats.overlap_m))?;
     column(
         &out,
         "units_dug",

@@ -75,7 +75,7 @@ const GOLDEN: &[Golden] = &[
         bench_args: &["random-walk", "--robots", "300", "--side-m", "256"],
         rounds: 60,
         digest: 0x813a_3fb5_ee15_196a,
-        metrics_crc: 0xe630_9875,
+        metrics_crc: 0x0cd1_698e,
     },
     Golden {
         name: "paper scale",
@@ -83,7 +83,7 @@ const GOLDEN: &[Golden] = &[
         bench_args: &["swarm", "--robots", "200", "--side-m", "10000", "--mesas", "600"],
         rounds: 60,
         digest: 0xe57e_e72f_f3a7_098a,
-        metrics_crc: 0xc7a7_6ede,
+        metrics_crc: 0x89e0_65a1,
     },
     Golden {
         name: "moonshot",
@@ -101,7 +101,7 @@ const GOLDEN: &[Golden] = &[
         ],
         rounds: 15,
         digest: 0xdb90_98f4_ed56_4c7c,
-        metrics_crc: 0x0dbb_2b5a,
+        metrics_crc: 0x97a8_65fc,
     },
     Golden {
         name: "kernel",
@@ -109,7 +109,7 @@ const GOLDEN: &[Golden] = &[
         bench_args: &["kernel", "--robots", "60"],
         rounds: 60,
         digest: 0x773b_f2c0_72ba_da56,
-        metrics_crc: 0x3820_15dd,
+        metrics_crc: 0xa392_cd0d,
     },
 ];
 

@@ -40,7 +40,8 @@ pub enum Command {
     /// Join the CSVs of a sweep's shards into the CSV a single-machine sweep writes.
     Merge(crate::sweep::MergeArgs),
     /// Draw explored fraction, treasures delivered, energy and known-map memory against
-    /// rounds from metrics or sweep CSVs (PNG or SVG): mean and spread over seeds.
+    /// rounds (or distance walked, `--x distance`) from metrics or sweep CSVs (PNG or SVG):
+    /// mean and spread over seeds.
     Plot(PlotArgs),
 }
 
@@ -57,6 +58,10 @@ pub struct PlotArgs {
     /// Size in pixels, `WIDTHxHEIGHT`.
     #[arg(long, value_name = "WxH", default_value = "1400x900", value_parser = parse_size)]
     pub size: (u32, u32),
+    /// What the charts run along: rounds, or metres walked by all robots (explored fraction
+    /// against distance walked, for comparing explorers).
+    #[arg(long, value_enum, default_value_t)]
+    pub x: crate::plot::XAxis,
 }
 
 /// `1400x900` → (1400, 900).
@@ -70,8 +75,8 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 /// Draw a figure and say what it holds.
-fn plot(inputs: &[PathBuf], output: &std::path::Path, (width, height): (u32, u32)) -> Result<()> {
-    let s = crate::plot::metrics_figure(inputs, output, width, height)?;
+fn plot(inputs: &[PathBuf], output: &std::path::Path, size: (u32, u32), x: crate::plot::XAxis) -> Result<()> {
+    let s = crate::plot::metrics_figure(inputs, output, size, x)?;
     println!(
         "{}: {} charts, {} lines each ({} runs): {}{}",
         output.display(),
@@ -379,11 +384,16 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
                 );
             }
             if let Some(fig) = &args.plot {
-                plot(std::slice::from_ref(&summary.output), fig, (1400, 900))?;
+                plot(
+                    std::slice::from_ref(&summary.output),
+                    fig,
+                    (1400, 900),
+                    crate::plot::XAxis::Round,
+                )?;
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Plot(args) => plot(&args.inputs, &args.output, args.size).map(|()| ExitCode::SUCCESS),
+        Command::Plot(args) => plot(&args.inputs, &args.output, args.size, args.x).map(|()| ExitCode::SUCCESS),
         Command::Merge(args) => {
             let summary = crate::sweep::merge_parts(&args)?;
             let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));

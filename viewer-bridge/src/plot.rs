@@ -174,6 +174,27 @@ pub const FIGURE_METRICS: [(&str, &str, &str, f64); 4] = [
     ("known_map_bytes", "Known-map memory, all robots", "MB", 1e-6),
 ];
 
+/// What the standard figure's charts run along.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum XAxis {
+    /// Rounds.
+    #[default]
+    Round,
+    /// Metres walked by all robots (`distance_m`): at each round, the mean over the group's
+    /// runs. Explored fraction against it says how far a strategy walks for what it finds.
+    Distance,
+}
+
+impl XAxis {
+    /// The axis label.
+    fn label(self) -> &'static str {
+        match self {
+            XAxis::Round => "round",
+            XAxis::Distance => "distance walked, all robots (m)",
+        }
+    }
+}
+
 /// What [`metrics_figure`] drew.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct FigureSummary {
@@ -267,9 +288,14 @@ fn read_groups(inputs: &[PathBuf], metrics: &[&str]) -> Result<Vec<(String, usiz
 
 /// Draw the standard figure of one or more metrics CSVs (from `smartteams run --metrics`)
 /// or sweep CSVs into `output` (`.png` or `.svg`, `width` × `height` pixels): a chart per
-/// metric of [`FIGURE_METRICS`] against rounds, a line per group of runs (the mean over its
+/// metric of [`FIGURE_METRICS`] against `x`, a line per group of runs (the mean over its
 /// seeds, with a band of ± one standard deviation when it has several).
-pub fn metrics_figure(inputs: &[PathBuf], output: &Path, width: u32, height: u32) -> Result<FigureSummary> {
+pub fn metrics_figure(
+    inputs: &[PathBuf],
+    output: &Path,
+    (width, height): (u32, u32),
+    x: XAxis,
+) -> Result<FigureSummary> {
     if inputs.is_empty() {
         return Err(PlotError("no CSV to plot".into()));
     }
@@ -278,9 +304,12 @@ pub fn metrics_figure(inputs: &[PathBuf], output: &Path, width: u32, height: u32
             "a figure of {width} × {height} pixels makes no sense (200 to 20000 a side)"
         )));
     }
-    let columns: Vec<&str> = FIGURE_METRICS.iter().map(|m| m.0).collect();
+    let mut columns: Vec<&str> = FIGURE_METRICS.iter().map(|m| m.0).collect();
+    if x == XAxis::Distance {
+        columns.push("distance_m");
+    }
     let groups = read_groups(inputs, &columns)?;
-    let charts = chart_lines(&groups);
+    let charts = chart_lines(&groups, x);
     match output
         .extension()
         .and_then(|e| e.to_str())
@@ -291,11 +320,13 @@ pub fn metrics_figure(inputs: &[PathBuf], output: &Path, width: u32, height: u32
             &BitMapBackend::new(output, (width, height)).into_drawing_area(),
             output,
             &charts,
+            x,
         )?,
         Some("svg") => draw_figure(
             &SVGBackend::new(output, (width, height)).into_drawing_area(),
             output,
             &charts,
+            x,
         )?,
         _ => {
             return Err(PlotError(format!(
@@ -313,8 +344,10 @@ pub fn metrics_figure(inputs: &[PathBuf], output: &Path, width: u32, height: u32
 }
 
 /// Per metric of [`FIGURE_METRICS`], a line per group: the mean at each round, and the band
-/// of ± one standard deviation (population) when the group has several runs.
-fn chart_lines(groups: &[(String, usize, Vec<Samples>)]) -> Vec<Vec<Line>> {
+/// of ± one standard deviation (population) when the group has several runs; placed at the
+/// round, or at the mean distance walked by then (the samples after the figure's metrics).
+fn chart_lines(groups: &[(String, usize, Vec<Samples>)], x: XAxis) -> Vec<Vec<Line>> {
+    let mean = |values: &[f64]| values.iter().sum::<f64>() / values.len() as f64;
     FIGURE_METRICS
         .iter()
         .enumerate()
@@ -326,9 +359,13 @@ fn chart_lines(groups: &[(String, usize, Vec<Samples>)]) -> Vec<Vec<Line>> {
                     let mut band = Vec::new();
                     for (&round, values) in &samples[m] {
                         let n = values.len() as f64;
-                        let mean = values.iter().sum::<f64>() / n;
-                        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
-                        let (x, sd) = (round as f64, var.sqrt());
+                        let mean_value = mean(values);
+                        let var = values.iter().map(|v| (v - mean_value).powi(2)).sum::<f64>() / n;
+                        let x = match x {
+                            XAxis::Round => round as f64,
+                            XAxis::Distance => mean(&samples[FIGURE_METRICS.len()][&round]),
+                        };
+                        let (mean, sd) = (mean_value, var.sqrt());
                         points.push((x, mean * scale));
                         band.push((x, ((mean - sd) * scale).max(0.0), (mean + sd) * scale));
                     }
@@ -348,13 +385,18 @@ fn chart_lines(groups: &[(String, usize, Vec<Samples>)]) -> Vec<Vec<Line>> {
 }
 
 /// The four charts of [`metrics_figure`], two by two.
-fn draw_figure<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, output: &Path, charts: &[Vec<Line>]) -> Result<()> {
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    output: &Path,
+    charts: &[Vec<Line>],
+    x: XAxis,
+) -> Result<()> {
     let at = |e: &dyn std::fmt::Display| PlotError(format!("{}: {e}", output.display()));
     root.fill(&WHITE).map_err(|e| at(&e))?;
     for (area, (lines, &(_, title, y_label, _))) in
         root.split_evenly((2, 2)).iter().zip(charts.iter().zip(&FIGURE_METRICS))
     {
-        draw_chart(area, title, "round", y_label, lines, false).map_err(|e| at(&e))?;
+        draw_chart(area, title, x.label(), y_label, lines, false).map_err(|e| at(&e))?;
     }
     root.present().map_err(|e| at(&e))
 }
@@ -391,7 +433,7 @@ mod tests {
         let groups = read_groups(&[sweep, single], &columns).unwrap();
         let labels: Vec<(&str, usize)> = groups.iter().map(|g| (g.0.as_str(), g.1)).collect();
         assert_eq!(labels, [("g.count=4", 2), ("g.count=8", 2), ("solo", 1)]);
-        let charts = chart_lines(&groups);
+        let charts = chart_lines(&groups, XAxis::Round);
         // Explored, team of 4: rounds 1 and 2 average (0.1, 0.3) and (0.3, 0.5): 0.2 ± 0.1,
         // 0.4 ± 0.1.
         let explored = &charts[0][0];
@@ -416,5 +458,33 @@ mod tests {
         // A lone run has no band.
         assert!(charts[2][2].band.is_empty());
         assert_eq!(charts[2][2].points, [(1.0, 3.0)]);
+    }
+
+    /// Against distance: each round's point sits at the group's mean distance walked by then.
+    /// Two seeds walked 10 and 30 m by round 1, 20 and 60 m by round 2: x = 20 and 40 m; their
+    /// explored fractions 0.1 and 0.3, then 0.2 and 0.6: y = 0.2 and 0.4.
+    #[test]
+    fn against_distance_each_point_sits_at_the_mean_distance_walked() {
+        let dir = tempfile::tempdir().unwrap();
+        let sweep = dir.path().join("s.csv");
+        std::fs::write(
+            &sweep,
+            "run,seed,round,explored_fraction,treasures_delivered,mean_energy,known_map_bytes,distance_m\n\
+             0,1,1,0.1,0,10,1,10\n0,1,2,0.2,0,10,1,20\n1,2,1,0.3,0,10,1,30\n1,2,2,0.6,0,10,1,60\n",
+        )
+        .unwrap();
+        let mut columns: Vec<&str> = FIGURE_METRICS.iter().map(|m| m.0).collect();
+        columns.push("distance_m");
+        let groups = read_groups(&[sweep], &columns).unwrap();
+        let charts = chart_lines(&groups, XAxis::Distance);
+        let explored = &charts[0][0];
+        for (got, want) in explored.points.iter().zip([(20.0, 0.2), (40.0, 0.4)]) {
+            assert!(
+                (got.0 - want.0).abs() < 1e-12 && (got.1 - want.1).abs() < 1e-12,
+                "{got:?}"
+            );
+        }
+        assert_eq!(explored.points.len(), 2);
+        assert!((explored.band[1].0 - 40.0).abs() < 1e-12);
     }
 }

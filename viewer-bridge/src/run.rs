@@ -13,7 +13,7 @@ use sim_core::io::Observer;
 use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
 use sim_core::spatial::RobotId;
-use sim_core::world::{Event, MapData, RoundReport};
+use sim_core::world::{Event, MapData, RoundMetrics, RoundReport};
 
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
@@ -129,8 +129,9 @@ impl std::fmt::Display for Summary {
         }
         writeln!(
             f,
-            "  explored          {:.1} % of the free area",
-            100.0 * m.explored_fraction
+            "  explored          {:.1} % of the free area; {}",
+            100.0 * m.explored_fraction,
+            milestones(m)
         )?;
         writeln!(
             f,
@@ -142,7 +143,13 @@ impl std::fmt::Display for Summary {
             "  robots alive      {} (mean energy {:.1})",
             m.robots_alive, m.mean_energy
         )?;
-        writeln!(f, "  distance          {:.1} m in all", m.distance_m)?;
+        writeln!(
+            f,
+            "  distance          {:.1} m in all, {:.1} m ({:.1} %) through explored ground",
+            m.distance_m,
+            m.overlap_m,
+            100.0 * m.overlap_m / m.distance_m.max(1e-9)
+        )?;
         write!(f, "  digest            {:016x} (final positions)", self.digest)?;
         if m.strategies_failed > 0 {
             write!(
@@ -178,6 +185,26 @@ impl std::fmt::Display for Summary {
         }
         Ok(())
     }
+}
+
+/// When the run first had 50, 90 and 98 % of the free area explored: "50 % at round R
+/// (D m walked)", or "not reached".
+fn milestones(m: &RoundMetrics) -> String {
+    [
+        (50, m.explored_50_round, m.explored_50_distance_m),
+        (90, m.explored_90_round, m.explored_90_distance_m),
+        (98, m.explored_98_round, m.explored_98_distance_m),
+    ]
+    .iter()
+    .map(|&(percent, round, distance_m)| {
+        if round == 0 {
+            format!("{percent} % not reached")
+        } else {
+            format!("{percent} % at round {round} ({distance_m:.1} m walked)")
+        }
+    })
+    .collect::<Vec<_>>()
+    .join(", ")
 }
 
 /// Run a resolved config with the built-in observers plus `extra` (viewers).

@@ -70,6 +70,40 @@ fn plot_draws_a_line_per_group_at_the_requested_size() {
     assert!(svg.contains("<svg") && svg.contains("width=\"1400\"") && svg.contains("height=\"900\""));
 }
 
+/// Against distance walked: a run's metrics CSV has the column; a CSV without it is refused
+/// by name.
+#[test]
+fn plot_against_distance_reads_the_distance_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/demo.xml");
+    let run = smartteams(
+        d,
+        &[
+            "run",
+            demo.to_str().unwrap(),
+            "--rounds",
+            "20",
+            "--no-viewer",
+            "-q",
+            "--metrics",
+            "demo.csv",
+        ],
+    );
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let out = smartteams(d, &["plot", "demo.csv", "-o", "fig.svg", "--x", "distance"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let svg = std::fs::read_to_string(d.join("fig.svg")).unwrap();
+    // Labels need a system font; without one the figure is drawn bare and says so.
+    let labelled = !String::from_utf8_lossy(&out.stdout).contains("no font found");
+    assert!(!labelled || svg.contains("distance walked"), "no distance axis");
+    std::fs::write(d.join("sweep.csv"), SWEEP).unwrap();
+    let out = smartteams(d, &["plot", "sweep.csv", "-o", "fig.png", "--x", "distance"]);
+    assert!(!out.status.success());
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("sweep.csv") && said.contains("'distance_m'"), "{said}");
+}
+
 #[test]
 fn plot_refuses_bad_input_naming_the_file_and_line() {
     let dir = tempfile::tempdir().unwrap();

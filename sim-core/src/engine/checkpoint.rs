@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::agent::DataModule;
 use crate::engine::simulation::Simulation;
 use crate::spatial::{Disc, KnownMap, RobotId};
-use crate::world::{Message, Payload, Recipient, Robot, TreasureState};
+use crate::world::{ExploredMilestones, Message, Payload, Recipient, Robot, TreasureState};
 use crate::{Error, Result};
 
 /// What changes in a run, as written (borrowed from the simulation).
@@ -28,6 +28,7 @@ struct StateRef<'a> {
     strategies_failed: u32,
     explored: &'a KnownMap,
     explored_free_cells: u64,
+    milestones: ExploredMilestones,
     explored_views: &'a [Option<Disc>],
     agents: Vec<AgentRef<'a>>,
     /// Payloads of the messages in flight, each once (receivers of a broadcast share it).
@@ -45,6 +46,7 @@ struct State {
     strategies_failed: u32,
     explored: KnownMap,
     explored_free_cells: u64,
+    milestones: ExploredMilestones,
     explored_views: Vec<Option<Disc>>,
     agents: Vec<AgentState>,
     payloads: Vec<Payload>,
@@ -157,6 +159,7 @@ impl Simulation {
             strategies_failed: self.strategies_failed,
             explored: &self.explored,
             explored_free_cells: self.explored_free_cells,
+            milestones: self.milestones,
             explored_views: &self.explored_views,
             agents,
             payloads,
@@ -209,6 +212,7 @@ impl Simulation {
         self.strategies_failed = state.strategies_failed;
         self.explored = state.explored;
         self.explored_free_cells = state.explored_free_cells;
+        self.milestones = state.milestones;
         self.explored_views = state.explored_views;
         self.rebuild_robot_indexes();
         self.report.round = self.round;

@@ -16,7 +16,9 @@ use crate::spatial::{
     BlockMemo, CellSet, Disc, Grid, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
     TreasureIndex,
 };
-use crate::world::{Action, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState};
+use crate::world::{
+    Action, ExploredMilestones, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState,
+};
 
 /// A message sent in step 3 without radio budgets, for [`Simulation::inboxes`] after it:
 /// bagged as `mailbag[bag]` by robot index `from`, to `to` (a robot index) or, if `None`,
@@ -199,6 +201,8 @@ pub struct Simulation {
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
+    /// When the explored fraction first reached 50, 90 and 98 %.
+    pub(super) milestones: ExploredMilestones,
     /// Each robot's view disc last marked in `explored`.
     pub(super) explored_views: Vec<Option<Disc>>,
     /// Free cells each robot was first to see this round (kept to reuse its allocation).
@@ -450,12 +454,14 @@ impl Simulation {
     ) -> RoundMetrics {
         // One pass over the robots for all the sums.
         let (mut alive, mut energy, mut distance_m, mut units_dug, mut units_delivered) = (0u32, 0.0, 0.0, 0, 0);
+        let mut overlap_m = 0.0;
         for r in &self.robots {
             if r.alive {
                 alive += 1;
                 energy += r.energy;
             }
             distance_m += r.stats.distance_m;
+            overlap_m += r.stats.overlap_m;
             units_dug += r.stats.units_dug;
             units_delivered += r.stats.units_delivered;
         }
@@ -478,6 +484,8 @@ impl Simulation {
             message_bytes,
             strategies_failed: self.strategies_failed,
             known_map_bytes: known_map_bytes as u64,
+            overlap_m,
+            ..RoundMetrics::default()
         }
     }
 
@@ -616,6 +624,7 @@ impl Simulation {
             step3_robots: Vec::new(),
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
+            milestones: ExploredMilestones::default(),
             explored_views: vec![None; n],
             explored_fresh: Vec::new(),
             explored_memo: BlockMemo::default(),

@@ -47,7 +47,7 @@ impl<W: Write> Observer for MetricsCsv<W> {
 }
 
 /// Columns of the per-robot statistics CSV.
-pub const ROBOT_STATS_COLUMNS: [&str; 14] = [
+pub const ROBOT_STATS_COLUMNS: [&str; 15] = [
     "robot",
     "group",
     "type",
@@ -62,6 +62,7 @@ pub const ROBOT_STATS_COLUMNS: [&str; 14] = [
     "energy_left",
     "messages_sent",
     "message_bytes",
+    "overlap_m",
 ];
 
 /// Write the per-robot statistics of a run as CSV.
@@ -86,6 +87,7 @@ pub fn write_robot_stats<W: Write>(sim: &Simulation, out: W) -> Result<(), csv::
             format!("{:.3}", r.energy),
             s.messages_sent.to_string(),
             s.message_bytes.to_string(),
+            format!("{:.3}", s.overlap_m),
         ])?;
     }
     w.flush()?;

@@ -33,7 +33,7 @@ macro_rules! metrics_table {
 }
 
 /// Number of metric columns (the round included).
-pub const METRICS_COUNT: usize = 14;
+pub const METRICS_COUNT: usize = 21;
 
 metrics_table! {
     /// Round number (1-based).
@@ -64,6 +64,49 @@ metrics_table! {
     strategies_failed: u32, "{}", "robots/strategies_failed";
     /// Bytes held by all robots' known maps (what the paper's Fig. 4 plots).
     known_map_bytes: u64, "{}", "memory/known_map_bytes";
+    /// Metres walked since the start in rounds whose view showed the team nothing new (the
+    /// team's overlap; see [`RobotStats::overlap_m`](crate::world::RobotStats::overlap_m)).
+    overlap_m: f64, "{:.3}", "totals/overlap_m";
+    /// The first round at the end of which 50 % of the free area was explored (0: not yet).
+    explored_50_round: u64, "{}", "milestones/explored_50_round";
+    /// `distance_m` at that round (0: not yet).
+    explored_50_distance_m: f64, "{:.3}", "milestones/explored_50_distance_m";
+    /// The same for 90 %.
+    explored_90_round: u64, "{}", "milestones/explored_90_round";
+    /// `distance_m` at that round (0: not yet).
+    explored_90_distance_m: f64, "{:.3}", "milestones/explored_90_distance_m";
+    /// The same for 98 %.
+    explored_98_round: u64, "{}", "milestones/explored_98_round";
+    /// `distance_m` at that round (0: not yet).
+    explored_98_distance_m: f64, "{:.3}", "milestones/explored_98_distance_m";
+}
+
+/// The explored fractions whose first reaching the metrics record: 50, 90 and 98 % of the
+/// free area.
+pub const EXPLORED_MILESTONES: [f64; 3] = [0.5, 0.9, 0.98];
+
+/// When a run first reached each of [`EXPLORED_MILESTONES`]: the round, and the metres the
+/// team had walked by its end. State of a run (kept in checkpoints).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ExploredMilestones {
+    /// Per milestone, `(round, distance_m)` once reached.
+    pub reached: [Option<(u64, f64)>; 3],
+}
+
+impl ExploredMilestones {
+    /// Note round `m` (a milestone is reached when `explored_fraction` is at least its
+    /// fraction), then write the milestones into its columns.
+    pub fn note(&mut self, m: &mut RoundMetrics) {
+        for (reached, &fraction) in self.reached.iter_mut().zip(&EXPLORED_MILESTONES) {
+            if reached.is_none() && m.explored_fraction >= fraction {
+                *reached = Some((m.round, m.distance_m));
+            }
+        }
+        let [(r50, d50), (r90, d90), (r98, d98)] = self.reached.map(|r| r.unwrap_or((0, 0.0)));
+        (m.explored_50_round, m.explored_50_distance_m) = (r50, d50);
+        (m.explored_90_round, m.explored_90_distance_m) = (r90, d90);
+        (m.explored_98_round, m.explored_98_distance_m) = (r98, d98);
+    }
 }
 
 impl RoundMetrics {

@@ -12,6 +12,6 @@ mod report;
 pub use mapfile::{HomeBase, MAGIC, MapData, TreasureSpec, VERSION};
 pub use memory::{MemoryList, Retention};
 pub use messages::{Inbox, InboxIter, Message, Payload, Recipient, Sighting, Task};
-pub use metrics::{METRICS_COLUMNS, METRICS_COUNT, RoundMetrics};
+pub use metrics::{EXPLORED_MILESTONES, ExploredMilestones, METRICS_COLUMNS, METRICS_COUNT, RoundMetrics};
 pub use model::{Action, Outcome, REACH_M, ROBOT_TYPE_ATTRIBUTES, Robot, RobotStats, RobotType, TreasureState};
 pub use report::{Event, Link, RoundReport, StrategyEvent};

@@ -319,6 +319,10 @@ pub struct RobotStats {
     pub messages_sent: u64,
     /// Bytes of message payload sent.
     pub message_bytes: u64,
+    /// Metres travelled in rounds whose view showed nothing new to the team: walking
+    /// through explored ground. A move is shorter than the view's radius, so it crosses
+    /// only cells that view showed.
+    pub overlap_m: f64,
 }
 
 /// A robot's physical state, owned by the kernel.

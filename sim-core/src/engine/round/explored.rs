@@ -90,10 +90,13 @@ impl ExploredUpdate {
         sim.explored_views = self.views;
         sim.report.known_changed = self.known_changed;
         sim.explored_memo = self.memo;
-        for (robot, &fresh) in sim.robots.iter_mut().zip(&self.fresh) {
+        for ((robot, &fresh), turn) in sim.robots.iter_mut().zip(&self.fresh).zip(&sim.turns) {
             if fresh > 0 {
                 sim.explored_free_cells += fresh;
                 robot.stats.explored_m2 += fresh as f64 * cell_area;
+            } else if turn.sensed_m.is_some() {
+                // Step 3 has moved it: this round's move went through explored ground.
+                robot.stats.overlap_m += robot.position.distance(turn.start);
             }
         }
         sim.explored_fresh = self.fresh;

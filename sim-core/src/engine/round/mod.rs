@@ -94,6 +94,7 @@ impl Simulation {
         let t = Instant::now();
         let known_bytes = self.turns.iter().map(|t| t.known_bytes).sum();
         self.report.metrics = self.metrics(round, messages, bytes, known_bytes);
+        self.milestones.note(&mut self.report.metrics);
         metrics_took += t.elapsed();
         self.phase_times.metrics += metrics_took;
         self.phase_times.other += started.elapsed().saturating_sub(apart);
