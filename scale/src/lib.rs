@@ -13,6 +13,7 @@
 //! # Ok::<(), scale::Error>(())
 //! ```
 
+pub mod exploration;
 pub mod fig4;
 pub mod kernel;
 pub mod paths;

@@ -158,6 +158,24 @@ enum Scenario {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Exploration quality: on each map of the comparison set, the distance one robot walks
+    /// to 90 % and 98 % explored with the greedy nearest-frontier reference and with
+    /// `--strategy`, and the rounds teams of `cooperative` robots take to 90 % (3.5 m view,
+    /// 0.25 m a round, no energy use). `--rounds` bounds each run.
+    Exploration {
+        /// The built-in explorer compared with the reference.
+        #[arg(long, default_value = "frontier")]
+        strategy: String,
+        /// The shared map folder (ROS maps and the Stage cave); default: `SMARTTEAMS_DATA`.
+        #[arg(long)]
+        data: Option<std::path::PathBuf>,
+        /// Team sizes of `cooperative` to time against one robot (`0`: no teams).
+        #[arg(long, value_delimiter = ',', default_value = "2,4,8")]
+        teams: Vec<u32>,
+        /// Only the maps whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
+    },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
     Fig4 {
@@ -206,6 +224,12 @@ fn run(cli: &Cli) -> Result<()> {
             compare_cells,
             seed,
         } => nav_graph(map, queries, robot_radius_m, compare_cells, seed),
+        Scenario::Exploration {
+            ref strategy,
+            ref data,
+            ref teams,
+            ref only,
+        } => exploration(strategy, data.as_deref(), teams, only.as_deref(), cli.rounds),
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
         Scenario::Scaling { ref scenario } => {
             let threads = if cli.threads.is_empty() {
@@ -503,6 +527,74 @@ fn fig4(out: &std::path::Path, quick: bool, plots: bool) -> Result<()> {
     let data = fig.run(|what| eprintln!("fig4: {what}"))?;
     for path in data.write(out, plots)? {
         println!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// The exploration-quality table (see `Scenario::Exploration`).
+fn exploration(
+    strategy: &str,
+    data: Option<&std::path::Path>,
+    teams: &[u32],
+    only: Option<&str>,
+    max_rounds: u64,
+) -> Result<()> {
+    use scale::exploration::{GREEDY_REFERENCE, comparison_maps, explore};
+    let workspace = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let from_env = std::env::var_os("SMARTTEAMS_DATA").map(std::path::PathBuf::from);
+    let data = data.map(std::path::Path::to_path_buf).or(from_env);
+    let maps = comparison_maps(&workspace, data.as_deref())?;
+    let metres = |at: Option<(u64, f64)>| at.map_or("-".to_owned(), |(_, d)| format!("{d:.1}"));
+    let ratio = |a: Option<(u64, f64)>, b: Option<(u64, f64)>| match (a, b) {
+        (Some((_, a)), Some((_, b))) if b > 0.0 => format!("{:.2}", a / b),
+        _ => "-".to_owned(),
+    };
+    println!(
+        "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
+    );
+    let (mut sum90, mut n90) = (0.0, 0);
+    for (name, map) in maps.iter().filter(|(n, _)| only.is_none_or(|o| n.contains(o))) {
+        let reference = explore(map, GREEDY_REFERENCE, 1, max_rounds)?;
+        let built_in = explore(map, strategy, 1, max_rounds)?;
+        if let (Some((_, a)), Some((_, b))) = (built_in.at_90, reference.at_90) {
+            sum90 += a / b;
+            n90 += 1;
+        }
+        let mut team_cells = Vec::new();
+        if teams.iter().any(|&n| n > 0) {
+            let solo = explore(map, "cooperative", 1, max_rounds)?;
+            team_cells.push(format!(
+                "1: {}, {}",
+                solo.at_90.map_or("-".into(), |(r, _)| r.to_string()),
+                metres(solo.at_90)
+            ));
+            for &n in teams.iter().filter(|&&n| n > 0) {
+                let team = explore(map, "cooperative", n, max_rounds)?;
+                let speedup = match (solo.at_90, team.at_90) {
+                    (Some((a, _)), Some((b, _))) => format!(" ({:.2}x)", a as f64 / b as f64),
+                    _ => String::new(),
+                };
+                team_cells.push(format!(
+                    "{n}: {}{speedup}, {}, {:.0} % overlap",
+                    team.at_90.map_or("-".into(), |(r, _)| r.to_string()),
+                    metres(team.at_90),
+                    100.0 * team.overlap_m / team.distance_m.max(1e-9)
+                ));
+            }
+        }
+        println!(
+            "{name} | {} / {} | {} / {} | {} / {} | {}",
+            metres(reference.at_90),
+            metres(reference.at_98),
+            metres(built_in.at_90),
+            metres(built_in.at_98),
+            ratio(built_in.at_90, reference.at_90),
+            ratio(built_in.at_98, reference.at_98),
+            team_cells.join("; ")
+        );
+    }
+    if n90 > 0 {
+        println!("mean ratio to 90 %: {:.2} over {n90} maps", sum90 / f64::from(n90));
     }
     Ok(())
 }
