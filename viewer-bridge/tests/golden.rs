@@ -50,23 +50,23 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "tactics.xml",
         rounds: 600,
-        digest: 0x88a5_c226_49a7_6240,
-        metrics_crc: 0xa733_ee25,
-        robots_crc: 0xe028_ec31,
+        digest: 0x8b9d_95c5_d26e_fc58,
+        metrics_crc: 0x6910_2d00,
+        robots_crc: 0x0944_42cb,
     },
     Golden {
         config: "bench-1000.xml",
         rounds: 50,
-        digest: 0x3c9e_ed76_48e5_2033,
-        metrics_crc: 0x2ac8_ad69,
-        robots_crc: 0xf3e8_9caa,
+        digest: 0x0f0c_0972_9ed5_ef10,
+        metrics_crc: 0x7a6c_266f,
+        robots_crc: 0xb8c0_33fe,
     },
     Golden {
         config: "bench-10000.xml",
         rounds: 5,
-        digest: 0x1d5d_aecb_6485_ba22,
-        metrics_crc: 0x3201_cb9b,
-        robots_crc: 0x94bf_3b67,
+        digest: 0xbcee_219c_ebb9_687e,
+        metrics_crc: 0x78e8_6da0,
+        robots_crc: 0x23d1_5bf9,
     },
 ];
 

@@ -9,13 +9,16 @@ use crate::agent::ctx::Ctx;
 use crate::spatial::{
     Aabb, BlockCells, Finger, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
 };
-use crate::world::Action;
+use crate::world::{Action, Outcome};
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Navigator {
     waypoints: Vec<DVec2>,
     next: usize,
+    /// Where the robot stood when it last stepped (whatever route it followed then).
+    #[serde(default)]
+    stepped_from: Option<DVec2>,
 }
 
 impl Navigator {
@@ -77,7 +80,11 @@ impl Navigator {
         }
     }
 
-    /// The move towards the next waypoint (skipping those already reached).
+    /// The move towards the next waypoint (skipping those already reached). A route's legs
+    /// join pieces of free space, and the robot's disc can catch a corner on one or find no
+    /// room at a waypoint by a wall; when a wall held the last step back and the straight way
+    /// on is blocked, it heads for the farthest of the next [`LOOK_AHEAD`] waypoints in
+    /// straight reach, else slides along the wall (see [`slide`]).
     pub fn step(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let p = ctx.position();
         let tol = 0.05;
@@ -86,6 +93,28 @@ impl Navigator {
         }
         let target = *self.waypoints.get(self.next)?;
         ctx.set_path(self.remaining());
+        let held_back = self.stepped_from.is_some_and(|q| {
+            q.distance(p) < 0.5 * ctx.kind.speed_m_per_round
+                && matches!(
+                    ctx.me.last_action,
+                    (Action::MoveTo { .. }, Outcome::Trimmed | Outcome::Refused)
+                )
+        });
+        self.stepped_from = Some(p);
+        if held_back && ctx.can_move(p, target) == Some(false) {
+            // A waypoint further on in straight reach (one the disc cannot stand on is
+            // passed by), else a slide towards this one.
+            let ahead = (self.next + 1..self.waypoints.len().min(self.next + 1 + LOOK_AHEAD))
+                .rev()
+                .find(|&k| ctx.can_move(p, self.waypoints[k]) == Some(true));
+            if let Some(k) = ahead {
+                self.next = k;
+                return Some(Action::MoveTo { to: self.waypoints[k] });
+            }
+            if let Some(to) = slide(ctx, p, target) {
+                return Some(Action::MoveTo { to });
+            }
+        }
         Some(Action::MoveTo { to: target })
     }
 
@@ -145,6 +174,26 @@ impl Navigator {
         }
         route
     }
+}
+
+/// Waypoints past the next that a robot held back by a wall looks at for one in straight
+/// reach.
+const LOOK_AHEAD: usize = 16;
+
+/// A step from `p` towards `target` along one axis (the longer part of the way first), one
+/// the known map shows free: how a disc caught on a corner gets round it. `None` if neither
+/// is free.
+fn slide(ctx: &Ctx, p: DVec2, target: DVec2) -> Option<DVec2> {
+    let d = target - p;
+    let mut parts = [DVec2::new(d.x, 0.0), DVec2::new(0.0, d.y)];
+    if d.y.abs() > d.x.abs() {
+        parts.swap(0, 1);
+    }
+    parts
+        .into_iter()
+        .filter(|part| part.length() > 1e-9)
+        .map(|part| p + part.clamp_length_max(ctx.kind.speed_m_per_round))
+        .find(|&to| ctx.can_move(p, to) == Some(true))
 }
 
 /// A frontier search under way (see [`Navigator::frontier_route_memo`]): what it looks
@@ -568,6 +617,58 @@ mod tests {
         assert!(
             found > 4000 && ties > 50 && tie_seeds > 50,
             "{found} found, {ties} ties, {tie_seeds} tied first points"
+        );
+    }
+
+    /// A robot in a corridor whose route's next waypoint lies too near the wall for its disc:
+    /// the first step heads there; held back, the next heads for the waypoint after it.
+    #[test]
+    fn a_robot_held_back_heads_for_a_later_waypoint_in_reach() {
+        use crate::agent::TestWorld;
+        use crate::spatial::Route;
+        use crate::world::{Action, Outcome};
+        let art = ["######", "#R...#", "######"].join("\n");
+        let mut w = TestWorld::from_ascii(&art, 1.0).unwrap().knowing_all();
+        let mut nav = super::Navigator::default();
+        let (too_near, beyond) = (DVec2::new(2.5, 1.05), DVec2::new(4.5, 1.5));
+        nav.follow(Route {
+            nodes: Vec::new(),
+            waypoints: vec![too_near, beyond],
+            length_m: 0.0,
+        });
+        let first = nav.step(&mut w.ctx());
+        assert_eq!(first, Some(Action::MoveTo { to: too_near }));
+        // The wall stopped it where it stood.
+        w.robot.last_action = (Action::MoveTo { to: too_near }, Outcome::Refused);
+        assert_eq!(nav.step(&mut w.ctx()), Some(Action::MoveTo { to: beyond }));
+        assert_eq!(nav.remaining(), &[beyond]);
+    }
+
+    /// Round a corner the straight leg would cut: the disc slides along the wall, on the
+    /// axis that is free (here north, as east is the wall).
+    #[test]
+    fn a_robot_caught_on_a_corner_slides_along_the_wall() {
+        use crate::agent::TestWorld;
+        use crate::spatial::Route;
+        use crate::world::{Action, Outcome};
+        let art = ["#####", "#...#", "#R###", "#####"].join("\n");
+        let mut w = TestWorld::from_ascii(&art, 1.0).unwrap().knowing_all();
+        let mut nav = super::Navigator::default();
+        let round_the_corner = DVec2::new(2.5, 2.5);
+        nav.follow(Route {
+            nodes: Vec::new(),
+            waypoints: vec![round_the_corner],
+            length_m: 0.0,
+        });
+        let _ = nav.step(&mut w.ctx());
+        w.robot.last_action = (Action::MoveTo { to: round_the_corner }, Outcome::Trimmed);
+        let p = w.robot.position;
+        assert_eq!(w.ctx().can_move(p, round_the_corner), Some(false));
+        assert_eq!(
+            nav.step(&mut w.ctx()),
+            Some(Action::MoveTo {
+                to: DVec2::new(1.5, 2.5)
+            })
         );
     }
 }
