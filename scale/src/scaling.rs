@@ -36,7 +36,7 @@ pub fn phases(p: &PhaseTimes) -> Vec<Phase> {
     let rest = p.other.saturating_sub(named_other) + p.resolve.saturating_sub(resolve_apart);
     let phase = |name, one_thread, time| Phase { name, one_thread, time };
     vec![
-        phase("inboxes (last round's messages)", true, p.inboxes),
+        phase("mailbag (last round's messages)", true, p.inboxes),
         phase("perceive + decide", false, p.perceive_decide),
         phase("discoveries", true, p.discoveries),
         phase("resolve: turns in id order", true, p.in_order),

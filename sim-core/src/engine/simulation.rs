@@ -249,7 +249,8 @@ pub struct PhaseTimes {
     /// Beside `resolve`, on another worker when there is one: marking the collective
     /// explored map (one thread).
     pub explored: Duration,
-    /// Of `other`: moving last round's messages into the receivers' perception (one thread).
+    /// Of `other`: taking last round's messages as one shared bag (one thread; the
+    /// receivers' inboxes are filled from it in step 2's parallel pass).
     pub inboxes: Duration,
     /// Of `other`: crediting first sightings and the strategies' events (one thread).
     pub discoveries: Duration,

@@ -3,18 +3,19 @@
 
 use std::cell::RefCell;
 use std::panic::AssertUnwindSafe;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 
 use glam::DVec2;
 use rayon::prelude::*;
 
-use super::perceive::{Snapshot, perceive};
+use super::perceive::{Snapshot, hand_out, perceive};
 use super::resolve::{Bodies, move_within_means, publish_plan, resolve_alone, trim_to_obstacles, upkeep};
 use crate::agent::{Ctx, StrategyFailure, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation, Turn};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
-use crate::world::{Action, HomeBase, Recipient, Robot, RobotType};
+use crate::world::{Action, HomeBase, Message, Recipient, Robot, RobotType};
 
 /// The most robots one parallel task takes. Rayon splits a slice in halves only while
 /// workers are idle, so uncapped, workers end up with a few large runs of robots; robots
@@ -27,7 +28,7 @@ pub(super) const ROBOTS_PER_TASK: usize = 16;
 impl Simulation {
     /// Steps 1 and 2, in parallel over robots. Returns whether some turn has news (see
     /// `Turn::news`).
-    pub(super) fn perceive_and_decide(&mut self, round: u64) -> bool {
+    pub(super) fn perceive_and_decide(&mut self, round: u64, mailbag: Option<&Arc<Vec<Message>>>) -> bool {
         let step = Step2 {
             round,
             seed: self.seed,
@@ -53,13 +54,26 @@ impl Simulation {
             pending: AtomicBool::new(false),
             any_news: AtomicBool::new(false),
         };
+        let held = AtomicBool::new(false);
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
             .zip(self.turns.par_iter_mut())
             .zip(self.bodies_now.par_iter_mut())
+            .zip(self.inboxes.par_iter_mut())
             .with_max_len(ROBOTS_PER_TASK)
-            .for_each(|(((agent, robot), turn), body)| step.robot_turn(agent, robot, turn, body));
+            .for_each(|((((agent, robot), turn), body), picks)| {
+                // Last round's messages first: only this robot's perception reads them.
+                if let Some(bag) = mailbag
+                    && hand_out(agent, picks, bag)
+                {
+                    held.store(true, Ordering::Relaxed);
+                }
+                step.robot_turn(agent, robot, turn, body);
+            });
+        if mailbag.is_some() {
+            self.inboxes_held = held.into_inner();
+        }
         let Step2 {
             planning_ns,
             pending,

@@ -46,10 +46,10 @@ impl Simulation {
         let mut apart = Duration::ZERO;
         // 1 + 2: perceive and decide, in parallel.
         let t = Instant::now();
-        self.deliver_messages();
+        let mailbag = self.take_mailbag();
         self.phase_times.inboxes += t.elapsed();
         let t = Instant::now();
-        let any_news = self.perceive_and_decide(round);
+        let any_news = self.perceive_and_decide(round, mailbag.as_ref());
         let took = t.elapsed();
         self.phase_times.perceive_decide += took;
         apart += took;

@@ -9,36 +9,29 @@ use crate::agent::{DataModule, Perception, SeenRobot, SeenTreasure};
 use crate::cache::prefetch;
 use crate::engine::simulation::{Agent, MergedFrom, Simulation, Turn};
 use crate::spatial::{RobotId, RobotIndex, TreasureIndex};
-use crate::world::{Event, Inbox, Payload, Robot, RobotType, Sighting, TreasureState};
+use crate::world::{Event, Inbox, Message, Payload, Robot, RobotType, Sighting, TreasureState};
+
+/// Move last round's messages picked for `agent` (`picks`, indices into `bag`) into its
+/// perception; its last inbox gives its list back, to be filled again in step 3. Returns
+/// whether it now holds messages. Each receiver's own: receivers run in parallel.
+pub(super) fn hand_out(agent: &mut Agent, picks: &mut Vec<u32>, bag: &Arc<Vec<Message>>) -> bool {
+    let mut spare = agent.mind.perception.inbox.take_picks();
+    if agent.needs.messages && !picks.is_empty() {
+        std::mem::swap(picks, &mut spare);
+        agent.mind.perception.inbox = Inbox::new(Arc::clone(bag), spare);
+        true
+    } else {
+        picks.clear();
+        false
+    }
+}
 
 impl Simulation {
-    /// Move last round's messages into the receivers' perception.
-    pub(super) fn deliver_messages(&mut self) {
-        if self.mailbag.is_empty() && !self.inboxes_held {
-            // Nothing sent last round, nothing held from the round before.
-            return;
-        }
-        let bag = Arc::new(std::mem::take(&mut self.mailbag));
-        let mut held = false;
-        for i in 0..self.agents.len() {
-            // An agent is about a kilobyte, and this loop is sequential: the inboxes ahead
-            // are prefetched.
-            if let Some(ahead) = self.agents.get(i + AGENTS_AHEAD) {
-                prefetch(&ahead.mind.perception.inbox);
-                prefetch(&ahead.needs);
-            }
-            let (agent, picks) = (&mut self.agents[i], &mut self.inboxes[i]);
-            // Last round's inbox gives its list back, to be filled again in step 3.
-            let mut spare = agent.mind.perception.inbox.take_picks();
-            if agent.needs.messages && !picks.is_empty() {
-                std::mem::swap(picks, &mut spare);
-                agent.mind.perception.inbox = Inbox::new(Arc::clone(&bag), spare);
-                held = true;
-            } else {
-                picks.clear();
-            }
-        }
-        self.inboxes_held = held;
+    /// Last round's messages, as one bag the receivers' inboxes share, if there is anything
+    /// to hand out ([`hand_out`] gives each receiver its own, in step 2's parallel pass).
+    pub(super) fn take_mailbag(&mut self) -> Option<Arc<Vec<Message>>> {
+        // Nothing sent last round and nothing held from the round before: nothing to do.
+        (!self.mailbag.is_empty() || self.inboxes_held).then(|| Arc::new(std::mem::take(&mut self.mailbag)))
     }
 
     /// First sightings of treasures and the strategies' events, credited in id order, for
