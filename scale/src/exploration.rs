@@ -6,7 +6,7 @@
 //! body fits in, 8-connected without cutting corners), walks that path (straightened where
 //! the known map allows), and picks again on arrival, when the target stops being a
 //! frontier, or when a move fails. [`explore`] plays one explorer (or a team) with the
-//! issue's robot: 3.5 m view, 0.25 m a round, no energy use.
+//! comparison robot ([`explorer_robot`]): 3.5 m view, 0.25 m a round, no energy use.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -14,7 +14,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use sim_core::agent::{Ctx, Needs, Params, Strategy, StrategyRegistry};
+use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap};
@@ -49,8 +49,6 @@ pub struct GreedyReference {
     path: Vec<DVec2>,
     /// Where it asked to move from last round (`None`: it did not ask).
     moved_from: Option<DVec2>,
-    /// Searches made.
-    pub plans: u64,
 }
 
 impl GreedyReference {
@@ -79,7 +77,6 @@ impl GreedyReference {
     /// Dijkstra from the robot's cell over open cells to the nearest frontier cell; sets the
     /// target and the path. `false` if none is reachable.
     fn plan(&mut self, ctx: &Ctx, grid: &Grid) -> bool {
-        self.plans += 1;
         self.target = None;
         self.path.clear();
         let Some(start) = grid.cell_of(ctx.position()) else {
@@ -270,7 +267,7 @@ pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64)
         .with_seed(1)
         .with_rounds(max_rounds)
         .with_types(vec![explorer_robot()])
-        .with_group(Group::new(strategy, 0, robots).with_params(Params::default()))
+        .with_group(Group::new(strategy, 0, robots))
         .build(&registry)?;
     let mut sim = Simulation::new(scenario)?;
     while sim.round() < max_rounds {
@@ -280,12 +277,12 @@ pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64)
         }
     }
     let m = sim.report().metrics;
-    let reached = |round: u64, distance_m: f64| (round > 0).then_some((round, distance_m));
+    let [_, at_90, at_98] = m.explored_milestones();
     Ok(Exploration {
         rounds: sim.round(),
         explored: m.explored_fraction,
-        at_90: reached(m.explored_90_round, m.explored_90_distance_m),
-        at_98: reached(m.explored_98_round, m.explored_98_distance_m),
+        at_90,
+        at_98,
         distance_m: m.distance_m,
         overlap_m: m.overlap_m,
     })

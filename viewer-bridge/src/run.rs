@@ -13,7 +13,7 @@ use sim_core::io::Observer;
 use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
 use sim_core::spatial::RobotId;
-use sim_core::world::{Event, MapData, RoundMetrics, RoundReport};
+use sim_core::world::{EXPLORED_MILESTONES, Event, MapData, RoundMetrics, RoundReport};
 
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
@@ -190,21 +190,18 @@ impl std::fmt::Display for Summary {
 /// When the run first had 50, 90 and 98 % of the free area explored: "50 % at round R
 /// (D m walked)", or "not reached".
 fn milestones(m: &RoundMetrics) -> String {
-    [
-        (50, m.explored_50_round, m.explored_50_distance_m),
-        (90, m.explored_90_round, m.explored_90_distance_m),
-        (98, m.explored_98_round, m.explored_98_distance_m),
-    ]
-    .iter()
-    .map(|&(percent, round, distance_m)| {
-        if round == 0 {
-            format!("{percent} % not reached")
-        } else {
-            format!("{percent} % at round {round} ({distance_m:.1} m walked)")
-        }
-    })
-    .collect::<Vec<_>>()
-    .join(", ")
+    EXPLORED_MILESTONES
+        .iter()
+        .zip(m.explored_milestones())
+        .map(|(fraction, reached)| {
+            let percent = (fraction * 100.0).round();
+            match reached {
+                Some((round, distance_m)) => format!("{percent} % at round {round} ({distance_m:.1} m walked)"),
+                None => format!("{percent} % not reached"),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Run a resolved config with the built-in observers plus `extra` (viewers).

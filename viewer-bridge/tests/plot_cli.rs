@@ -20,6 +20,14 @@ fn png_size(bytes: &[u8]) -> (u32, u32) {
     (be(&bytes[16..20]), be(&bytes[20..24]))
 }
 
+/// Run 20 rounds of the demo config in `dir`, writing its metrics to `demo.csv`.
+fn demo_metrics(dir: &Path) {
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/demo.xml");
+    let args = ["run", demo.to_str().unwrap(), "--rounds", "20", "--no-viewer", "-q"];
+    let run = smartteams(dir, &[&args[..], &["--metrics", "demo.csv"]].concat());
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+}
+
 const SWEEP: &str = "run,seed,g.count,round,explored_fraction,treasures_delivered,mean_energy,known_map_bytes
 0,1,4,1,0.1,0,10,1000
 0,1,4,2,0.3,1,8,2000
@@ -46,21 +54,7 @@ fn plot_draws_a_line_per_group_at_the_requested_size() {
     assert_eq!(png_size(&std::fs::read(d.join("fig.png")).unwrap()), (900, 700));
 
     // A run's own metrics CSV beside the sweep: one more line; SVG by the extension.
-    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/demo.xml");
-    let run = smartteams(
-        d,
-        &[
-            "run",
-            demo.to_str().unwrap(),
-            "--rounds",
-            "20",
-            "--no-viewer",
-            "-q",
-            "--metrics",
-            "demo.csv",
-        ],
-    );
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    demo_metrics(d);
     let out = smartteams(d, &["plot", "sweep.csv", "demo.csv", "-o", "fig.svg"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let said = String::from_utf8_lossy(&out.stdout);
@@ -76,21 +70,7 @@ fn plot_draws_a_line_per_group_at_the_requested_size() {
 fn plot_against_distance_reads_the_distance_column() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../configs/demo.xml");
-    let run = smartteams(
-        d,
-        &[
-            "run",
-            demo.to_str().unwrap(),
-            "--rounds",
-            "20",
-            "--no-viewer",
-            "-q",
-            "--metrics",
-            "demo.csv",
-        ],
-    );
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    demo_metrics(d);
     let out = smartteams(d, &["plot", "demo.csv", "-o", "fig.svg", "--x", "distance"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let svg = std::fs::read_to_string(d.join("fig.svg")).unwrap();

@@ -110,6 +110,17 @@ impl ExploredMilestones {
 }
 
 impl RoundMetrics {
+    /// Per fraction of [`EXPLORED_MILESTONES`], the round and `distance_m` at which it was
+    /// first reached, as its columns hold them (`None`: not yet).
+    pub fn explored_milestones(&self) -> [Option<(u64, f64)>; 3] {
+        [
+            (self.explored_50_round, self.explored_50_distance_m),
+            (self.explored_90_round, self.explored_90_distance_m),
+            (self.explored_98_round, self.explored_98_distance_m),
+        ]
+        .map(|(round, distance_m)| (round > 0).then_some((round, distance_m)))
+    }
+
     /// `(column, chart path below "metrics/", value)` of every metric but the round.
     pub fn series(&self) -> impl Iterator<Item = (&'static str, &'static str, f64)> + use<> {
         let values = self.values();

@@ -4,12 +4,12 @@ use std::cell::{Cell, RefCell};
 
 use glam::DVec2;
 
-use super::SEARCH_BUDGET;
+use super::{SEARCH_BUDGET, blocked};
 use crate::agent::ctx::Ctx;
 use crate::spatial::{
     Aabb, BlockCells, Finger, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
 };
-use crate::world::{Action, Outcome};
+use crate::world::Action;
 
 /// Follows routes on the navigation graph, waypoint by waypoint, and finds frontiers.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
@@ -93,13 +93,9 @@ impl Navigator {
         }
         let target = *self.waypoints.get(self.next)?;
         ctx.set_path(self.remaining());
-        let held_back = self.stepped_from.is_some_and(|q| {
-            q.distance(p) < 0.5 * ctx.kind.speed_m_per_round
-                && matches!(
-                    ctx.me.last_action,
-                    (Action::MoveTo { .. }, Outcome::Trimmed | Outcome::Refused)
-                )
-        });
+        let held_back = self
+            .stepped_from
+            .is_some_and(|q| q.distance(p) < 0.5 * ctx.kind.speed_m_per_round && blocked(ctx));
         self.stepped_from = Some(p);
         if held_back && ctx.can_move(p, target) == Some(false) {
             // A waypoint further on in straight reach (one the disc cannot stand on is
