@@ -330,6 +330,10 @@ impl Simulation {
     pub fn map(&self) -> &MapData {
         &self.map
     }
+    /// The map, shared: for observers that read it on a thread of their own. O(1).
+    pub fn shared_map(&self) -> Arc<MapData> {
+        Arc::clone(&self.map)
+    }
     /// The obstacles.
     pub fn obstacles(&self) -> &ObstacleMap {
         &self.map.obstacles
