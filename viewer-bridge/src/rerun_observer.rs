@@ -7,14 +7,14 @@
 //! | `world` | `AnnotationContext`: one class per robot type (+ "disabled") | static |
 //! | `world/obstacles/raster`, `world/obstacles/boxes` | obstacle raster; exact outlines if ≤ 50k | static |
 //! | `world/home` | home base | static |
-//! | `world/treasures` | remaining treasures, radius by remaining quantity | logged rounds |
+//! | `world/treasures` | remaining treasures, radius by remaining quantity | logged rounds where one changed |
 //! | `world/robots` | robots (class id = type) + detail columns `type`, `energy`, `alive`, `action`, `outcome`, `goal_x`/`goal_y`, `load`, `x`/`y` (world coordinates) | logged rounds |
-//! | `world/paths`, `world/links` | planned paths; message links of the round (an even sample of at most `max_links`) | logged rounds |
+//! | `world/paths`, `world/links` | planned paths; message links of the round (an even sample of at most `max_links`, chained into trails) | logged rounds |
 //! | `world/explored` | collective explored region (raster) | every `explored_every` logged rounds |
 //! | `world/known/<id>` | one robot's known region, coarse (swarms of at most `known_per_robot_max` robots) | every `known_every` rounds, if its coarse region changed |
 //! | `world/known/<type>` | the known regions of all robots of a type, each box with its `robot` (larger swarms) | every `known_every` rounds, if one of them changed |
 //! | `world3d/…` | ground, obstacle boxes with heights, robots on the plane | static / logged rounds |
-//! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`metric_entities`]) | every round |
+//! | `metrics/<column>` | one `Scalars` per metrics CSV column ([`metric_entities`]) | every round (sent in columns) |
 //! | `events` | `TextLog` of the round's events | every round with events |
 //!
 //! The simulation thread copies each round into a frame; a logging thread builds the
@@ -493,8 +493,7 @@ pub fn sample_pairs<I: Iterator<Item = Link>>(
 /// Up to `max` distinct undirected pairs (lower id first) of `pairs`, spread evenly over
 /// them. The second step of [`sample_links`], on the logging thread.
 pub fn thin_pairs(pairs: &[(u32, u32)], max: usize) -> Vec<(u32, u32)> {
-    let mut keys = sorted_pairs(pairs);
-    keys.dedup();
+    let mut keys = distinct_pairs(pairs);
     if keys.len() > max {
         let n = keys.len();
         keys = (0..max).map(|i| keys[i * n / max]).collect();
@@ -502,11 +501,12 @@ pub fn thin_pairs(pairs: &[(u32, u32)], max: usize) -> Vec<(u32, u32)> {
     keys
 }
 
-/// `pairs` as (lower id, higher id), sorted: bucketed by the lower id (a counting sort, as
-/// ids are dense), then each bucket sorted, about ten pairs each. O(pairs + largest id),
-/// three times quicker than a comparison sort of the round's ten thousand pairs.
-fn sorted_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
-    let Some(top) = pairs.iter().map(|&(a, b)| a.min(b)).max() else {
+/// The distinct pairs of `pairs` as (lower id, higher id), by lower id, each lower id's in
+/// the order first met: a counting sort on the lower id (ids are dense), duplicates dropped
+/// by remembering, for each higher id, the last lower id it was met with. O(pairs + largest
+/// id), without a comparison sort of the round's ten thousand pairs.
+fn distinct_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let Some(top) = pairs.iter().map(|&(a, b)| a.max(b)).max() else {
         return Vec::new();
     };
     let mut start = vec![0usize; top as usize + 2];
@@ -517,16 +517,24 @@ fn sorted_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
         start[i] += start[i - 1];
     }
     let mut fill = start.clone();
-    let mut sorted = vec![(0, 0); pairs.len()];
+    let mut bucketed = vec![0u32; pairs.len()];
     for &(a, b) in pairs {
         let low = a.min(b) as usize;
-        sorted[fill[low]] = (a.min(b), a.max(b));
+        bucketed[fill[low]] = a.max(b);
         fill[low] += 1;
     }
-    for w in start.windows(2) {
-        sorted[w[0]..w[1]].sort_unstable();
+    // `met_with[high]`: 1 + the lower id `high` was last met with (0: never).
+    let mut met_with = vec![0u32; top as usize + 1];
+    let mut distinct = Vec::with_capacity(pairs.len());
+    for (low, w) in start.windows(2).enumerate() {
+        for &high in &bucketed[w[0]..w[1]] {
+            if met_with[high as usize] != low as u32 + 1 {
+                met_with[high as usize] = low as u32 + 1;
+                distinct.push((low as u32, high));
+            }
+        }
     }
-    sorted
+    distinct
 }
 
 /// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
@@ -1375,7 +1383,9 @@ mod tests {
         let links = all_to_all(200);
         let pairs = sample_links(|k| links.iter().copied().step_by(k), links.len(), 5_000);
         let trails = Trails::cover(&pairs, 200);
-        assert_eq!(drawn(&trails), pairs);
+        let mut sorted = pairs.clone();
+        sorted.sort_unstable();
+        assert_eq!(drawn(&trails), sorted);
         // One strip per segment would take 2 points a segment.
         assert!(
             trails.robots.len() * 10 < pairs.len() * 2 * 6,
@@ -1389,12 +1399,17 @@ mod tests {
         #![proptest_config(proptest::test_runner::Config { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..Default::default() })]
 
         #[test]
-        fn pairs_bucketed_by_the_lower_id_are_the_sorted_pairs(
+        fn distinct_pairs_are_each_pair_once_by_lower_id(
             raw in proptest::collection::vec((0u32..300, 0u32..300), 0..500),
         ) {
+            let got = distinct_pairs(&raw);
             let mut expected: Vec<(u32, u32)> = raw.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
             expected.sort_unstable();
-            proptest::prop_assert_eq!(sorted_pairs(&raw), expected);
+            expected.dedup();
+            proptest::prop_assert!(got.windows(2).all(|w| w[0].0 <= w[1].0), "not by lower id: {:?}", got);
+            let mut sorted = got.clone();
+            sorted.sort_unstable();
+            proptest::prop_assert_eq!(sorted, expected);
         }
     }
 }
