@@ -127,10 +127,13 @@ fn wait_for_rounds(metrics: &Path, run: &mut Child) {
     let t0 = Instant::now();
     let rows = || std::fs::read_to_string(metrics).map_or(0, |s| s.lines().count().saturating_sub(1));
     while rows() == 0 {
-        assert!(
-            run.try_wait().unwrap().is_none(),
-            "the run ended before writing a round"
-        );
+        if let Some(status) = run.try_wait().unwrap() {
+            let mut err = String::new();
+            if let Some(mut e) = run.stderr.take() {
+                let _ = std::io::Read::read_to_string(&mut e, &mut err);
+            }
+            panic!("the run ended ({status}) before writing a round: {err}");
+        }
         assert!(t0.elapsed() < Duration::from_mins(1), "the run wrote no round");
         std::thread::sleep(Duration::from_millis(20));
     }

@@ -19,6 +19,7 @@ use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::{MAX_LEG_BLOCKS, ObstacleMap};
 use crate::spatial::quadtree::{Finger, Square};
 
+mod corridor;
 mod funnel;
 mod memo;
 mod pieces;
@@ -516,6 +517,31 @@ impl NavGraph {
         (lo, hi)
     }
 
+    /// The route through `nodes` when the pulled string cannot keep the clearance: through
+    /// each portal square's middle ([`deep_crossings`](Self::deep_crossings)) if every leg
+    /// of that keeps it (on maps of cells as large as the robot), else the shortest chain of
+    /// cells the disc stands free on through the pieces and the ring round them
+    /// ([`corridor::corridor_path`]), else the crossings anyway (the robot, held back, plans
+    /// again). Both straightened where the known map allows.
+    fn fallback_route(&self, from: DVec2, nodes: Vec<NavNodeId>, goal: DVec2, terrain: Terrain) -> Route {
+        let mut crossings = self.deep_crossings(&nodes);
+        crossings.push(goal);
+        let crossings = shortcut(from, &crossings, terrain);
+        // The legs between crossings (the robot's own start may lie closer to a wall than
+        // the clearance, which says nothing of the way on).
+        if crossings.windows(2).all(|w| terrain.leg_clear(w[0], w[1])) {
+            return Self::route_of(from, nodes, crossings);
+        }
+        let pieces: Vec<Piece> = nodes.iter().map(|&n| self.piece(n)).collect();
+        let clearance_m = terrain.clearance_m();
+        match corridor::corridor_path(&self.grid, &pieces, from, goal, |c| {
+            terrain.obstacles.is_disc_free(c, clearance_m)
+        }) {
+            Some(chain) => Self::route_of(from, nodes, shortcut(from, &chain, terrain)),
+            None => Self::route_of(from, nodes, crossings),
+        }
+    }
+
     /// Where a route through `nodes` that keeps well inside them crosses their portals: for
     /// each portal, a point either side of its middle, as deep into each piece as half the
     /// portal's length and half of either piece allow. Legs between such points stay that
@@ -612,9 +638,7 @@ impl NavGraph {
                 break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
             }
             if attempt == 4 {
-                let mut waypoints = self.deep_crossings(&nodes);
-                waypoints.push(goal);
-                break Self::route_of(from, nodes, shortcut(from, &waypoints, terrain));
+                break self.fallback_route(from, nodes, goal, terrain);
             }
             for &(a, b, passed, i, clear) in &legs {
                 if clear {

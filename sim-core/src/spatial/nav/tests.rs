@@ -438,3 +438,49 @@ proptest::proptest! {
         proptest::prop_assert_eq!(heap_key(a.0, a.1, a.2).cmp(&heap_key(b.0, b.1, b.2)), tuple);
     }
 }
+
+/// A corridor of 0.1 m cells, 5 cells wide with a one-cell tooth on alternate walls every
+/// few cells (0.4 m between teeth), bending twice: pieces of a few cells each, whose
+/// portals are shorter than the robot.
+fn jagged_corridor() -> ObstacleMap {
+    let grid = Grid::new(DVec2::ZERO, 0.1, 48, 32).unwrap();
+    // Three legs: along y 2..7 (x 2..40), up x 35..40 (y 2..26), back along y 21..26 (x 6..40).
+    let in_corridor = |x: u32, y: u32| {
+        ((2..40).contains(&x) && (2..7).contains(&y))
+            || ((35..40).contains(&x) && (2..26).contains(&y))
+            || ((6..40).contains(&x) && (21..26).contains(&y))
+    };
+    // Teeth: every third cell along the long legs, the wall cell next to the corridor
+    // alternately below and above.
+    let tooth = |x: u32, y: u32| {
+        let along_x = x.is_multiple_of(3) && x < 34;
+        (along_x && (y == 2 || y == 21) && x.is_multiple_of(2))
+            || (along_x && (y == 6 || y == 25) && !x.is_multiple_of(2))
+    };
+    ObstacleMap::from_fn(grid, |x, y| !in_corridor(x, y) || tooth(x, y))
+}
+
+#[test]
+fn routes_through_small_pieces_keep_the_discs_clearance() {
+    let map = jagged_corridor();
+    let grid = *map.grid();
+    let g = NavGraph::build(&map);
+    let mut known = KnownMap::new(grid);
+    known.mark(&grid.extent());
+    let radius_m = 0.125;
+    let terrain = Terrain {
+        obstacles: &map,
+        known: &known,
+        radius_m,
+    };
+    let (from, to) = (DVec2::new(0.45, 0.45), DVec2::new(0.95, 2.35));
+    let r = g
+        .route_within(terrain, from, to, usize::MAX)
+        .expect("the corridor is passable");
+    let mut prev = from;
+    for w in &r.waypoints {
+        assert!(map.is_swept_disc_free(prev, *w, radius_m), "{prev} → {w} in {r:?}");
+        prev = *w;
+    }
+    assert_eq!(prev, to);
+}
