@@ -518,28 +518,30 @@ impl NavGraph {
     }
 
     /// The route through `nodes` when the pulled string cannot keep the clearance: through
-    /// each portal square's middle ([`deep_crossings`](Self::deep_crossings)) if every leg
-    /// of that keeps it (on maps of cells as large as the robot), else the shortest chain of
+    /// each portal square's middle ([`deep_crossings`](Self::deep_crossings)) on maps whose
+    /// half cell is at least the clearance (cells as large as the robot), else the shortest chain of
     /// cells the disc stands free on through the pieces and the ring round them
-    /// ([`corridor::corridor_path`]), else the crossings anyway (the robot, held back, plans
-    /// again). Both straightened where the known map allows.
+    /// ([`corridor::corridor_path`]) pulled straight by sight ([`pull_chain`]), else the
+    /// crossings anyway (the robot, held back, plans again).
     fn fallback_route(&self, from: DVec2, nodes: Vec<NavNodeId>, goal: DVec2, terrain: Terrain) -> Route {
-        let mut crossings = self.deep_crossings(&nodes);
-        crossings.push(goal);
-        let crossings = shortcut(from, &crossings, terrain);
-        // The legs between crossings (the robot's own start may lie closer to a wall than
-        // the clearance, which says nothing of the way on).
-        if crossings.windows(2).all(|w| terrain.leg_clear(w[0], w[1])) {
-            return Self::route_of(from, nodes, crossings);
-        }
-        let pieces: Vec<Piece> = nodes.iter().map(|&n| self.piece(n)).collect();
         let clearance_m = terrain.clearance_m();
-        match corridor::corridor_path(&self.grid, &pieces, from, goal, |c| {
-            terrain.obstacles.is_disc_free(c, clearance_m)
-        }) {
-            Some(chain) => Self::route_of(from, nodes, shortcut(from, &chain, terrain)),
-            None => Self::route_of(from, nodes, crossings),
-        }
+        // Crossings keep half a cell clear: enough where that is the clearance or more.
+        let chain = (0.5 * self.grid.cell_m() < clearance_m)
+            .then(|| {
+                let pieces: Vec<Piece> = nodes.iter().map(|&n| self.piece(n)).collect();
+                corridor::corridor_path(&self.grid, &pieces, from, goal, |c| {
+                    terrain.obstacles.is_disc_free(c, clearance_m)
+                })
+            })
+            .flatten();
+        let waypoints = if let Some(chain) = chain {
+            pull_chain(from, &chain, terrain)
+        } else {
+            let mut crossings = self.deep_crossings(&nodes);
+            crossings.push(goal);
+            shortcut(from, &crossings, terrain)
+        };
+        Self::route_of(from, nodes, waypoints)
     }
 
     /// Where a route through `nodes` that keeps well inside them crosses their portals: for
@@ -873,6 +875,26 @@ impl NavGraph {
         }
         Some(route)
     }
+}
+
+/// A chain of cell centres, each next to the one before, straightened by sight: from each
+/// point kept, the next kept is the last of the run of chain points it reaches by legs
+/// [`Terrain::shortcut_clear`] allows. A cell chain steps in eight directions only, and
+/// [`shortcut`]'s few waypoints of look-ahead would leave a staircase of 0.1 m steps on fine
+/// maps. O(chain) leg tests.
+fn pull_chain(from: DVec2, chain: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
+    let mut out = Vec::new();
+    let (mut at, mut i) = (from, 0);
+    while i < chain.len() {
+        // The next point is always walkable: a neighbouring cell the disc stands free on.
+        let mut j = i;
+        while j + 1 < chain.len() && terrain.shortcut_clear(at, chain[j + 1]) {
+            j += 1;
+        }
+        out.push(chain[j]);
+        (at, i) = (chain[j], j + 1);
+    }
+    out
 }
 
 /// `waypoints` (walked from `from`) with corners cut where the terrain allows: from each
