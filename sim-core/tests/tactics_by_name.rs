@@ -449,3 +449,23 @@ fn cooperative_takes_max_detour_m() {
         );
     }
 }
+
+/// `frontier` and `cooperative` take `replan_within_view` (a fraction of the view radius)
+/// and refuse anything outside [0, 1] with the parameter's name.
+#[test]
+fn explorers_take_replan_within_view() {
+    let registry = StrategyRegistry::with_builtins();
+    for strategy in ["frontier", "cooperative"] {
+        let make = |v: &str| registry.create(strategy, &Params::default().with("replan_within_view", v));
+        for good in ["0", "0.5", "1"] {
+            assert!(make(good).is_ok(), "{strategy} {good}");
+        }
+        for bad in ["-0.1", "1.5", "soon", "NaN"] {
+            let e = make(bad).err().map(|e| e.to_string()).unwrap_or_default();
+            assert!(
+                e.contains("parameter 'replan_within_view' must be a number in [0, 1]"),
+                "{strategy} {bad}: {e}"
+            );
+        }
+    }
+}

@@ -18,7 +18,7 @@ pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};
 pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
-    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, SEARCH_BUDGET, ShortestPath,
-    Tactic, Team, Teaming, blocked,
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, REPLAN_WITHIN_VIEW,
+    SEARCH_BUDGET, ShortestPath, Tactic, Team, Teaming, blocked,
 };
 pub use testing::TestWorld;

@@ -3,7 +3,7 @@
 use glam::{DVec2, Vec2};
 
 use super::explorer::{Explorer, Sharing, share_knowledge};
-use crate::agent::{Ctx, Needs, Strategy};
+use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy};
 use crate::world::{Action, Payload};
 
 /// Team mates' goals, with the round heard, sorted by robot id: 16 bytes a claim, as a
@@ -216,9 +216,13 @@ pub(super) struct Frontier {
 }
 
 impl Frontier {
-    pub(super) fn new(sharing: Option<Sharing>) -> Self {
+    /// An explorer that shares with `sharing` (`None`: alone) and searches again once its
+    /// target is known and nearer than `replan_within_view` of its view radius.
+    pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64) -> Self {
+        let mut core = Explorer::default();
+        core.frontier = FrontierSeeking::default().with_replan_within_view(replan_within_view);
         Self {
-            core: Explorer::default(),
+            core,
             sharing,
             claims: Claims::default(),
             announced: None,

@@ -10,15 +10,25 @@ use crate::spatial::PieceMemo;
 use crate::world::Action;
 
 /// How near a revealed target a robot walks before it searches for the next frontier, as a
-/// fraction of its view radius. Smaller fractions search less often, but 0 (re-plan only
-/// on arrival) stalls exploration (BENCHMARKS.md, "Defaults of `cooperative`").
-const REPLAN_WITHIN_VIEW: f64 = 0.25;
+/// fraction of its view radius, by default. Smaller fractions search less often, but 0
+/// (re-plan only on arrival) stalls exploration (BENCHMARKS.md, "Defaults of
+/// `cooperative`"); a lone explorer walks less with 0.5 (`frontier`'s default, BENCHMARKS.md,
+/// "Exploration quality").
+pub const REPLAN_WITHIN_VIEW: f64 = 0.25;
+
+fn default_replan_within_view() -> f64 {
+    REPLAN_WITHIN_VIEW
+}
 
 /// Walks to the nearest frontier (by route: known free space bordering the unknown) and
 /// publishes it as the goal; quiet once nothing is left to explore (a failed search is
 /// retried every 20 rounds, as merged maps may open new frontiers).
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct FrontierSeeking {
+    /// Search again once the target is known and nearer than this fraction of the view
+    /// radius (default [`REPLAN_WITHIN_VIEW`]).
+    #[serde(default = "default_replan_within_view")]
+    replan_within_view: f64,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
@@ -28,7 +38,26 @@ pub struct FrontierSeeking {
     memo: PieceMemo,
 }
 
+impl Default for FrontierSeeking {
+    fn default() -> Self {
+        Self {
+            replan_within_view: REPLAN_WITHIN_VIEW,
+            nav: Navigator::default(),
+            target: None,
+            failed_at: None,
+            memo: PieceMemo::default(),
+        }
+    }
+}
+
 impl FrontierSeeking {
+    /// Search again once the target is known and nearer than `fraction` of the view radius.
+    #[must_use]
+    pub fn with_replan_within_view(mut self, fraction: f64) -> Self {
+        self.replan_within_view = fraction;
+        self
+    }
+
     /// The route follower (strategies that also go elsewhere share it).
     pub fn navigator(&mut self) -> &mut Navigator {
         &mut self.nav
@@ -53,7 +82,8 @@ impl FrontierSeeking {
         // close by.
         let p = ctx.position();
         let revealed_near = self.target.is_none_or(|t| {
-            ctx.known().is_some_and(|k| k.is_known(t)) && t.distance(p) < REPLAN_WITHIN_VIEW * ctx.kind.view_radius_m
+            ctx.known().is_some_and(|k| k.is_known(t))
+                && t.distance(p) < self.replan_within_view * ctx.kind.view_radius_m
         });
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {

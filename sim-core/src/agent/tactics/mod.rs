@@ -30,7 +30,7 @@ mod team;
 pub use boundary::BoundaryFollowing;
 pub use collision::CollisionAvoidance;
 pub use energy::EnergyManagement;
-pub use frontier::FrontierSeeking;
+pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW};
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};
