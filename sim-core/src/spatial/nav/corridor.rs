@@ -121,7 +121,8 @@ fn corridor_cells(grid: &Grid, pieces: &[Piece]) -> Option<Vec<(u32, u32)>> {
         let (x0, y0) = (p.x.saturating_sub(1), p.y.saturating_sub(1));
         let x1 = (p.x + p.w + 1).min(grid.width_cells());
         let y1 = (p.y + p.h + 1).min(grid.height_cells());
-        if cells.len() + ((x1 - x0) * (y1 - y0)) as usize > 4 * MAX_CELLS {
+        let area = u64::from(x1 - x0) * u64::from(y1 - y0);
+        if cells.len() as u64 + area > 4 * MAX_CELLS as u64 {
             return None;
         }
         for y in y0..y1 {
@@ -188,5 +189,28 @@ mod tests {
                 .iter()
                 .any(|c| (c.y - 0.25).abs() < 1e-9 && (0.6..0.8).contains(&c.x))
         );
+    }
+
+    #[test]
+    fn a_corridor_beyond_the_cell_budget_is_left_to_the_crossings() {
+        let grid = Grid::new(DVec2::ZERO, 0.1, 300, 300).unwrap();
+        let hall = [Piece {
+            x: 0,
+            y: 0,
+            w: 300,
+            h: 300,
+        }];
+        let (from, goal) = (DVec2::new(0.05, 0.05), DVec2::new(29.95, 29.95));
+        assert_eq!(corridor_path(&grid, &hall, from, goal, |_| true), None);
+        let room = [Piece {
+            x: 0,
+            y: 0,
+            w: 20,
+            h: 20,
+        }];
+        let (from, goal) = (DVec2::new(0.05, 0.05), DVec2::new(1.95, 1.95));
+        let chain = corridor_path(&grid, &room, from, goal, |_| true).unwrap();
+        // Open ground: the diagonal, one cell a step.
+        assert_eq!(chain.len(), 19);
     }
 }
