@@ -458,21 +458,39 @@ fn view_logs_the_maps_cells() {
 fn receiver(python: &Path, save: &Path) -> (Child, u16) {
     static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _one_at_a_time = STARTING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
-    let mut child = Command::new(rerun_bin(python))
-        .args(["--bind", "127.0.0.1", "--port", &port.to_string(), "--save"])
-        .arg(save)
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    // A port picked free can be taken again before the receiver binds it (a receiver just
+    // killed by another test may still hold it): then the receiver exits, and a new port
+    // is tried.
+    for _ in 0..5 {
+        let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let mut child = Command::new(rerun_bin(python))
+            .args(["--bind", "127.0.0.1", "--port", &port.to_string(), "--save"])
+            .arg(save)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        if listening(&mut child, port) {
+            return (child, port);
+        }
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+    panic!("no rerun receiver started in 5 attempts");
+}
+
+/// Whether `child` listens on `port` within 30 s, and still does a moment later.
+fn listening(child: &mut Child, port: u16) -> bool {
     let t0 = Instant::now();
     while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
-        assert!(child.try_wait().unwrap().is_none(), "rerun receiver exited");
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
         assert!(t0.elapsed() < Duration::from_secs(30), "rerun receiver did not start");
         std::thread::sleep(Duration::from_millis(100));
     }
-    (child, port)
+    std::thread::sleep(Duration::from_millis(300));
+    child.try_wait().unwrap().is_none() && std::net::TcpStream::connect(("127.0.0.1", port)).is_ok()
 }
 
 #[test]
