@@ -279,8 +279,8 @@ fn scaling(timed: &Timed, rounds: u64, threads: &[usize]) -> Result<()> {
         eprintln!("scaling: {n} thread(s): {:.1} rounds/s", m.rounds_per_s());
         runs.push((n, m));
     }
-    print_scaling(name, &runs);
     let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, m)| m.digest).collect();
+    print_scaling(name, &runs, &digests);
     anyhow::ensure!(
         digests.len() == 1,
         "the runs' digests differ between thread counts: the round is not deterministic"
@@ -384,12 +384,11 @@ fn print_measurement(name: &str, m: &scale::Measurement) {
 
 /// The scaling report: per step, its time on each thread count and whether it runs on one
 /// thread; then the sequential share on the first run and Amdahl's bounds.
-fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)]) {
+fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)], digests: &std::collections::BTreeSet<u64>) {
     use scale::scaling::{amdahl, karp_flatt, phases, sequential_share};
     let Some((first_threads, first)) = runs.first() else {
         return;
     };
-    let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, m)| m.digest).collect();
     println!(
         "scaling: {name}, {} robots, {} rounds; digest {}",
         first.robots,
@@ -544,7 +543,6 @@ fn exploration(
     let from_env = std::env::var_os("SMARTTEAMS_DATA").map(std::path::PathBuf::from);
     let data = data.map(std::path::Path::to_path_buf).or(from_env);
     let maps = comparison_maps(&workspace, data.as_deref())?;
-    let metres = |at: Option<(u64, f64)>| at.map_or("-".to_owned(), |(_, d)| format!("{d:.1}"));
     let ratio = |a: Option<(u64, f64)>, b: Option<(u64, f64)>| match (a, b) {
         (Some((_, a)), Some((_, b))) if b > 0.0 => format!("{:.2}", a / b),
         _ => "-".to_owned(),
@@ -560,28 +558,7 @@ fn exploration(
             sum90 += a / b;
             n90 += 1;
         }
-        let mut team_cells = Vec::new();
-        if teams.iter().any(|&n| n > 0) {
-            let solo = explore(map, "cooperative", 1, max_rounds)?;
-            team_cells.push(format!(
-                "1: {}, {}",
-                solo.at_90.map_or("-".into(), |(r, _)| r.to_string()),
-                metres(solo.at_90)
-            ));
-            for &n in teams.iter().filter(|&&n| n > 0) {
-                let team = explore(map, "cooperative", n, max_rounds)?;
-                let speedup = match (solo.at_90, team.at_90) {
-                    (Some((a, _)), Some((b, _))) => format!(" ({:.2}x)", a as f64 / b as f64),
-                    _ => String::new(),
-                };
-                team_cells.push(format!(
-                    "{n}: {}{speedup}, {}, {:.0} % overlap",
-                    team.at_90.map_or("-".into(), |(r, _)| r.to_string()),
-                    metres(team.at_90),
-                    100.0 * team.overlap_m / team.distance_m.max(1e-9)
-                ));
-            }
-        }
+        let team_cells = team_cells(map, teams, max_rounds)?;
         println!(
             "{name} | {} / {} | {} / {} | {} / {} | {}",
             metres(reference.at_90),
@@ -590,11 +567,43 @@ fn exploration(
             metres(built_in.at_98),
             ratio(built_in.at_90, reference.at_90),
             ratio(built_in.at_98, reference.at_98),
-            team_cells.join("; ")
+            team_cells
         );
     }
     if n90 > 0 {
         println!("mean ratio to 90 %: {:.2} over {n90} maps", sum90 / f64::from(n90));
     }
     Ok(())
+}
+
+/// Metres walked by a milestone, or `-`.
+fn metres(at: Option<(u64, f64)>) -> String {
+    at.map_or("-".to_owned(), |(_, d)| format!("{d:.1}"))
+}
+
+/// The teams' cell of the exploration table: one `cooperative` robot's rounds and metres to
+/// 90 %, then each team size of `teams` with its speed-up, summed metres and overlap (empty
+/// when `teams` holds no size).
+fn team_cells(map: &std::sync::Arc<sim_core::world::MapData>, teams: &[u32], max_rounds: u64) -> Result<String> {
+    use scale::exploration::explore;
+    if !teams.iter().any(|&n| n > 0) {
+        return Ok(String::new());
+    }
+    let solo = explore(map, "cooperative", 1, max_rounds)?;
+    let rounds = |at: Option<(u64, f64)>| at.map_or("-".into(), |(r, _)| r.to_string());
+    let mut cells = vec![format!("1: {}, {}", rounds(solo.at_90), metres(solo.at_90))];
+    for &n in teams.iter().filter(|&&n| n > 0) {
+        let team = explore(map, "cooperative", n, max_rounds)?;
+        let speedup = match (solo.at_90, team.at_90) {
+            (Some((a, _)), Some((b, _))) => format!(" ({:.2}x)", a as f64 / b as f64),
+            _ => String::new(),
+        };
+        cells.push(format!(
+            "{n}: {}{speedup}, {}, {:.0} % overlap",
+            rounds(team.at_90),
+            metres(team.at_90),
+            100.0 * team.overlap_m / team.distance_m.max(1e-9)
+        ));
+    }
+    Ok(cells.join("; "))
 }

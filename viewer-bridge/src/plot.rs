@@ -359,15 +359,14 @@ fn chart_lines(groups: &[(String, usize, Vec<Samples>)], x: XAxis) -> Vec<Vec<Li
                     let mut band = Vec::new();
                     for (&round, values) in &samples[m] {
                         let n = values.len() as f64;
-                        let mean_value = mean(values);
-                        let var = values.iter().map(|v| (v - mean_value).powi(2)).sum::<f64>() / n;
+                        let y = mean(values);
+                        let sd = (values.iter().map(|v| (v - y).powi(2)).sum::<f64>() / n).sqrt();
                         let x = match x {
                             XAxis::Round => round as f64,
                             XAxis::Distance => mean(&samples[FIGURE_METRICS.len()][&round]),
                         };
-                        let (mean, sd) = (mean_value, var.sqrt());
-                        points.push((x, mean * scale));
-                        band.push((x, ((mean - sd) * scale).max(0.0), (mean + sd) * scale));
+                        points.push((x, y * scale));
+                        band.push((x, ((y - sd) * scale).max(0.0), (y + sd) * scale));
                     }
                     Line {
                         label: if *runs > 1 {

@@ -335,13 +335,14 @@ impl RerunObserver {
         std::mem::forget(self.rec.clone());
     }
 
-    /// How long metric values may wait before they are sent: a file's reader sees them when
-    /// the file is closed, so they gather as Rerun's file batcher gathers rows (10 s); a live
-    /// viewer gets them at its batcher's pace (200 ms).
+    /// How long metric values may wait before they are sent: for a file, as long as its
+    /// batcher holds rows ([`crate::viewer::file_batching`]); for a live viewer, Rerun's
+    /// default batching interval (its charts move five times a second; the world's rows go
+    /// out sooner).
     fn metrics_window(&self) -> std::time::Duration {
         match self.when_behind {
-            WhenBehind::Wait => std::time::Duration::from_secs(10),
-            WhenBehind::SkipWorld => std::time::Duration::from_millis(200),
+            WhenBehind::Wait => crate::viewer::file_batching().flush_tick,
+            WhenBehind::SkipWorld => rerun::log::ChunkBatcherConfig::DEFAULT.flush_tick,
         }
     }
 
@@ -502,32 +503,20 @@ pub fn thin_pairs(pairs: &[(u32, u32)], max: usize) -> Vec<(u32, u32)> {
 }
 
 /// The distinct pairs of `pairs` as (lower id, higher id), by lower id, each lower id's in
-/// the order first met: a counting sort on the lower id (ids are dense), duplicates dropped
-/// by remembering, for each higher id, the last lower id it was met with. O(pairs + largest
+/// the order first met: grouped by lower id ([`group_by`]), duplicates dropped by
+/// remembering, for each higher id, the last lower id it was met with. O(pairs + largest
 /// id), without a comparison sort of the round's ten thousand pairs.
 fn distinct_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
     let Some(top) = pairs.iter().map(|&(a, b)| a.max(b)).max() else {
         return Vec::new();
     };
-    let mut start = vec![0usize; top as usize + 2];
-    for &(a, b) in pairs {
-        start[a.min(b) as usize + 1] += 1;
-    }
-    for i in 1..start.len() {
-        start[i] += start[i - 1];
-    }
-    let mut fill = start.clone();
-    let mut bucketed = vec![0u32; pairs.len()];
-    for &(a, b) in pairs {
-        let low = a.min(b) as usize;
-        bucketed[fill[low]] = a.max(b);
-        fill[low] += 1;
-    }
+    let ids = top as usize + 1;
+    let (start, higher) = group_by(pairs.iter().map(|&(a, b)| (a.min(b) as usize, a.max(b))), ids);
     // `met_with[high]`: 1 + the lower id `high` was last met with (0: never).
-    let mut met_with = vec![0u32; top as usize + 1];
+    let mut met_with = vec![0u32; ids];
     let mut distinct = Vec::with_capacity(pairs.len());
     for (low, w) in start.windows(2).enumerate() {
-        for &high in &bucketed[w[0]..w[1]] {
+        for &high in &higher[w[0]..w[1]] {
             if met_with[high as usize] != low as u32 + 1 {
                 met_with[high as usize] = low as u32 + 1;
                 distinct.push((low as u32, high));
@@ -535,6 +524,29 @@ fn distinct_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
         }
     }
     distinct
+}
+
+/// A counting sort: the values of `items` (bucket, value) grouped by bucket, each bucket's
+/// in the order given, with where each bucket starts (`buckets + 1` offsets, the last the
+/// total). Buckets are below `buckets`. O(items + buckets).
+fn group_by<T: Copy + Default>(
+    items: impl Iterator<Item = (usize, T)> + Clone,
+    buckets: usize,
+) -> (Vec<usize>, Vec<T>) {
+    let mut start = vec![0usize; buckets + 1];
+    for (b, _) in items.clone() {
+        start[b + 1] += 1;
+    }
+    for i in 1..start.len() {
+        start[i] += start[i - 1];
+    }
+    let mut fill = start.clone();
+    let mut grouped = vec![T::default(); start[buckets]];
+    for (b, v) in items {
+        grouped[fill[b]] = v;
+        fill[b] += 1;
+    }
+    (start, grouped)
 }
 
 /// Up to `max` distinct undirected pairs (lower id first) of the round's deliveries, spread
@@ -1013,10 +1025,8 @@ fn log_paths(rec: &rerun::RecordingStream, paths: &Paths) -> rerun::RecordingStr
 }
 
 /// Segments between robots chained into trails: each trail is a polyline whose consecutive
-/// robots are one segment, so a robot shared by consecutive segments is stored once. A
-/// round's links drawn this way take about half the points of one strip per segment
-/// (5,000 segments among 1,000 robots: about 5,500 points instead of 10,000), which is half
-/// of what the recording spends on links.
+/// robots are one segment, so a robot shared by consecutive segments is stored once: about
+/// half the points of one strip per segment in a dense round.
 ///
 /// Invariant: the trails' consecutive pairs are exactly the given segments, each once
 /// (`trails_draw_every_segment_once`).
@@ -1033,27 +1043,17 @@ impl Trails {
     /// Greedy: walks start at robots with an odd number of unused segments first (a walk
     /// from one ends at another), then anywhere. O(robots + segments).
     fn cover(pairs: &[(u32, u32)], robots: usize) -> Self {
-        // Segments at each robot, compressed rows: ends of segment e are pairs[e].
-        let mut start = vec![0u32; robots + 1];
-        for &(a, b) in pairs {
-            start[a as usize + 1] += 1;
-            start[b as usize + 1] += 1;
-        }
-        for i in 0..robots {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut at = vec![0u32; 2 * pairs.len()];
-        for (e, &(a, b)) in pairs.iter().enumerate() {
-            for v in [a, b] {
-                at[fill[v as usize] as usize] = e as u32;
-                fill[v as usize] += 1;
-            }
-        }
+        // The segments at each robot (`at[start[v]..start[v + 1]]`); the ends of segment e
+        // are pairs[e].
+        let ends = pairs
+            .iter()
+            .enumerate()
+            .flat_map(|(e, &(a, b))| [(a as usize, e), (b as usize, e)]);
+        let (start, at) = group_by(ends, robots);
         let mut used = vec![false; pairs.len()];
         // Per robot, the first of its segments that may still be unused.
         let mut next = start[..robots].to_vec();
-        let mut unused: Vec<u32> = (0..robots).map(|v| start[v + 1] - start[v]).collect();
+        let mut unused: Vec<usize> = start.windows(2).map(|w| w[1] - w[0]).collect();
         let mut trails = Self::default();
         let odd: Vec<u32> = (0..robots as u32).filter(|&v| unused[v as usize] % 2 == 1).collect();
         let rest = 0..robots as u32;
@@ -1064,13 +1064,13 @@ impl Trails {
                 let mut v = first;
                 loop {
                     let row = v as usize;
-                    while next[row] < start[row + 1] && used[at[next[row] as usize] as usize] {
+                    while next[row] < start[row + 1] && used[at[next[row]]] {
                         next[row] += 1;
                     }
                     if next[row] == start[row + 1] {
                         break;
                     }
-                    let e = at[next[row] as usize] as usize;
+                    let e = at[next[row]];
                     used[e] = true;
                     let (a, b) = pairs[e];
                     unused[a as usize] -= 1;

@@ -239,7 +239,7 @@ pub struct PhaseTimes {
     pub resolve: Duration,
     /// Delivering the round's messages within radio budgets (parallel by receiver).
     pub deliver: Duration,
-    /// Everything else: moving last round's messages into inboxes, crediting discoveries,
+    /// Everything else: taking last round's messages as one bag, crediting discoveries,
     /// rebuilding the robot indexes, metrics.
     pub other: Duration,
     /// Of `resolve`: the turns taken in id order (one thread).

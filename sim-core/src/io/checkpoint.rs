@@ -33,7 +33,7 @@ use crate::{Error, Result};
 
 /// The checkpoint format this build writes and reads. Raised whenever what a checkpoint
 /// holds changes meaning, so that an older file is refused by name instead of misread.
-/// 3: `cooperative` keeps its team mates' goals in single precision, from its home.
+/// 4: the exploration milestones are part of a run's state.
 pub const CHECKPOINT_FORMAT: u32 = 4;
 
 const MAGIC: &[u8; 16] = b"SMARTTEAMS CKPT\n";

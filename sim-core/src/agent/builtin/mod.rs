@@ -34,10 +34,10 @@ impl Default for StrategyRegistry {
     }
 }
 
-/// `frontier`'s default [`REPLAN_WITHIN_VIEW`]: a lone explorer that searches again as soon as
-/// its target is seen within half its view walks 7 % less to 90 % explored over the
-/// exploration-quality maps than at 0.25 (BENCHMARKS.md, "Exploration quality"); crowds keep
-/// 0.25, as each search costs planning time and moves claims.
+/// `frontier`'s `replan_within_view`: a lone explorer that searches again as soon as its
+/// target is seen within half its view walks less (BENCHMARKS.md, "Exploration quality");
+/// `cooperative` keeps [`REPLAN_WITHIN_VIEW`], as in crowds each search costs planning time
+/// and moves claims.
 const LONE_REPLAN_WITHIN_VIEW: f64 = 0.5;
 
 /// Register every built-in strategy.
