@@ -16,6 +16,7 @@
 //! update happens in step 3 in id order, so results do not depend on the thread count.
 
 mod decide;
+mod deliver;
 mod explored;
 mod perceive;
 mod resolve;
