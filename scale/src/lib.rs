@@ -28,7 +28,7 @@ use editor::generate::{GenerateOptions, cell_hash, mesas::mesas, unit};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_core::agent::{Params, StrategyRegistry};
-use sim_core::engine::{Group, PhaseTimes, Scenario, ScenarioBuilder, Simulation};
+use sim_core::engine::{Group, PhaseTimes, Scenario, ScenarioBuilder, Simulation, TurnSharing};
 use sim_core::glam::DVec2;
 use sim_core::spatial::ObstacleMap;
 use sim_core::world::{HomeBase, MapData, RobotType, TreasureSpec};
@@ -395,11 +395,18 @@ pub fn peak_rss_bytes() -> u64 {
 /// core), timing the set-up and the rounds apart, and the strategies' planning within the
 /// rounds ([`PhaseTimes::planning`]).
 pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measurement> {
+    measure_with(scenario, rounds, threads, TurnSharing::Auto)
+}
+
+/// [`measure`] with step 3's turns shared as `sharing` says.
+pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: TurnSharing) -> Result<Measurement> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
     pool.install(|| {
         let t0 = Instant::now();
         // Planning is timed for `PhaseTimes::planning` (two clock reads a search).
-        let mut sim = Simulation::new(scenario)?.with_time_planning(true);
+        let mut sim = Simulation::new(scenario)?
+            .with_time_planning(true)
+            .with_turn_sharing(sharing);
         let setup_s = t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
         // The bench has the cores to itself: the workers poll between parallel steps

@@ -8,7 +8,8 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use scale::fig4::Fig4;
-use scale::{Kernel, RandomWalk, Swarm, measure};
+use scale::{Kernel, RandomWalk, Swarm, measure, measure_with};
+use sim_core::engine::TurnSharing;
 
 /// Time Smart Teams at scale: each scenario generates its own map, then prints set-up time,
 /// rounds per second after set-up, and peak memory.
@@ -23,6 +24,24 @@ struct Cli {
     /// Worker threads (0: one per core); for `scaling`, a list (default 1,2).
     #[arg(long, global = true, value_delimiter = ',')]
     threads: Vec<usize>,
+}
+
+/// `scaling --turns`: how step 3 shares its turns (see `TurnSharing`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum Turns {
+    Auto,
+    InOrder,
+    SideBySide,
+}
+
+impl From<Turns> for TurnSharing {
+    fn from(t: Turns) -> Self {
+        match t {
+            Turns::Auto => TurnSharing::Auto,
+            Turns::InOrder => TurnSharing::InOrder,
+            Turns::SideBySide => TurnSharing::SideBySide,
+        }
+    }
 }
 
 /// The scenarios that play rounds and time them.
@@ -101,6 +120,10 @@ enum Scenario {
     /// the sequential share and what Amdahl's law allows at 4, 16 and 64 cores, with the
     /// measured speed-up at each of `--threads` (default 1,2).
     Scaling {
+        /// How step 3 shares its turns: `auto` (as runs do), `in-order` or `side-by-side`
+        /// (as on a machine with more cores, for the sequential share there).
+        #[arg(long, default_value = "auto")]
+        turns: Turns,
         #[command(subcommand)]
         scenario: Timed,
     },
@@ -231,13 +254,13 @@ fn run(cli: &Cli) -> Result<()> {
             ref only,
         } => exploration(strategy, data.as_deref(), teams, only.as_deref(), cli.rounds),
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
-        Scenario::Scaling { ref scenario } => {
+        Scenario::Scaling { ref scenario, turns } => {
             let threads = if cli.threads.is_empty() {
                 vec![1, 2]
             } else {
                 cli.threads.clone()
             };
-            scaling(scenario, cli.rounds, &threads)
+            scaling(scenario, cli.rounds, &threads, turns.into())
         }
     }
 }
@@ -269,13 +292,13 @@ fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
 
 /// The scaling report of a timed scenario: one run per thread count, each on a scenario
 /// built afresh (same seed, same map).
-fn scaling(timed: &Timed, rounds: u64, threads: &[usize]) -> Result<()> {
+fn scaling(timed: &Timed, rounds: u64, threads: &[usize], sharing: TurnSharing) -> Result<()> {
     let mut runs = Vec::new();
     let mut name = "";
     for &n in threads {
         let (scenario_name, scenario, _) = build_scenario(timed)?;
         name = scenario_name;
-        let m = measure(scenario, rounds, n)?;
+        let m = measure_with(scenario, rounds, n, sharing)?;
         eprintln!("scaling: {n} thread(s): {:.1} rounds/s", m.rounds_per_s());
         runs.push((n, m));
     }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use sim_core::agent::{Ctx, Needs, Params, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, Start};
-use sim_core::engine::{Scenario, ScenarioBuilder, Simulation};
+use sim_core::engine::{Scenario, ScenarioBuilder, Simulation, TurnSharing};
 use sim_core::glam::DVec2;
 use sim_core::io::InvariantChecker;
 use sim_core::io::{Observer, ObserverError};
@@ -265,6 +265,69 @@ fn turns_resolved_alone_give_the_id_order_run() {
     let alone = rooms_trace(2, 7, 200, groups(), |sim| sim.with_turns_resolved_alone(true));
     let in_order = rooms_trace(2, 7, 200, groups(), |sim| sim.with_turns_resolved_alone(false));
     assert_same_rounds(&alone, &in_order, 200);
+}
+
+/// A 160 m × 160 m open map with a few walls and a home of 6 m in the middle, three
+/// treasures near it.
+fn crowd_map() -> Arc<MapData> {
+    let grid = Grid::new(DVec2::ZERO, 1.0, 160, 160).unwrap();
+    let obstacles = ObstacleMap::from_fn(grid, |x, y| {
+        (x == 70 && (60..78).contains(&y)) || (y == 92 && (70..100).contains(&x))
+    });
+    let treasures = [(74.5, 80.5, 6), (88.5, 76.5, 4), (80.5, 88.5, 5)]
+        .map(|(x, y, quantity)| TreasureSpec {
+            position: DVec2::new(x, y),
+            quantity,
+        })
+        .to_vec();
+    Arc::new(MapData {
+        obstacles,
+        home: HomeBase::Disc {
+            center: DVec2::new(80.0, 80.0),
+            radius_m: 6.0,
+        },
+        treasures,
+    })
+}
+
+/// Step 3's turns taken side by side (moves settled by strips of the map, several workers
+/// waiting for or settling one another's movers) give exactly the run of one pass in id
+/// order: 1,300 robots crowded round home, walkers that block one another, walkers that
+/// run dry, explorers that talk, workers that dig and carry, a strategy that fails (every
+/// round's metrics, events, positions and energies), on 1, 3 and 4 threads.
+#[test]
+fn turns_side_by_side_give_the_id_order_run() {
+    let mut registry = StrategyRegistry::with_builtins();
+    registry.register("fragile", "", |_| Ok(Box::new(Fragile)));
+    let groups = || {
+        vec![
+            (3, RobotType::explorer(), "fragile"),
+            (1000, RobotType::explorer(), "random_walk"),
+            (200, RobotType::explorer().with_energy_capacity(30.0), "random_walk"),
+            (60, RobotType::explorer(), "cooperative"),
+            (20, RobotType::excavator(), "excavator"),
+            (20, RobotType::transporter(), "transporter"),
+        ]
+    };
+    let run = |threads: usize, sharing: TurnSharing| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let s = scenario(crowd_map(), 11, 120, groups());
+            let mut sim = new_sim(s, &registry).unwrap().with_turn_sharing(sharing);
+            let mut t = Trace::default();
+            run_checked(&mut sim, &mut [&mut t]);
+            (t, sim.phase_times())
+        })
+    };
+    let (in_order, times) = run(3, TurnSharing::InOrder);
+    assert_eq!(times.rounds_side_by_side, 0);
+    for threads in [1, 3, 4] {
+        let (side_by_side, times) = run(threads, TurnSharing::SideBySide);
+        assert_same_rounds(&side_by_side, &in_order, 120);
+        assert_eq!(times.rounds_side_by_side, 120, "every round's turns went side by side");
+    }
+    let alive_at_end = in_order.0[119].1.iter().filter(|r| r.2 > 0).count();
+    assert!(alive_at_end < 1300, "some walkers ran dry");
 }
 
 /// Planning is timed only when asked, into `PhaseTimes::planning`, and timing it changes

@@ -11,4 +11,6 @@ mod simulation;
 pub use hot_workers::with_hot_workers;
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
-pub use simulation::{DEFAULT_DECIDE_LIMIT, PhaseTimes, Simulation};
+pub use simulation::{
+    DEFAULT_DECIDE_LIMIT, PhaseTimes, SIDE_BY_SIDE_MIN_ROBOTS, SIDE_BY_SIDE_MIN_WORKERS, Simulation, TurnSharing,
+};

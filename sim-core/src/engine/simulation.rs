@@ -11,13 +11,15 @@ use rand::SeedableRng;
 
 use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, RobotRng, Strategy};
+use crate::engine::round::{Step3, TurnKind};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
     BlockMemo, CellSet, Disc, Grid, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
     TreasureIndex,
 };
 use crate::world::{
-    Action, ExploredMilestones, Link, MapData, Message, Robot, RobotType, RoundMetrics, RoundReport, TreasureState,
+    Action, ExploredMilestones, Link, MapData, Message, Payload, Recipient, Robot, RobotType, RoundMetrics,
+    RoundReport, TreasureState,
 };
 
 /// A message sent in step 3 without radio budgets, for [`Simulation::inboxes`] after it:
@@ -46,15 +48,15 @@ pub(super) struct Agent {
     /// This round's move with obstacles already accounted for, worked out in parallel in
     /// step 2 (see [`PlannedMove`]).
     pub(super) planned_move: Option<PlannedMove>,
-    /// With a planned move: the robots that could be in its way (see
-    /// `Bodies::near_move` in step 3), also listed in step 2.
-    pub(super) planned_near: Vec<u32>,
     /// If it broadcasts this round (and radios have no budget): the robots in its
     /// communication range at the start of the round, by id, listed in parallel in step 2
     /// (step 3 addresses the broadcasts to those still alive). Empty otherwise.
     pub(super) hearers: Vec<RobotId>,
     /// Why its strategy failed this round (it panicked): step 3 disables the robot.
     pub(super) failure: Option<String>,
+    /// The messages its turn in step 3 paid for, in order, until they are addressed after
+    /// the round's turns (empty otherwise).
+    pub(super) paid_sends: Vec<(Recipient, Payload)>,
 }
 
 /// What step 2 leaves of a robot's turn for the rest of the round, apart from its agent:
@@ -93,6 +95,11 @@ pub(super) struct Turn {
     /// Resolved in step 2, nothing in its turn depending on another robot (see
     /// `resolve_alone`).
     pub(super) alone: bool,
+    /// With a planned move (see `Agent::planned_move`): the robots that could be in its way
+    /// (see `Bodies::near_move`), listed in step 2 for step 3's contact test.
+    pub(super) near: Vec<u32>,
+    /// How step 3 takes its turn side by side with others.
+    pub(super) kind: TurnKind,
     /// Its broadcasts' hearers are to be listed after step 2 (the view-sized index was not
     /// built for this round: no strategy perceives robots).
     pub(super) hearers_pending: bool,
@@ -110,6 +117,8 @@ impl Turn {
         self.known_changed = false;
         self.news = false;
         self.alone = false;
+        self.near.clear();
+        self.kind = TurnKind::Free;
         self.hearers_pending = false;
         self.slow = None;
         self.new_squares.clear();
@@ -195,9 +204,8 @@ pub struct Simulation {
     /// This round's unbudgeted sends, to put in the inboxes after step 3 (see
     /// [`Fanout`]).
     pub(super) fanout: Vec<Fanout>,
-    /// The robots whose turn step 3 resolves this round, in id order (kept to reuse its
-    /// allocation).
-    pub(super) step3_robots: Vec<u32>,
+    /// Step 3's lists (see [`Step3`]).
+    pub(super) step3: Step3,
     /// The union of everything every robot has seen.
     pub(super) explored: KnownMap,
     pub(super) explored_free_cells: u64,
@@ -216,16 +224,63 @@ pub struct Simulation {
     /// Whether some robot type has a finite radio budget: messages are then delivered by
     /// [`deliver_within_budget`](Self::deliver_within_budget) after the resolve step.
     pub(super) radio_limited: bool,
-    /// Scratch list of robots near a move (kept to reuse its allocation).
-    pub(super) near_scratch: Vec<u32>,
     /// Each robot's position and body radius as step 3 meets it, written in step 2 (after
     /// any turn resolved there) and as step 3 moves robots: what a move's contact test
     /// reads of the robots in its way, 24 bytes each rather than a whole [`Robot`].
     pub(super) bodies_now: Vec<(DVec2, f64)>,
+    /// How step 3 shares its turns among workers (see [`TurnSharing`]).
+    pub(super) turn_sharing: TurnSharing,
     /// Messages sent this round, waiting for budgeted delivery (sender order).
     pub(super) outgoing: Vec<Outgoing>,
     /// Wall time spent in each step of the rounds so far.
     pub(super) phase_times: PhaseTimes,
+}
+
+/// How step 3 shares its turns among the workers. The outcome is always that of one pass
+/// in robot id order.
+///
+/// ```
+/// use sim_core::engine::TurnSharing;
+///
+/// // 10,000 robots: side by side on 4 workers, in id order on 2.
+/// assert!(TurnSharing::Auto.side_by_side(10_000, 4));
+/// assert!(!TurnSharing::Auto.side_by_side(10_000, 2));
+/// assert!(TurnSharing::SideBySide.side_by_side(10, 1));
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TurnSharing {
+    /// Every turn in id order, on one thread: the least work.
+    InOrder,
+    /// Side by side when the pool has at least [`SIDE_BY_SIDE_MIN_WORKERS`] workers and
+    /// the run at least [`SIDE_BY_SIDE_MIN_ROBOTS`] robots; in id order otherwise.
+    #[default]
+    Auto,
+    /// Side by side whatever the workers and robots: the moves settled by strips of the map,
+    /// a worker a strip, then every turn at once, those at treasures in id order (see
+    /// `round/moves.rs`). It does about half as much work again as the pass in id order
+    /// (settling a move, then taking its turn), which more workers share.
+    SideBySide,
+}
+
+/// [`TurnSharing::Auto`] shares turns from this many workers: on 2 cores, the 10,000-walker
+/// crowd's rounds ran side by side no faster than in id order within the machine's noise
+/// (see BENCHMARKS.md, "Scaling"); more workers share the extra work.
+pub const SIDE_BY_SIDE_MIN_WORKERS: usize = 3;
+
+/// [`TurnSharing::Auto`] shares turns in runs of at least this many robots: below it,
+/// handing the turns out costs about what sharing them saves.
+pub const SIDE_BY_SIDE_MIN_ROBOTS: usize = 4096;
+
+impl TurnSharing {
+    /// Whether a round of `robots` robots on a pool of `workers` takes its turns side by
+    /// side.
+    pub fn side_by_side(self, robots: usize, workers: usize) -> bool {
+        match self {
+            TurnSharing::InOrder => false,
+            TurnSharing::Auto => workers >= SIDE_BY_SIDE_MIN_WORKERS && robots >= SIDE_BY_SIDE_MIN_ROBOTS,
+            TurnSharing::SideBySide => true,
+        }
+    }
 }
 
 /// Wall time a simulation spent in each step of its rounds so far (see
@@ -242,8 +297,20 @@ pub struct PhaseTimes {
     /// Everything else: taking last round's messages as one bag, crediting discoveries,
     /// rebuilding the robot indexes, metrics.
     pub other: Duration,
-    /// Of `resolve`: the turns taken in id order (one thread).
+    /// Of `resolve`: the turns taken in id order (one thread; see [`TurnSharing`]).
     pub in_order: Duration,
+    /// Of `resolve`, when turns go side by side: sorting them (movers by strip, turns at
+    /// treasures) and taking those at treasures, in id order (one thread).
+    pub ordering: Duration,
+    /// Of `resolve`, when turns go side by side: settling the moves and taking the other
+    /// turns (all workers).
+    pub side_by_side: Duration,
+    /// Of `resolve`: putting the turns' events in the report and addressing their messages,
+    /// in id order (one thread).
+    pub addressing: Duration,
+    /// Rounds whose step 3 took its turns side by side (see [`TurnSharing`]); the others
+    /// took them in id order.
+    pub rounds_side_by_side: u64,
     /// Of `resolve`: putting the unbudgeted sends in the inboxes (parallel by receiver).
     pub fan_out: Duration,
     /// Beside `resolve`, on another worker when there is one: marking the collective
@@ -315,6 +382,14 @@ impl Simulation {
     /// `turns_resolved_alone_give_the_id_order_run` (tests/kernel.rs).
     pub fn with_turns_resolved_alone(mut self, enabled: bool) -> Self {
         self.resolve_alone = enabled;
+        self
+    }
+
+    /// How step 3 shares its turns among workers. Default: [`TurnSharing::Auto`]. Results
+    /// are the same whatever the choice: `turns_side_by_side_give_the_id_order_run`
+    /// (tests/kernel.rs).
+    pub fn with_turn_sharing(mut self, sharing: TurnSharing) -> Self {
+        self.turn_sharing = sharing;
         self
     }
 
@@ -583,9 +658,9 @@ fn new_agent(strategy: Box<dyn Strategy>, grid: Grid) -> Agent {
         action: Action::Idle,
         merged_from: HashMap::default(),
         planned_move: None,
-        planned_near: Vec::new(),
         hearers: Vec::new(),
         failure: None,
+        paid_sends: Vec::new(),
     }
 }
 
@@ -626,7 +701,7 @@ impl Simulation {
             mailbag: Vec::new(),
             inboxes: vec![Vec::new(); n],
             fanout: Vec::new(),
-            step3_robots: Vec::new(),
+            step3: Step3::new(n),
             explored: KnownMap::new(grid),
             explored_free_cells: 0,
             milestones: ExploredMilestones::default(),
@@ -639,8 +714,8 @@ impl Simulation {
             max_speed_m,
             radio_limited,
             outgoing: Vec::new(),
-            near_scratch: Vec::new(),
             bodies_now: vec![(DVec2::ZERO, 0.0); n],
+            turn_sharing: TurnSharing::default(),
             map: parts.map,
         }
     }

@@ -10,8 +10,10 @@ use std::time::Duration;
 use glam::DVec2;
 use rayon::prelude::*;
 
+use super::contact::{Bodies, trim_to_obstacles};
 use super::perceive::{Snapshot, hand_out, perceive};
-use super::resolve::{Bodies, move_within_means, publish_plan, resolve_alone, trim_to_obstacles, upkeep};
+use super::resolve::TurnKind;
+use super::turn::{move_within_means, publish_plan, resolve_alone, upkeep};
 use crate::agent::{Ctx, StrategyFailure, WorldView};
 use crate::engine::simulation::{Agent, PlannedMove, Simulation, Turn};
 use crate::spatial::{KnownMap, ObstacleMap, RobotId, RobotIndex};
@@ -53,16 +55,19 @@ impl Simulation {
             planning_ns: AtomicU64::new(0),
             pending: AtomicBool::new(false),
             any_news: AtomicBool::new(false),
+            unknown: AtomicBool::new(false),
         };
         let held = AtomicBool::new(false);
+        let (marks, roles, slots) = self.step3.step2_marks();
         self.agents
             .par_iter_mut()
             .zip(self.robots.par_iter_mut())
             .zip(self.turns.par_iter_mut())
             .zip(self.bodies_now.par_iter_mut())
             .zip(self.inboxes.par_iter_mut())
+            .zip(roles.par_iter_mut().zip(slots.par_iter_mut()))
             .with_max_len(ROBOTS_PER_TASK)
-            .for_each(|((((agent, robot), turn), body), picks)| {
+            .for_each(|(((((agent, robot), turn), body), picks), (role, slot))| {
                 // Last round's messages first: only this robot's perception reads them.
                 if let Some(bag) = mailbag
                     && hand_out(agent, picks, bag)
@@ -70,6 +75,7 @@ impl Simulation {
                     held.store(true, Ordering::Relaxed);
                 }
                 step.robot_turn(agent, robot, turn, body);
+                marks.mark(turn, role, slot);
             });
         if mailbag.is_some() {
             self.inboxes_held = held.into_inner();
@@ -78,8 +84,10 @@ impl Simulation {
             planning_ns,
             pending,
             any_news,
+            unknown,
             ..
         } = step;
+        self.step3.unknown = unknown.into_inner();
         if pending.into_inner() {
             self.list_pending_hearers();
         }
@@ -169,6 +177,8 @@ struct Step2<'a> {
     planning_ns: AtomicU64,
     pending: AtomicBool,
     any_news: AtomicBool,
+    /// Some turn is [`TurnKind::Unknown`].
+    unknown: AtomicBool,
 }
 
 impl Step2<'_> {
@@ -227,7 +237,7 @@ impl Step2<'_> {
     fn take(&self, agent: &mut Agent, robot: &mut Robot, turn: &mut Turn, kind: &RobotType, action: Action) {
         agent.action = action;
         publish_plan(robot, &agent.mind.output);
-        agent.planned_move = plan_move(agent, robot, kind, self.obstacles, &self.bodies);
+        agent.planned_move = plan_move(agent, robot, kind, self.obstacles, &self.bodies, &mut turn.near);
         agent.hearers.clear();
         let broadcasts = agent
             .mind
@@ -244,7 +254,13 @@ impl Step2<'_> {
             }
         }
         // Step 3 for a robot whose turn depends on nobody, while its data are at hand.
-        turn.alone = self.alone_allowed && resolve_alone(robot, agent, kind, &self.home);
+        turn.alone = self.alone_allowed && resolve_alone(robot, agent, &turn.near, kind, &self.home);
+        if !turn.alone {
+            turn.kind = TurnKind::of(robot, agent, kind);
+            if matches!(turn.kind, TurnKind::Unknown) {
+                self.unknown.store(true, Ordering::Relaxed);
+            }
+        }
     }
 }
 
@@ -263,16 +279,17 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 /// The obstacle test of this round's move, if it is one, done here in parallel rather than
 /// in the sequential step 3: with the energy step 3 will leave the robot before it moves
 /// (upkeep is charged first), the same trim to speed and energy, the same bisection; and
-/// the robots that could be in its way (into `agent.planned_near`).
+/// the robots that could be in its way (into `near`).
 // Inlined into step 2's per-robot closure, its only caller: left to itself the compiler
 // flips between inlining it or not as the queries under it change size.
 #[inline]
 fn plan_move(
-    agent: &mut Agent,
+    agent: &Agent,
     robot: &Robot,
     kind: &RobotType,
     obstacles: &ObstacleMap,
     bodies: &Bodies,
+    near: &mut Vec<u32>,
 ) -> Option<PlannedMove> {
     let Action::MoveTo { to } = agent.action else {
         return None;
@@ -288,7 +305,7 @@ fn plan_move(
     }
     let d = move_within_means(from, to, kind, energy);
     let free = trim_to_obstacles(obstacles, from, d, kind.radius_m);
-    bodies.near_move(robot.id.index(), from, free, kind.radius_m, &mut agent.planned_near);
+    bodies.near_move(robot.id.index(), from, free, kind.radius_m, near);
     Some(PlannedMove {
         from,
         d,

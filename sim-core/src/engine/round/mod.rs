@@ -4,28 +4,39 @@
 //!    round and reads the messages delivered to it.
 //! 2. **Decide** (parallel, fused with 1): its strategy picks one action and any messages;
 //!    each robot owns its strategy and data, nothing shared is written.
-//! 3. **Resolve** (by robot id): the physical unit charges energy and refuses or trims what
-//!    is illegal (speed, energy, obstacles, other robots, abilities, capacity), then applies
-//!    the rest; messages are addressed to whoever was in range at send time. A robot whose
-//!    turn depends on nobody has it in step 2, in parallel (same outcome as in id order);
-//!    the rest follow in id order while another thread marks the views of step 1 in the
-//!    collective explored map.
+//! 3. **Resolve** (the outcome of one pass by robot id): the physical unit charges energy
+//!    and refuses or trims what is illegal (speed, energy, obstacles, other robots,
+//!    abilities, capacity), then applies the rest; messages are addressed to whoever was in
+//!    range at send time. A robot whose turn depends on nobody has it in step 2. With more
+//!    than one worker the moves are settled by strips of the map side by side, then the
+//!    turns are taken at once (those at treasures in id order); with one, the turns go in id
+//!    order. Meanwhile another thread marks the views of step 1 in the collective explored
+//!    map.
 //! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
 //!
-//! Randomness comes from generators seeded by (run seed, robot, round), and every shared
-//! update happens in step 3 in id order, so results do not depend on the thread count.
+//! Randomness comes from generators seeded by (run seed, robot, round), and step 3's outcome
+//! is that of its pass in id order however its work is shared, so results do not depend on
+//! the thread count.
+//!
+//! Modules: `decide` and `perceive` (steps 1 and 2), `resolve` (step 3's order), `turn` (one
+//! robot's turn), `moves` (moves settled side by side), `contact` (who could be in a move's
+//! way), `deliver` (messages within radio budgets), `explored` (the collective map).
 
+mod contact;
 mod decide;
 mod deliver;
 mod explored;
+mod moves;
 mod perceive;
 mod resolve;
+mod turn;
 
 use std::time::{Duration, Instant};
 
 use explored::ExploredUpdate;
 
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
+pub(crate) use resolve::{Step3, TurnKind};
 
 use crate::engine::simulation::Simulation;
 use crate::world::{RoundMetrics, RoundReport};
