@@ -330,6 +330,35 @@ fn turns_side_by_side_give_the_id_order_run() {
     assert!(alive_at_end < 1300, "some walkers ran dry");
 }
 
+/// A run stepped on a pool of 4 workers and a pool of 1 in turn, its turns side by side:
+/// the 1-worker rounds have the strips cut for 4, so their only worker settles each strip
+/// itself, up to the movers it needs of the others, before finishing its own. Same run as
+/// in id order.
+#[test]
+fn turns_side_by_side_on_one_worker_with_several_strips_give_the_id_order_run() {
+    let registry = StrategyRegistry::with_builtins();
+    let groups = vec![(1200, RobotType::explorer(), "random_walk")];
+    let (four, one) = (
+        rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap(),
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap(),
+    );
+    let run = |sharing: TurnSharing| {
+        let s = scenario(crowd_map(), 5, 40, groups.clone());
+        let mut sim = new_sim(s, &registry).unwrap().with_turn_sharing(sharing);
+        let mut trace = Trace::default();
+        for round in 1..=40 {
+            let pool = if round % 2 == 1 { &four } else { &one };
+            let report = pool.install(|| sim.step().clone());
+            trace.on_round(&sim, &report).unwrap();
+        }
+        (trace, sim.phase_times().rounds_side_by_side)
+    };
+    let (side_by_side, shared) = run(TurnSharing::SideBySide);
+    let (in_order, _) = run(TurnSharing::InOrder);
+    assert_eq!(shared, 40);
+    assert_same_rounds(&side_by_side, &in_order, 40);
+}
+
 /// Planning is timed only when asked, into `PhaseTimes::planning`, and timing it changes
 /// nothing in the run. Explorers plan frontier routes and workers routes to treasures on
 /// the rooms map.

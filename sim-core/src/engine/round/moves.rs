@@ -15,7 +15,7 @@
 //! are few. `turns_side_by_side_give_the_id_order_run` (tests/kernel.rs) checks the outcome.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Mutex, PoisonError};
+use std::sync::{Mutex, PoisonError, TryLockError};
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -87,6 +87,22 @@ impl Slot {
 struct Block {
     cursor: Mutex<(Vec<u32>, usize)>,
     busy: AtomicBool,
+}
+
+/// Marks a block busy while it lives, whether the work ends or panics.
+struct Busy<'a>(&'a AtomicBool);
+
+impl<'a> Busy<'a> {
+    fn new(flag: &'a AtomicBool) -> Self {
+        flag.store(true, Ordering::Relaxed);
+        Self(flag)
+    }
+}
+
+impl Drop for Busy<'_> {
+    fn drop(&mut self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
 }
 
 /// The round's moves settled side by side, kept from round to round to reuse allocations.
@@ -191,9 +207,8 @@ impl SettledMoves {
         };
         self.blocks.par_iter().for_each(|block| {
             let mut cursor = block.cursor.lock().unwrap_or_else(PoisonError::into_inner);
-            block.busy.store(true, Ordering::Relaxed);
+            let _busy = Busy::new(&block.busy);
             s.advance(&mut cursor, u32::MAX);
-            block.busy.store(false, Ordering::Relaxed);
         });
     }
 
@@ -288,12 +303,20 @@ impl Settle<'_> {
                 return end;
             }
             let block = &self.moves.blocks[usize::from(self.moves.role[j])];
-            if !block.busy.load(Ordering::Relaxed)
-                && let Ok(mut cursor) = block.cursor.try_lock()
-            {
-                block.busy.store(true, Ordering::Relaxed);
+            let cursor = if block.busy.load(Ordering::Relaxed) {
+                None
+            } else {
+                match block.cursor.try_lock() {
+                    Ok(cursor) => Some(cursor),
+                    // A worker panicked settling this block: settling it again here meets
+                    // the same panic, which then reaches the caller rather than a wait.
+                    Err(TryLockError::Poisoned(p)) => Some(p.into_inner()),
+                    Err(TryLockError::WouldBlock) => None,
+                }
+            };
+            if let Some(mut cursor) = cursor {
+                let _busy = Busy::new(&block.busy);
                 self.advance(&mut cursor, u32::try_from(j + 1).expect("robot ids are u32"));
-                block.busy.store(false, Ordering::Relaxed);
             } else {
                 std::hint::spin_loop();
             }
