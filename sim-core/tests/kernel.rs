@@ -292,42 +292,51 @@ fn crowd_map() -> Arc<MapData> {
 
 /// Step 3's turns taken side by side (moves settled by strips of the map, several workers
 /// waiting for or settling one another's movers) give exactly the run of one pass in id
-/// order: 1,300 robots crowded round home, walkers that block one another, walkers that
-/// run dry, explorers that talk, workers that dig and carry, a strategy that fails (every
-/// round's metrics, events, positions and energies), on 1, 3 and 4 threads.
+/// order: 1,300 robots crowded round home, walkers that block one another, larger and
+/// faster walkers, walkers that run dry, explorers that talk, workers that dig and carry,
+/// a strategy that fails (every round's metrics, events, positions and energies), on 1, 3
+/// and 4 threads; with unlimited radios and with a radio budget.
 #[test]
 fn turns_side_by_side_give_the_id_order_run() {
     let mut registry = StrategyRegistry::with_builtins();
     registry.register("fragile", "", |_| Ok(Box::new(Fragile)));
-    let groups = || {
+    let groups = |radio_bytes: u64| {
+        let talker = RobotType::explorer().with_radio_bytes_per_round(radio_bytes);
         vec![
             (3, RobotType::explorer(), "fragile"),
             (1000, RobotType::explorer(), "random_walk"),
-            (200, RobotType::explorer().with_energy_capacity(30.0), "random_walk"),
-            (60, RobotType::explorer(), "cooperative"),
+            (
+                50,
+                RobotType::explorer().with_radius_m(0.4).with_speed_m_per_round(1.5),
+                "random_walk",
+            ),
+            (150, RobotType::explorer().with_energy_capacity(30.0), "random_walk"),
+            (60, talker, "cooperative"),
             (20, RobotType::excavator(), "excavator"),
             (20, RobotType::transporter(), "transporter"),
         ]
     };
-    let run = |threads: usize, sharing: TurnSharing| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| {
-            let s = scenario(crowd_map(), 11, 120, groups());
-            let mut sim = new_sim(s, &registry).unwrap().with_turn_sharing(sharing);
-            let mut t = Trace::default();
-            run_checked(&mut sim, &mut [&mut t]);
-            (t, sim.phase_times())
-        })
-    };
-    let (in_order, times) = run(3, TurnSharing::InOrder);
-    assert_eq!(times.rounds_side_by_side, 0);
-    for threads in [1, 3, 4] {
-        let (side_by_side, times) = run(threads, TurnSharing::SideBySide);
-        assert_same_rounds(&side_by_side, &in_order, 120);
-        assert_eq!(times.rounds_side_by_side, 120, "every round's turns went side by side");
+    for radio_bytes in [u64::MAX, 4096] {
+        let run = |threads: usize, sharing: TurnSharing| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let s = scenario(crowd_map(), 11, 120, groups(radio_bytes));
+                let mut sim = new_sim(s, &registry).unwrap().with_turn_sharing(sharing);
+                let mut t = Trace::default();
+                run_checked(&mut sim, &mut [&mut t]);
+                (t, sim.phase_times())
+            })
+        };
+        let (in_order, times) = run(3, TurnSharing::InOrder);
+        assert_eq!(times.rounds_side_by_side, 0);
+        for threads in [1, 3, 4] {
+            let (side_by_side, times) = run(threads, TurnSharing::SideBySide);
+            assert_same_rounds(&side_by_side, &in_order, 120);
+            assert_eq!(times.rounds_side_by_side, 120, "every round's turns went side by side");
+        }
+        let alive_at_end = in_order.0[119].1.iter().filter(|r| r.2 > 0).count();
+        assert!(alive_at_end < 1300, "some walkers ran dry");
     }
-    let alive_at_end = in_order.0[119].1.iter().filter(|r| r.2 > 0).count();
-    assert!(alive_at_end < 1300, "some walkers ran dry");
 }
 
 /// A run stepped on a pool of 4 workers and a pool of 1 in turn, its turns side by side:
