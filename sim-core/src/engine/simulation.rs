@@ -242,9 +242,10 @@ pub struct Simulation {
 /// ```
 /// use sim_core::engine::TurnSharing;
 ///
-/// // 10,000 robots: side by side on 4 workers, in id order on 2.
+/// // 10,000 robots: side by side on 4 workers, in id order on 2; 100 robots in id order.
 /// assert!(TurnSharing::Auto.side_by_side(10_000, 4));
 /// assert!(!TurnSharing::Auto.side_by_side(10_000, 2));
+/// assert!(!TurnSharing::Auto.side_by_side(100, 16));
 /// assert!(TurnSharing::SideBySide.side_by_side(10, 1));
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -262,14 +263,15 @@ pub enum TurnSharing {
     SideBySide,
 }
 
-/// [`TurnSharing::Auto`] shares turns from this many workers: on 2 cores, the 10,000-walker
-/// crowd's rounds ran side by side no faster than in id order within the machine's noise
-/// (see BENCHMARKS.md, "Scaling"); more workers share the extra work.
+/// [`TurnSharing::Auto`] shares turns from this many workers: on 2 cores, rounds side by
+/// side took a little longer than in id order (see BENCHMARKS.md, "Scaling"); more workers
+/// share the extra work.
 pub const SIDE_BY_SIDE_MIN_WORKERS: usize = 3;
 
-/// [`TurnSharing::Auto`] shares turns in runs of at least this many robots: below it,
-/// handing the turns out costs about what sharing them saves.
-pub const SIDE_BY_SIDE_MIN_ROBOTS: usize = 4096;
+/// [`TurnSharing::Auto`] shares turns in runs of at least this many robots: with fewer
+/// there are movers for one strip only, and handing the rest of the turns out costs about
+/// what it saves.
+pub const SIDE_BY_SIDE_MIN_ROBOTS: usize = 512;
 
 impl TurnSharing {
     /// Whether a round of `robots` robots on a pool of `workers` takes its turns side by
