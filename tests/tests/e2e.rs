@@ -103,19 +103,33 @@ fn the_demo_config_runs_and_writes_its_csv_outputs() {
 fn same_seed_same_csv_whatever_the_thread_count() {
     let dir = scratch("threads");
     let registry = StrategyRegistry::with_builtins();
-    let csv = |threads: usize| {
-        let out = dir.join(format!("m{threads}.csv"));
+    let csv = |threads: usize, turns: &str| {
+        let out = dir.join(format!("m{threads}-{turns}.csv"));
         let t = threads.to_string();
         let run = args(
             &repo().join("configs/demo.xml"),
-            &["--rounds", "80", "--threads", &t, "--metrics", out.to_str().unwrap()],
+            &[
+                "--rounds",
+                "80",
+                "--threads",
+                &t,
+                "--turns",
+                turns,
+                "--metrics",
+                out.to_str().unwrap(),
+            ],
         )
         .resolve()
         .unwrap();
         execute(&run, &registry, &mut []).unwrap();
         std::fs::read(out).unwrap()
     };
-    assert_eq!(csv(1), csv(2));
+    let one = csv(1, "auto");
+    assert_eq!(one, csv(2, "auto"));
+    // Turns side by side, on two threads and on one: the same rows.
+    assert_eq!(one, csv(2, "side-by-side"));
+    assert_eq!(one, csv(1, "side-by-side"));
+    assert_eq!(one, csv(2, "in-order"));
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use sim_core::agent::StrategyRegistry;
-use sim_core::engine::{Simulation, with_hot_workers};
+use sim_core::engine::{Simulation, TurnSharing, with_hot_workers};
 use sim_core::io::Observer;
 use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
@@ -27,6 +27,8 @@ pub struct RunConfig {
     pub config: SimConfig,
     /// Worker threads for the decide phase (`None`: one per core).
     pub threads: Option<usize>,
+    /// How step 3 shares its turns among the workers.
+    pub turn_sharing: TurnSharing,
     /// Decisions slower than this are reported (`None`: not timed).
     pub decide_limit: Option<Duration>,
     /// Per-round metrics CSV.
@@ -245,7 +247,9 @@ fn build_simulation(run: &RunConfig, registry: &StrategyRegistry, resumed: Optio
         None => Simulation::new(run.config.scenario(registry)?)
             .with_context(|| format!("setting up {}", run.config.path.display()))?,
     };
-    Ok(sim.with_decide_limit(run.decide_limit))
+    Ok(sim
+        .with_decide_limit(run.decide_limit)
+        .with_turn_sharing(run.turn_sharing))
 }
 
 /// The worker threads of the decide phase (`None`: one per core).
