@@ -26,24 +26,6 @@ struct Cli {
     threads: Vec<usize>,
 }
 
-/// `scaling --turns`: how step 3 shares its turns (see `TurnSharing`).
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-enum Turns {
-    Auto,
-    InOrder,
-    SideBySide,
-}
-
-impl From<Turns> for TurnSharing {
-    fn from(t: Turns) -> Self {
-        match t {
-            Turns::Auto => TurnSharing::Auto,
-            Turns::InOrder => TurnSharing::InOrder,
-            Turns::SideBySide => TurnSharing::SideBySide,
-        }
-    }
-}
-
 /// The scenarios that play rounds and time them.
 #[derive(Subcommand, Debug)]
 enum Timed {
@@ -123,7 +105,7 @@ enum Scenario {
         /// How step 3 shares its turns: `auto` (as runs do), `in-order` or `side-by-side`
         /// (as on a machine with more cores, for the sequential share there).
         #[arg(long, default_value = "auto")]
-        turns: Turns,
+        turns: TurnSharing,
         #[command(subcommand)]
         scenario: Timed,
     },
@@ -260,7 +242,7 @@ fn run(cli: &Cli) -> Result<()> {
             } else {
                 cli.threads.clone()
             };
-            scaling(scenario, cli.rounds, &threads, turns.into())
+            scaling(scenario, cli.rounds, &threads, turns)
         }
     }
 }

@@ -199,28 +199,6 @@ pub struct ResumeArgs {
     pub output: OutputArgs,
 }
 
-/// `--turns`: how step 3 shares its turns (see `TurnSharing`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum Turns {
-    /// Side by side from 3 threads and 512 robots, else in id order.
-    #[default]
-    Auto,
-    /// In id order, on one thread.
-    InOrder,
-    /// Side by side, whatever the threads and robots.
-    SideBySide,
-}
-
-impl From<Turns> for TurnSharing {
-    fn from(t: Turns) -> Self {
-        match t {
-            Turns::Auto => TurnSharing::Auto,
-            Turns::InOrder => TurnSharing::InOrder,
-            Turns::SideBySide => TurnSharing::SideBySide,
-        }
-    }
-}
-
 /// What `run` and `resume` share: outputs, viewer, threads.
 #[derive(Debug, Default, clap::Args)]
 pub struct OutputArgs {
@@ -230,8 +208,8 @@ pub struct OutputArgs {
     /// How a round's moves and actions are shared among the threads: `auto` (side by side
     /// from 3 threads and 512 robots, else in id order), `in-order` or `side-by-side`.
     /// Results do not depend on it.
-    #[arg(long, value_enum, default_value_t = Turns::Auto)]
-    pub turns: Turns,
+    #[arg(long, default_value = "auto")]
+    pub turns: TurnSharing,
     /// Write per-round metrics to this CSV file.
     #[arg(long)]
     pub metrics: Option<PathBuf>,
@@ -282,7 +260,7 @@ impl OutputArgs {
         Ok(RunConfig {
             config,
             threads: self.threads,
-            turn_sharing: self.turns.into(),
+            turn_sharing: self.turns,
             decide_limit: (self.decide_limit_ms > 0).then(|| std::time::Duration::from_millis(self.decide_limit_ms)),
             metrics,
             robot_stats,

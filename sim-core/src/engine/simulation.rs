@@ -247,6 +247,8 @@ pub struct Simulation {
 /// assert!(!TurnSharing::Auto.side_by_side(10_000, 2));
 /// assert!(!TurnSharing::Auto.side_by_side(100, 16));
 /// assert!(TurnSharing::SideBySide.side_by_side(10, 1));
+/// assert_eq!("side-by-side".parse::<TurnSharing>().unwrap(), TurnSharing::SideBySide);
+/// assert!("sideways".parse::<TurnSharing>().is_err());
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TurnSharing {
@@ -272,6 +274,22 @@ pub const SIDE_BY_SIDE_MIN_WORKERS: usize = 3;
 /// there are movers for one strip only, and handing the rest of the turns out costs about
 /// what it saves.
 pub const SIDE_BY_SIDE_MIN_ROBOTS: usize = 512;
+
+impl std::str::FromStr for TurnSharing {
+    type Err = crate::Error;
+
+    /// `auto`, `in-order` or `side-by-side` (as command lines spell them).
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "auto" => Ok(TurnSharing::Auto),
+            "in-order" => Ok(TurnSharing::InOrder),
+            "side-by-side" => Ok(TurnSharing::SideBySide),
+            _ => Err(crate::Error::InvalidParameter(format!(
+                "turns go 'auto', 'in-order' or 'side-by-side', got '{s}'"
+            ))),
+        }
+    }
+}
 
 impl TurnSharing {
     /// Whether a round of `robots` robots on a pool of `workers` takes its turns side by

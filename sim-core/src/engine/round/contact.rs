@@ -29,8 +29,9 @@ impl<'a> Bodies<'a> {
     /// `p`, hence within that of the move's segment; one after it still stands where it
     /// started, so within `radius + max_radius_m`.
     ///
-    /// Robots that [`resolve_alone`] moved ahead of the order are no exception: one after
-    /// `i` in a list could not have been alone, as `i` started within the reach of its move.
+    /// Robots that [`resolve_alone`](super::turn::resolve_alone) moved ahead of the order are
+    /// no exception: one after `i` in a list could not have been alone, as `i` started
+    /// within the reach of its move.
     /// `a_move_meets_robots_before_it_where_they_moved_and_after_it_where_they_stand`
     /// (tests/resolve.rs) checks both reaches.
     pub(super) fn near_move(&self, i: usize, from: DVec2, d: DVec2, radius: f64, near: &mut Vec<u32>) {

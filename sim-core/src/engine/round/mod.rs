@@ -7,11 +7,10 @@
 //! 3. **Resolve** (the outcome of one pass by robot id): the physical unit charges energy
 //!    and refuses or trims what is illegal (speed, energy, obstacles, other robots,
 //!    abilities, capacity), then applies the rest; messages are addressed to whoever was in
-//!    range at send time. A robot whose turn depends on nobody has it in step 2. With more
-//!    than one worker the moves are settled by strips of the map side by side, then the
-//!    turns are taken at once (those at treasures in id order); with one, the turns go in id
-//!    order. Meanwhile another thread marks the views of step 1 in the collective explored
-//!    map.
+//!    range at send time. A robot whose turn depends on nobody has it in step 2. The rest go
+//!    in id order, or side by side (see `TurnSharing`): the moves settled by strips of the
+//!    map, then the turns taken at once (those at treasures in id order). Meanwhile another
+//!    thread marks the views of step 1 in the collective explored map.
 //! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
 //!
 //! Randomness comes from generators seeded by (run seed, robot, round), and step 3's outcome

@@ -1,7 +1,8 @@
 //! Step 3: the physical unit, with the outcome of one pass in robot id order. Each turn
 //! (see [`super::turn`]) charges energy, refuses or trims what is illegal and applies the
-//! rest. With more than one worker the moves are settled side by side first (see
-//! [`SettledMoves`]), then the turns are taken at once, those at treasures in id order.
+//! rest. The turns go in id order, or side by side (see
+//! [`TurnSharing`](crate::engine::TurnSharing)): the moves settled first (see
+//! [`SettledMoves`]), then the turns taken at once, those at treasures in id order.
 //! Messages are addressed after the turns, in id order, to whoever was in range at send
 //! time and alive then.
 
@@ -28,7 +29,7 @@ const TURNS_PER_TASK: usize = 64;
 
 impl Simulation {
     /// Step 3 for the robots that did not have their turn in step 2 (see
-    /// [`resolve_alone`]). Returns messages and bytes sent.
+    /// [`resolve_alone`](super::turn::resolve_alone)). Returns messages and bytes sent.
     ///
     /// Side by side (see [`TurnSharing`](crate::engine::TurnSharing)), the moves are settled
     /// first (see [`SettledMoves`]), then every turn but those at treasures is taken at

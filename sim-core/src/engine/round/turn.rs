@@ -61,7 +61,8 @@ pub(super) struct InOrder<'b, 'a> {
 pub(super) enum Way<'b, 'a> {
     /// In id order (see [`InOrder`]).
     InOrder(InOrder<'b, 'a>),
-    /// Settled ahead (see [`SettledMoves`]): its step, if it moves, and its body.
+    /// Settled ahead (see [`SettledMoves`](super::moves::SettledMoves)): its step, if it
+    /// moves, and its body.
     Settled(Option<DVec2>, &'b mut (DVec2, f64)),
 }
 
