@@ -220,7 +220,10 @@ impl Frontier {
     /// target is known and nearer than `replan_within_view` of its view radius.
     pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64) -> Self {
         let mut core = Explorer::default();
-        core.frontier = FrontierSeeking::default().with_replan_within_view(replan_within_view);
+        // A lone explorer ranks frontiers by the walk to their targets.
+        core.frontier = FrontierSeeking::default()
+            .with_replan_within_view(replan_within_view)
+            .with_ranking_by_target(sharing.is_none());
         Self {
             core,
             sharing,

@@ -29,6 +29,11 @@ pub struct FrontierSeeking {
     /// radius (default [`REPLAN_WITHIN_VIEW`]).
     #[serde(default = "default_replan_within_view")]
     replan_within_view: f64,
+    /// Rank frontiers by the walk to their targets (see
+    /// [`Navigator::nearest_frontier_route`]) when no claim is to be avoided; otherwise by
+    /// the walk to the pieces holding them (default `false`).
+    #[serde(default)]
+    by_target: bool,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
@@ -42,6 +47,7 @@ impl Default for FrontierSeeking {
     fn default() -> Self {
         Self {
             replan_within_view: REPLAN_WITHIN_VIEW,
+            by_target: false,
             nav: Navigator::default(),
             target: None,
             failed_at: None,
@@ -55,6 +61,14 @@ impl FrontierSeeking {
     #[must_use]
     pub fn with_replan_within_view(mut self, fraction: f64) -> Self {
         self.replan_within_view = fraction;
+        self
+    }
+
+    /// Rank frontiers by the walk to their targets when no claim is to be avoided (see
+    /// [`Navigator::nearest_frontier_route`]): a search settles a few more pieces.
+    #[must_use]
+    pub fn with_ranking_by_target(mut self, by_target: bool) -> Self {
+        self.by_target = by_target;
         self
     }
 
@@ -87,9 +101,13 @@ impl FrontierSeeking {
         });
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            let memo = &mut self.memo;
+            let (memo, by_target) = (&mut self.memo, self.by_target);
             let found = ctx.timed_planning(|| {
-                Navigator::frontier_route_memo(ctx, memo, &avoid(), avoid_radius_m, max_detour_m)
+                let avoid = avoid();
+                if by_target && avoid.is_empty() {
+                    return Navigator::nearest_frontier_route(ctx, memo);
+                }
+                Navigator::frontier_route_memo(ctx, memo, &avoid, avoid_radius_m, max_detour_m)
                     .or_else(|| Navigator::frontier_route_memo(ctx, memo, &[], 0.0, f64::INFINITY))
             });
             if let Some(route) = found {

@@ -137,18 +137,41 @@ impl Navigator {
         avoid_radius_m: f64,
         max_detour_m: f64,
     ) -> Option<Route> {
+        Self::frontier_search(ctx, memo, avoid, avoid_radius_m, max_detour_m, Ranking::ByEntry)
+    }
+
+    /// The route to the frontier nearest by route for a robot that avoids no claims: as
+    /// [`frontier_route_memo`](Self::frontier_route_memo) with nothing to avoid, but the
+    /// frontiers are ranked by the walk to their targets, not to the pieces holding them
+    /// (see [`NavGraph::search_nearest_goal`]), and each target is the unknown point
+    /// nearest to where the route enters its piece. Pieces are up to 16 leaves long, so
+    /// the first piece reached can hold a frontier metres farther than a later one's.
+    pub fn nearest_frontier_route(ctx: &Ctx, memo: &mut PieceMemo) -> Option<Route> {
+        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, Ranking::ByTarget)
+    }
+
+    /// A frontier search (see [`frontier_route_memo`](Self::frontier_route_memo)) ranking
+    /// frontiers as `ranking` says.
+    fn frontier_search(
+        ctx: &Ctx,
+        memo: &mut PieceMemo,
+        avoid: &[DVec2],
+        avoid_radius_m: f64,
+        max_detour_m: f64,
+        ranking: Ranking,
+    ) -> Option<Route> {
         let terrain = ctx.terrain()?;
         let known = terrain.known;
         let nav = ctx.nav();
         let p = ctx.position();
         let start_hint = memo.route_end();
         let search = FrontierSearch {
+            ranking,
             nav,
             known,
             avoid,
             avoid_radius_m,
             max_detour_m,
-            p,
             step_in: 0.5 * known.grid().cell_m(),
             touched: RefCell::new(Vec::with_capacity(32)),
             skipped: Cell::new(None),
@@ -157,14 +180,24 @@ impl Navigator {
             // from where the last one passed.
             finger: RefCell::new(Finger::new(known.tree())),
         };
-        let route = nav.search_knowing_reached(
-            p,
-            start_hint,
-            terrain,
-            |m| search.usable(m),
-            |n, d, reached| search.goal(n, d, reached),
-            SEARCH_BUDGET,
-        );
+        let route = match ranking {
+            Ranking::ByEntry => nav.search_knowing_reached(
+                p,
+                start_hint,
+                terrain,
+                |m| search.usable(m),
+                |n, d, reached| search.goal(n, d, p, reached),
+                SEARCH_BUDGET,
+            ),
+            Ranking::ByTarget => nav.search_nearest_goal(
+                p,
+                start_hint,
+                terrain,
+                |m| search.usable(m),
+                |n, d, at, reached| search.goal(n, d, at, reached),
+                SEARCH_BUDGET,
+            ),
+        };
         if let Some(r) = &route {
             search.memo.into_inner().set_route_end(r.nodes.last().copied());
         }
@@ -192,16 +225,25 @@ fn slide(ctx: &Ctx, p: DVec2, target: DVec2) -> Option<DVec2> {
         .find(|&to| ctx.can_move(p, to) == Some(true))
 }
 
+/// How a frontier search ranks the frontiers it finds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ranking {
+    /// By the walk to where the route enters the piece holding the frontier; the first
+    /// piece with one wins, its target the unknown point nearest to the robot.
+    ByEntry,
+    /// By the walk to the target itself (see [`Navigator::nearest_frontier_route`]).
+    ByTarget,
+}
+
 /// A frontier search under way (see [`Navigator::frontier_route_memo`]): what it looks
 /// for, and what its usable test and goal test share.
 struct FrontierSearch<'a, 'm> {
+    ranking: Ranking,
     nav: &'a NavGraph,
     known: &'a KnownMap,
     avoid: &'a [DVec2],
     avoid_radius_m: f64,
     max_detour_m: f64,
-    /// Where the robot stands.
-    p: DVec2,
     /// How far past an edge a target across it lies.
     step_in: f64,
     /// The goal test of a node asks its neighbours whether the known map touches them,
@@ -243,10 +285,12 @@ impl FrontierSearch<'_, '_> {
         ok
     }
 
-    /// The search's goal test of piece `n`, entered after walking `d`: the skipped target
-    /// once the detour allowed is used up, else the nearest unknown point of a piece the
-    /// known map does not cover, else a point across an edge into a piece it does not touch.
-    fn goal(&self, n: NavNodeId, d: f64, reached: &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)> {
+    /// The search's goal test of piece `n`, entered at `at` after walking `d`: the skipped
+    /// target once the detour allowed is used up, else the unknown point nearest to `at`
+    /// of a piece the known map does not cover, else a point across an edge into a piece it
+    /// does not touch. `at` is the robot's position when ranking by entry (as before the
+    /// search knew the entry).
+    fn goal(&self, n: NavNodeId, d: f64, at: DVec2, reached: &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)> {
         self.touched.borrow_mut().clear();
         // Pieces settle in the order of the distance walked to enter them, so this is the
         // first piece beyond the detour allowed: the skipped target it is.
@@ -258,11 +302,11 @@ impl FrontierSearch<'_, '_> {
             .borrow_mut()
             .covered_from(self.nav, self.known, &mut self.finger.borrow_mut(), n)
         {
-            return nearest_unknown(self.known, &self.nav.bounds(n), self.p)
+            return nearest_unknown(self.known, &self.nav.bounds(n), at)
                 .filter(|t| self.taken(n, d, *t))
                 .map(|t| (n, t));
         }
-        self.goal_across_edge(n, d, reached)
+        self.goal_across_edge(n, d, at, reached)
     }
 
     /// A target just across the edge from piece `n` into a neighbour the known map does not
@@ -271,6 +315,7 @@ impl FrontierSearch<'_, '_> {
         &self,
         n: NavNodeId,
         d: f64,
+        at: DVec2,
         reached: &dyn Fn(NavNodeId) -> bool,
     ) -> Option<(NavNodeId, DVec2)> {
         let mut cache = self.touched.borrow_mut();
@@ -285,7 +330,11 @@ impl FrontierSearch<'_, '_> {
             if t {
                 continue;
             }
-            let portal = self.nav.portal(n, m);
+            // Ranked by the walk to the target, the edge is crossed where it is nearest.
+            let portal = match self.ranking {
+                Ranking::ByEntry => self.nav.portal(n, m),
+                Ranking::ByTarget => self.nav.entry_point(n, m, at),
+            };
             let inward = (self.nav.bounds(m).center() - portal).normalize_or_zero();
             let found = Some(portal + inward * self.step_in).filter(|t| self.taken(n, d, *t));
             if found.is_some() {

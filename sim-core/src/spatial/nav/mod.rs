@@ -501,7 +501,7 @@ impl NavGraph {
     /// portal nearest to `at`, kept half a cell from the portal's ends. Costing a piece by
     /// the walk between such points, not between portal midpoints, keeps searches from
     /// preferring corridors that look short only through the middles of big pieces.
-    fn entry_point(&self, a: NavNodeId, b: NavNodeId, at: DVec2) -> DVec2 {
+    pub(crate) fn entry_point(&self, a: NavNodeId, b: NavNodeId, at: DVec2) -> DVec2 {
         let (lo, hi) = self.portal_ends(a, b);
         let inset = DVec2::splat(0.5 * self.grid.cell_m()).min(0.5 * (hi - lo));
         at.clamp(lo + inset, hi - inset)
@@ -722,7 +722,37 @@ impl NavGraph {
         is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
         max_nodes: usize,
     ) -> Option<Route> {
-        let (nodes, goal) = self.best_first(from, start_hint, usable, is_goal, None, max_nodes)?;
+        let mut is_goal = is_goal;
+        let (nodes, goal) = self.best_first(
+            from,
+            start_hint,
+            usable,
+            |n, d, _, reached| is_goal(n, d, reached),
+            Goals::First,
+            None,
+            max_nodes,
+        )?;
+        Some(self.taut_route(from, nodes, goal, terrain))
+    }
+
+    /// [`search_knowing_reached`](Self::search_knowing_reached) for the goal nearest by
+    /// route, not the first node accepted: `is_goal` also gets where the search entered the
+    /// node, and a goal costs the walk to that entry plus the straight line on to the goal
+    /// point (inside the node, a convex piece, or just across its edge). Goals found wait
+    /// in the search's queue with that cost, so the one returned is the cheapest; the
+    /// search settles the nodes nearer than it as well, a few more than the first-accepted
+    /// search. In big pieces the first node accepted can hold a goal metres farther than a
+    /// later one's. Checked by `nearest_goal_search_takes_the_goal_nearest_by_route`.
+    pub fn search_nearest_goal(
+        &self,
+        from: DVec2,
+        start_hint: Option<NavNodeId>,
+        terrain: Terrain,
+        usable: impl FnMut(NavNodeId) -> bool,
+        is_goal: impl FnMut(NavNodeId, f64, DVec2, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        max_nodes: usize,
+    ) -> Option<Route> {
+        let (nodes, goal) = self.best_first(from, start_hint, usable, is_goal, Goals::Nearest, None, max_nodes)?;
         Some(self.taut_route(from, nodes, goal, terrain))
     }
 
@@ -735,12 +765,14 @@ impl NavGraph {
     /// settled, as costs popped never decrease, so the moves back into settled nodes are
     /// not worked out. With an estimate a later, cheaper way into a settled node reopens
     /// it, as entry points depend on the way in. Checked by `a_star_routes_match_dijkstra`.
+    #[allow(clippy::too_many_arguments)] // each is one aspect of the search; a struct would only wrap them
     fn best_first(
         &self,
         from: DVec2,
         start_hint: Option<NavNodeId>,
         mut usable: impl FnMut(NavNodeId) -> bool,
-        mut is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        mut is_goal: impl FnMut(NavNodeId, f64, DVec2, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        goals: Goals,
         estimate: Option<&dyn Fn(DVec2) -> f64>,
         max_nodes: usize,
     ) -> Option<(Vec<NavNodeId>, DVec2)> {
@@ -761,9 +793,18 @@ impl NavGraph {
             marks[start.0 as usize] = (stamp, 0);
             heap.push(Reverse(heap_key(estimate(from), self.rank[start.0 as usize], 0)));
             let mut settled = 0usize;
+            // The cheapest goal waiting in the heap (`Goals::Nearest`), as its entry.
+            let mut best_goal: Option<(f64, u32)> = None;
+            let found = |e: u32, entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)]| {
+                let (goal, _, n, _) = entry[e as usize];
+                (chain_to(entry, marks, n), goal)
+            };
             while let Some(Reverse(key)) = heap.pop() {
                 let e = key as u32;
-                let (at, d, n, _) = entry[e as usize];
+                let (at, d, n, parent) = entry[e as usize];
+                if parent == GOAL_ENTRY {
+                    return Some(found(e, entry, marks));
+                }
                 let node = NavNodeId(n);
                 // An entry other than the node's current one was bettered since.
                 if marks[n as usize].1 != e {
@@ -772,11 +813,21 @@ impl NavGraph {
                 marks[n as usize].0 = settled_stamp;
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
-                if let Some((NavNodeId(n), goal)) = is_goal(node, d, &reached) {
-                    return Some((chain_to(entry, marks, n), goal));
+                if let Some((NavNodeId(g), goal)) = is_goal(node, d, at, &reached) {
+                    if goals == Goals::First {
+                        return Some((chain_to(entry, marks, g), goal));
+                    }
+                    // It waits for the nodes nearer than itself, in the heap.
+                    let cost = d + at.distance(goal);
+                    let e = u32::try_from(entry.len()).expect("fewer entries than u32");
+                    entry.push((goal, cost, g, GOAL_ENTRY));
+                    heap.push(Reverse(heap_key(cost, self.rank[g as usize], e)));
+                    if best_goal.is_none_or(|(c, _)| cost < c) {
+                        best_goal = Some((cost, e));
+                    }
                 }
                 if settled >= max_nodes {
-                    return None;
+                    return best_goal.map(|(_, e)| found(e, entry, marks));
                 }
                 for m in self.neighbors(node) {
                     let mark = marks[m.0 as usize];
@@ -816,7 +867,8 @@ impl NavGraph {
             from,
             None,
             |n| self.touched_by(known, n),
-            |n, _, _| (n == goal).then_some((n, to)),
+            |n, _, _, _| (n == goal).then_some((n, to)),
+            Goals::First,
             Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
@@ -845,7 +897,7 @@ impl NavGraph {
             from,
             None,
             |n| self.touched_by(known, n),
-            |n, _, _| {
+            |n, _, _, _| {
                 if Some(n) == goal {
                     return Some((n, to));
                 }
@@ -865,6 +917,7 @@ impl NavGraph {
                     .find(|&exit| terrain.hopeful(exit, to))
                     .map(|e| (n, e))
             },
+            Goals::First,
             Some(&|p: DVec2| p.distance(to)),
             max_nodes,
         )?;
@@ -916,6 +969,18 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
     }
     out
 }
+
+/// Which goal a best-first search returns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Goals {
+    /// The first node's its goal test accepts, in the order nodes are settled.
+    First,
+    /// The goal nearest by the walk to its node's entry plus the straight line on.
+    Nearest,
+}
+
+/// The parent mark of a search entry that is a goal waiting in the heap, not a node.
+const GOAL_ENTRY: u32 = u32::MAX - 1;
 
 /// A search heap entry as one number, ordered as the tuple (`cost` by `total_cmp`, `node`,
 /// `entry`): ties broken by the node's rank, so searches are deterministic. One integer

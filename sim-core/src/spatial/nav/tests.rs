@@ -238,6 +238,55 @@ proptest::proptest! {
         }
     }
 
+    /// `search_nearest_goal` returns the goal whose walk is shortest by the search's own
+    /// measure: worked out apart by settling every node (a goal test that never accepts,
+    /// noting each node's entry and distance) and costing each node's goal as the distance
+    /// to its entry plus the straight line on; ties may go either way.
+    #[test]
+    fn nearest_goal_search_takes_the_goal_nearest_by_route(
+        cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
+        goals in proptest::collection::vec((proptest::bool::weighted(0.3), 0.0f64..1.0, 0.0f64..1.0), 256),
+        from in (0u32..16, 0u32..16),
+    ) {
+        let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
+        let map = ObstacleMap::from_fn(grid, |x, y| cells[(y * 16 + x) as usize]);
+        let g = NavGraph::build(&map);
+        let mut known = KnownMap::new(grid);
+        known.mark(&Aabb::from_corners(DVec2::ZERO, DVec2::splat(16.0)));
+        let from = grid.cell_center(from.0, from.1) + DVec2::new(0.1, -0.2);
+        let point = Terrain { obstacles: &map, known: &known, radius_m: 0.0 };
+        // A goal in some pieces: a point of the piece placed by the draw for its first cell.
+        let goal_of = |n: NavNodeId| {
+            let p = g.piece(n);
+            let (accept, fx, fy) = goals[(p.y * 16 + p.x) as usize];
+            let b = g.bounds(n);
+            accept.then(|| b.min + (b.max - b.min) * DVec2::new(fx, fy))
+        };
+        let mut labels = Vec::new();
+        let none = g.search_nearest_goal(from, None, point, |_| true, |n, d, at, _| {
+            labels.push((n, d, at));
+            None
+        }, usize::MAX);
+        proptest::prop_assert!(none.is_none());
+        let best = labels
+            .iter()
+            .filter_map(|&(n, d, at)| goal_of(n).map(|t| d + at.distance(t)))
+            .fold(f64::INFINITY, f64::min);
+        let mut costs = Vec::new();
+        let found = g.search_nearest_goal(from, None, point, |_| true, |n, d, at, _| {
+            goal_of(n).map(|t| {
+                costs.push((t, d + at.distance(t)));
+                (n, t)
+            })
+        }, usize::MAX);
+        proptest::prop_assert_eq!(found.is_some(), best.is_finite());
+        if let Some(route) = found {
+            let end = *route.waypoints.last().unwrap();
+            let cost = costs.iter().find(|c| c.0 == end).unwrap().1;
+            proptest::prop_assert!((cost - best).abs() <= 1e-9, "{} against {}", cost, best);
+        }
+    }
+
     /// A small robot's route, pulled taut, keeps its radius clear of obstacles, is never
     /// shorter than a point's exact any-angle optimum (a visibility graph of the blocked
     /// cells' corners, built independently), and never longer than the midpoint route
