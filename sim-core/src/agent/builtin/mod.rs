@@ -40,6 +40,11 @@ impl Default for StrategyRegistry {
 /// and moves claims.
 const LONE_REPLAN_WITHIN_VIEW: f64 = 0.5;
 
+/// `frontier`'s `seen_cost_views`: a frontier whose view round it is all known costs two
+/// view radii more than one as near whose view is all unknown, so a lone explorer takes
+/// frontiers that reveal more (BENCHMARKS.md, "Exploration quality").
+const SEEN_COST_VIEWS: f64 = 2.0;
+
 /// Register every built-in strategy.
 fn register_builtins(r: &mut StrategyRegistry) {
     r.register(
@@ -49,12 +54,14 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "frontier",
-        "frontier exploration: walks to the nearest boundary between known free space and the unknown, \
+        "frontier exploration: walks to the nearest boundary between known free space and the unknown \
+         (by route, plus seen_cost_views view radii (2) for a view round it already known), \
          searching again once its target is seen nearer than replan_within_view of its view radius (0.5)",
         |p| {
-            p.only(&["replan_within_view"])?;
+            p.only(&["replan_within_view", "seen_cost_views"])?;
             let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            Ok(Box::new(frontier::Frontier::new(None, replan)))
+            let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
+            Ok(Box::new(frontier::Frontier::new(None, replan, seen)))
         },
     );
     r.register(
@@ -72,7 +79,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
             ])?;
             let share = explorer::Sharing::from_params(p)?;
             let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            Ok(Box::new(frontier::Frontier::new(Some(share), replan)))
+            Ok(Box::new(frontier::Frontier::new(Some(share), replan, 0.0)))
         },
     );
     r.register(

@@ -29,11 +29,12 @@ pub struct FrontierSeeking {
     /// radius (default [`REPLAN_WITHIN_VIEW`]).
     #[serde(default = "default_replan_within_view")]
     replan_within_view: f64,
-    /// Rank frontiers by the walk to their targets (see
-    /// [`Navigator::nearest_frontier_route`]) when no claim is to be avoided; otherwise by
-    /// the walk to the pieces holding them (default `false`).
+    /// Rank frontiers by the walk to their targets, charging this many view radii for a
+    /// view round the target already known (see [`Navigator::nearest_frontier_route`]),
+    /// when no claim is to be avoided; `None` (the default): by the walk to the pieces
+    /// holding them.
     #[serde(default)]
-    by_target: bool,
+    by_target: Option<f64>,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
@@ -47,7 +48,7 @@ impl Default for FrontierSeeking {
     fn default() -> Self {
         Self {
             replan_within_view: REPLAN_WITHIN_VIEW,
-            by_target: false,
+            by_target: None,
             nav: Navigator::default(),
             target: None,
             failed_at: None,
@@ -64,11 +65,13 @@ impl FrontierSeeking {
         self
     }
 
-    /// Rank frontiers by the walk to their targets when no claim is to be avoided (see
-    /// [`Navigator::nearest_frontier_route`]): a search settles a few more pieces.
+    /// Rank frontiers by the walk to their targets when no claim is to be avoided, charging
+    /// `seen_cost_views` view radii for a view round the target wholly known (in
+    /// proportion; see [`Navigator::nearest_frontier_route`]); `None`: by the walk to the
+    /// pieces holding them. By target, a search settles a few more pieces.
     #[must_use]
-    pub fn with_ranking_by_target(mut self, by_target: bool) -> Self {
-        self.by_target = by_target;
+    pub fn with_ranking_by_target(mut self, seen_cost_views: Option<f64>) -> Self {
+        self.by_target = seen_cost_views;
         self
     }
 
@@ -104,8 +107,10 @@ impl FrontierSeeking {
             let (memo, by_target) = (&mut self.memo, self.by_target);
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
-                if by_target && avoid.is_empty() {
-                    return Navigator::nearest_frontier_route(ctx, memo);
+                if let Some(views) = by_target
+                    && avoid.is_empty()
+                {
+                    return Navigator::nearest_frontier_route(ctx, memo, views * ctx.kind.view_radius_m);
                 }
                 Navigator::frontier_route_memo(ctx, memo, &avoid, avoid_radius_m, max_detour_m)
                     .or_else(|| Navigator::frontier_route_memo(ctx, memo, &[], 0.0, f64::INFINITY))

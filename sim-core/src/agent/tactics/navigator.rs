@@ -146,8 +146,13 @@ impl Navigator {
     /// (see [`NavGraph::search_nearest_goal`]), and each target is the unknown point
     /// nearest to where the route enters its piece. Pieces are up to 16 leaves long, so
     /// the first piece reached can hold a frontier metres farther than a later one's.
-    pub fn nearest_frontier_route(ctx: &Ctx, memo: &mut PieceMemo) -> Option<Route> {
-        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, Ranking::ByTarget)
+    ///
+    /// A frontier's cost is also charged `seen_cost_m` times the part of the view round its
+    /// target that the robot knows already ([`KnownMap::known_fraction_near`]): of two
+    /// frontiers about as near, the one with more unknown round it is taken (0: by route
+    /// only).
+    pub fn nearest_frontier_route(ctx: &Ctx, memo: &mut PieceMemo, seen_cost_m: f64) -> Option<Route> {
+        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, Ranking::ByTarget { seen_cost_m })
     }
 
     /// A frontier search (see [`frontier_route_memo`](Self::frontier_route_memo)) ranking
@@ -164,6 +169,7 @@ impl Navigator {
         let known = terrain.known;
         let nav = ctx.nav();
         let p = ctx.position();
+        let view_m = ctx.kind.view_radius_m;
         let start_hint = memo.route_end();
         let search = FrontierSearch {
             ranking,
@@ -189,12 +195,13 @@ impl Navigator {
                 |n, d, reached| search.goal(n, d, p, reached),
                 SEARCH_BUDGET,
             ),
-            Ranking::ByTarget => nav.search_nearest_goal(
+            Ranking::ByTarget { seen_cost_m } => nav.search_nearest_goal(
                 p,
                 start_hint,
                 terrain,
                 |m| search.usable(m),
                 |n, d, at, reached| search.goal(n, d, at, reached),
+                &|t| seen_cost_m * known.known_fraction_near(t, view_m),
                 SEARCH_BUDGET,
             ),
         };
@@ -226,13 +233,14 @@ fn slide(ctx: &Ctx, p: DVec2, target: DVec2) -> Option<DVec2> {
 }
 
 /// How a frontier search ranks the frontiers it finds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Ranking {
     /// By the walk to where the route enters the piece holding the frontier; the first
     /// piece with one wins, its target the unknown point nearest to the robot.
     ByEntry,
-    /// By the walk to the target itself (see [`Navigator::nearest_frontier_route`]).
-    ByTarget,
+    /// By the walk to the target itself, plus `seen_cost_m` times the part of the view round
+    /// it already known (see [`Navigator::nearest_frontier_route`]).
+    ByTarget { seen_cost_m: f64 },
 }
 
 /// A frontier search under way (see [`Navigator::frontier_route_memo`]): what it looks
@@ -333,7 +341,7 @@ impl FrontierSearch<'_, '_> {
             // Ranked by the walk to the target, the edge is crossed where it is nearest.
             let portal = match self.ranking {
                 Ranking::ByEntry => self.nav.portal(n, m),
-                Ranking::ByTarget => self.nav.entry_point(n, m, at),
+                Ranking::ByTarget { .. } => self.nav.entry_point(n, m, at),
             };
             let inward = (self.nav.bounds(m).center() - portal).normalize_or_zero();
             let found = Some(portal + inward * self.step_in).filter(|t| self.taken(n, d, *t));

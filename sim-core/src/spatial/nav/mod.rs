@@ -738,11 +738,14 @@ impl NavGraph {
     /// [`search_knowing_reached`](Self::search_knowing_reached) for the goal nearest by
     /// route, not the first node accepted: `is_goal` also gets where the search entered the
     /// node, and a goal costs the walk to that entry plus the straight line on to the goal
-    /// point (inside the node, a convex piece, or just across its edge). Goals found wait
-    /// in the search's queue with that cost, so the one returned is the cheapest; the
-    /// search settles the nodes nearer than it as well, a few more than the first-accepted
-    /// search. In big pieces the first node accepted can hold a goal metres farther than a
-    /// later one's. Checked by `nearest_goal_search_takes_the_goal_nearest_by_route`.
+    /// point (inside the node, a convex piece, or just across its edge), plus `bias` of the
+    /// goal point (never negative: a goal then costs at least the walk to its node). Goals
+    /// found wait in the search's queue with that cost, so the one returned is the
+    /// cheapest; the search settles the nodes nearer than it as well, a few more than the
+    /// first-accepted search. In big pieces the first node accepted can hold a goal metres
+    /// farther than a later one's. Checked by
+    /// `nearest_goal_search_takes_the_goal_nearest_by_route`.
+    #[allow(clippy::too_many_arguments)] // `search_knowing_reached`'s, and the bias
     pub fn search_nearest_goal(
         &self,
         from: DVec2,
@@ -750,9 +753,11 @@ impl NavGraph {
         terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
         is_goal: impl FnMut(NavNodeId, f64, DVec2, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        bias: &dyn Fn(DVec2) -> f64,
         max_nodes: usize,
     ) -> Option<Route> {
-        let (nodes, goal) = self.best_first(from, start_hint, usable, is_goal, Goals::Nearest, None, max_nodes)?;
+        let (nodes, goal) =
+            self.best_first(from, start_hint, usable, is_goal, Goals::Nearest(bias), None, max_nodes)?;
         Some(self.taut_route(from, nodes, goal, terrain))
     }
 
@@ -814,11 +819,11 @@ impl NavGraph {
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
                 if let Some((NavNodeId(g), goal)) = is_goal(node, d, at, &reached) {
-                    if goals == Goals::First {
+                    let Goals::Nearest(bias) = goals else {
                         return Some((chain_to(entry, marks, g), goal));
-                    }
+                    };
                     // It waits for the nodes nearer than itself, in the heap.
-                    let cost = d + at.distance(goal);
+                    let cost = d + at.distance(goal) + bias(goal);
                     let e = u32::try_from(entry.len()).expect("fewer entries than u32");
                     entry.push((goal, cost, g, GOAL_ENTRY));
                     heap.push(Reverse(heap_key(cost, self.rank[g as usize], e)));
@@ -971,12 +976,13 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
 }
 
 /// Which goal a best-first search returns.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Goals {
+#[derive(Clone, Copy)]
+enum Goals<'b> {
     /// The first node's its goal test accepts, in the order nodes are settled.
     First,
-    /// The goal nearest by the walk to its node's entry plus the straight line on.
-    Nearest,
+    /// The goal nearest by the walk to its node's entry plus the straight line on, plus
+    /// the bias (never negative) of the goal point.
+    Nearest(&'b dyn Fn(DVec2) -> f64),
 }
 
 /// The parent mark of a search entry that is a goal waiting in the heap, not a node.

@@ -238,15 +238,17 @@ proptest::proptest! {
         }
     }
 
-    /// `search_nearest_goal` returns the goal whose walk is shortest by the search's own
-    /// measure: worked out apart by settling every node (a goal test that never accepts,
-    /// noting each node's entry and distance) and costing each node's goal as the distance
-    /// to its entry plus the straight line on; ties may go either way.
+    /// `search_nearest_goal` returns the goal whose walk plus bias is least by the search's
+    /// own measure: worked out apart by settling every node (a goal test that never
+    /// accepts, noting each node's entry and distance) and costing each node's goal as the
+    /// distance to its entry plus the straight line on plus the goal's bias; ties may go
+    /// either way.
     #[test]
     fn nearest_goal_search_takes_the_goal_nearest_by_route(
         cells in proptest::collection::vec(proptest::bool::weighted(0.3), 256),
         goals in proptest::collection::vec((proptest::bool::weighted(0.3), 0.0f64..1.0, 0.0f64..1.0), 256),
         from in (0u32..16, 0u32..16),
+        bias_m in proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0f64..8.0],
     ) {
         let grid = Grid::new(DVec2::ZERO, 1.0, 16, 16).unwrap();
         let map = ObstacleMap::from_fn(grid, |x, y| cells[(y * 16 + x) as usize]);
@@ -262,23 +264,25 @@ proptest::proptest! {
             let b = g.bounds(n);
             accept.then(|| b.min + (b.max - b.min) * DVec2::new(fx, fy))
         };
+        // A bias that is never negative and varies over the map.
+        let bias = |t: DVec2| bias_m * (0.5 + 0.5 * (t.x * 0.7 + t.y * 0.3).sin());
         let mut labels = Vec::new();
         let none = g.search_nearest_goal(from, None, point, |_| true, |n, d, at, _| {
             labels.push((n, d, at));
             None
-        }, usize::MAX);
+        }, &bias, usize::MAX);
         proptest::prop_assert!(none.is_none());
         let best = labels
             .iter()
-            .filter_map(|&(n, d, at)| goal_of(n).map(|t| d + at.distance(t)))
+            .filter_map(|&(n, d, at)| goal_of(n).map(|t| d + at.distance(t) + bias(t)))
             .fold(f64::INFINITY, f64::min);
         let mut costs = Vec::new();
         let found = g.search_nearest_goal(from, None, point, |_| true, |n, d, at, _| {
             goal_of(n).map(|t| {
-                costs.push((t, d + at.distance(t)));
+                costs.push((t, d + at.distance(t) + bias(t)));
                 (n, t)
             })
-        }, usize::MAX);
+        }, &bias, usize::MAX);
         proptest::prop_assert_eq!(found.is_some(), best.is_finite());
         if let Some(route) = found {
             let end = *route.waypoints.last().unwrap();
