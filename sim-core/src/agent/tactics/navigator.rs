@@ -296,8 +296,7 @@ impl FrontierSearch<'_, '_> {
     /// The search's goal test of piece `n`, entered at `at` after walking `d`: the skipped
     /// target once the detour allowed is used up, else the unknown point nearest to `at`
     /// of a piece the known map does not cover, else a point across an edge into a piece it
-    /// does not touch. `at` is the robot's position when ranking by entry (as before the
-    /// search knew the entry).
+    /// does not touch. Ranking by entry passes the robot's position as `at`.
     fn goal(&self, n: NavNodeId, d: f64, at: DVec2, reached: &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)> {
         self.touched.borrow_mut().clear();
         // Pieces settle in the order of the distance walked to enter them, so this is the
