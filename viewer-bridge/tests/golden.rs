@@ -50,9 +50,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "tactics.xml",
         rounds: 600,
-        digest: 0x8b9d_95c5_d26e_fc58,
-        metrics_crc: 0x6910_2d00,
-        robots_crc: 0x0944_42cb,
+        digest: 0x860a_5c4d_af05_2abd,
+        metrics_crc: 0x6ba9_c006,
+        robots_crc: 0x1788_791d,
     },
     Golden {
         config: "bench-1000.xml",

@@ -12,7 +12,7 @@ mod worker;
 
 use std::ops::RangeInclusive;
 
-use crate::agent::{REPLAN_WITHIN_VIEW, StrategyRegistry};
+use crate::agent::{REPLAN_WITHIN_VIEW, SEEN_COST_VIEWS, StrategyRegistry};
 
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
@@ -39,11 +39,6 @@ impl Default for StrategyRegistry {
 /// `cooperative` keeps [`REPLAN_WITHIN_VIEW`], as in crowds each search costs planning time
 /// and moves claims.
 const LONE_REPLAN_WITHIN_VIEW: f64 = 0.5;
-
-/// `frontier`'s `seen_cost_views`: a frontier whose view round it is all known costs two
-/// view radii more than one as near whose view is all unknown, so a lone explorer takes
-/// frontiers that reveal more (BENCHMARKS.md, "Exploration quality").
-const SEEN_COST_VIEWS: f64 = 2.0;
 
 /// Register every built-in strategy.
 fn register_builtins(r: &mut StrategyRegistry) {

@@ -16,6 +16,12 @@ use crate::world::Action;
 /// "Exploration quality").
 pub const REPLAN_WITHIN_VIEW: f64 = 0.25;
 
+/// `seen_cost_views` of the `frontier` strategy and tactic, by default: a frontier whose
+/// view round it is all known costs two view radii more than one as near whose view is all
+/// unknown, so a lone explorer takes frontiers that reveal more (BENCHMARKS.md,
+/// "Exploration quality").
+pub const SEEN_COST_VIEWS: f64 = 2.0;
+
 fn default_replan_within_view() -> f64 {
     REPLAN_WITHIN_VIEW
 }

@@ -30,7 +30,7 @@ mod team;
 pub use boundary::BoundaryFollowing;
 pub use collision::CollisionAvoidance;
 pub use energy::EnergyManagement;
-pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW};
+pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW, SEEN_COST_VIEWS};
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};
@@ -130,10 +130,12 @@ impl TacticRegistry {
         );
         r.register(
             "frontier",
-            "walks to the nearest frontier (known free space next to the unknown) and publishes it as the goal",
+            "walks to the nearest frontier (known free space next to the unknown) by route, plus seen_cost_views \
+             view radii (2) for a view round it already known, and publishes it as the goal",
             |p| {
-                p.only(&[])?;
-                Ok(Box::new(FrontierSeeking::default()))
+                p.only(&["seen_cost_views"])?;
+                let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
+                Ok(Box::new(FrontierSeeking::default().with_ranking_by_target(Some(seen))))
             },
         );
         r.register(
