@@ -56,7 +56,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
             p.only(&["replan_within_view", "seen_cost_views"])?;
             let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
             let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
-            Ok(Box::new(frontier::Frontier::new(None, replan, seen)))
+            Ok(Box::new(frontier::Frontier::new(None, replan, Some(seen))))
         },
     );
     r.register(
@@ -74,7 +74,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
             ])?;
             let share = explorer::Sharing::from_params(p)?;
             let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            Ok(Box::new(frontier::Frontier::new(Some(share), replan, 0.0)))
+            Ok(Box::new(frontier::Frontier::new(Some(share), replan, None)))
         },
     );
     r.register(

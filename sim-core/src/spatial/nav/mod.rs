@@ -719,10 +719,9 @@ impl NavGraph {
         start_hint: Option<NavNodeId>,
         terrain: Terrain,
         usable: impl FnMut(NavNodeId) -> bool,
-        is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        mut is_goal: impl FnMut(NavNodeId, f64, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
         max_nodes: usize,
     ) -> Option<Route> {
-        let mut is_goal = is_goal;
         let (nodes, goal) = self.best_first(
             from,
             start_hint,
@@ -978,7 +977,7 @@ fn shortcut(from: DVec2, waypoints: &[DVec2], terrain: Terrain) -> Vec<DVec2> {
 /// Which goal a best-first search returns.
 #[derive(Clone, Copy)]
 enum Goals<'b> {
-    /// The first node's its goal test accepts, in the order nodes are settled.
+    /// The goal of the first node its goal test accepts, in the order nodes are settled.
     First,
     /// The goal nearest by the walk to its node's entry plus the straight line on, plus
     /// the bias (never negative) of the goal point.
