@@ -511,14 +511,17 @@ fn distinct_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
         return Vec::new();
     };
     let ids = top as usize + 1;
-    let (start, higher) = group_by(pairs.iter().map(|&(a, b)| (a.min(b) as usize, a.max(b))), ids);
+    let by_lower: Vec<(u32, u32)> = pairs.iter().map(|&(a, b)| (a.min(b), a.max(b))).collect();
+    let (start, higher) = group_by(&by_lower, ids);
     // `met_with[high]`: 1 + the lower id `high` was last met with (0: never).
     let mut met_with = vec![0u32; ids];
     let mut distinct = Vec::with_capacity(pairs.len());
     for (low, w) in start.windows(2).enumerate() {
-        for &high in &higher[w[0]..w[1]] {
-            if met_with[high as usize] != low as u32 + 1 {
-                met_with[high as usize] = low as u32 + 1;
+        let mark = low as u32 + 1;
+        for &high in &higher[w[0] as usize..w[1] as usize] {
+            let met = &mut met_with[high as usize];
+            if *met != mark {
+                *met = mark;
                 distinct.push((low as u32, high));
             }
         }
@@ -529,22 +532,20 @@ fn distinct_pairs(pairs: &[(u32, u32)]) -> Vec<(u32, u32)> {
 /// A counting sort: the values of `items` (bucket, value) grouped by bucket, each bucket's
 /// in the order given, with where each bucket starts (`buckets + 1` offsets, the last the
 /// total). Buckets are below `buckets`. O(items + buckets).
-fn group_by<T: Copy + Default>(
-    items: impl Iterator<Item = (usize, T)> + Clone,
-    buckets: usize,
-) -> (Vec<usize>, Vec<T>) {
-    let mut start = vec![0usize; buckets + 1];
-    for (b, _) in items.clone() {
-        start[b + 1] += 1;
+fn group_by<T: Copy + Default>(items: &[(u32, T)], buckets: usize) -> (Vec<u32>, Vec<T>) {
+    let mut start = vec![0u32; buckets + 1];
+    for &(b, _) in items {
+        start[b as usize + 1] += 1;
     }
     for i in 1..start.len() {
         start[i] += start[i - 1];
     }
-    let mut fill = start.clone();
-    let mut grouped = vec![T::default(); start[buckets]];
-    for (b, v) in items {
-        grouped[fill[b]] = v;
-        fill[b] += 1;
+    let mut fill = start[..buckets].to_vec();
+    let mut grouped = vec![T::default(); items.len()];
+    for &(b, v) in items {
+        let at = &mut fill[b as usize];
+        grouped[*at as usize] = v;
+        *at += 1;
     }
     (start, grouped)
 }
@@ -1045,15 +1046,16 @@ impl Trails {
     fn cover(pairs: &[(u32, u32)], robots: usize) -> Self {
         // The segments at each robot (`at[start[v]..start[v + 1]]`); the ends of segment e
         // are pairs[e].
-        let ends = pairs
-            .iter()
-            .enumerate()
-            .flat_map(|(e, &(a, b))| [(a as usize, e), (b as usize, e)]);
-        let (start, at) = group_by(ends, robots);
+        let mut ends = Vec::with_capacity(2 * pairs.len());
+        for (e, &(a, b)) in (0u32..).zip(pairs) {
+            ends.push((a, e));
+            ends.push((b, e));
+        }
+        let (start, at) = group_by(&ends, robots);
         let mut used = vec![false; pairs.len()];
         // Per robot, the first of its segments that may still be unused.
         let mut next = start[..robots].to_vec();
-        let mut unused: Vec<usize> = start.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut unused: Vec<u32> = start.windows(2).map(|w| w[1] - w[0]).collect();
         let mut trails = Self::default();
         let odd: Vec<u32> = (0..robots as u32).filter(|&v| unused[v as usize] % 2 == 1).collect();
         let rest = 0..robots as u32;
@@ -1064,13 +1066,14 @@ impl Trails {
                 let mut v = first;
                 loop {
                     let row = v as usize;
-                    while next[row] < start[row + 1] && used[at[next[row]]] {
+                    let end = start[row + 1];
+                    while next[row] < end && used[at[next[row] as usize] as usize] {
                         next[row] += 1;
                     }
-                    if next[row] == start[row + 1] {
+                    if next[row] == end {
                         break;
                     }
-                    let e = at[next[row]];
+                    let e = at[next[row] as usize] as usize;
                     used[e] = true;
                     let (a, b) = pairs[e];
                     unused[a as usize] -= 1;
