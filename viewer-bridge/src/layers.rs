@@ -124,7 +124,15 @@ impl Raster {
     pub fn to_rgb(&self, empty: [u8; 3], full: [u8; 3]) -> Vec<u8> {
         let mut out = Vec::with_capacity(self.coverage.len() * 3);
         for &c in &self.coverage {
-            let c = c.clamp(0.0, 1.0);
+            // Most pixels are wholly free or wholly blocked: their colour needs no blend.
+            if c <= 0.0 {
+                out.extend_from_slice(&empty);
+                continue;
+            }
+            if c >= 1.0 {
+                out.extend_from_slice(&full);
+                continue;
+            }
             for k in 0..3 {
                 out.push((f32::from(empty[k]) * (1.0 - c) + f32::from(full[k]) * c + 0.5) as u8);
             }
