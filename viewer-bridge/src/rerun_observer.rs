@@ -921,8 +921,17 @@ fn log_robots(
         )
         .with_component_from_data("x", dense(&mut robots.iter().map(|r| r.position.x)))
         .with_component_from_data("y", dense(&mut robots.iter().map(|r| r.position.y)));
-    let mut points = rerun::Points2D::new(robots.iter().map(|r| to_2d(r.position)));
-    let mut points3d = rerun::Points3D::new(robots.iter().map(|r| [r.position.x as f32, r.position.y as f32, r.z_m]));
+    let positions: Vec<[f32; 2]> = robots.iter().map(|r| to_2d(r.position)).collect();
+    let positions =
+        vec_batch::<rerun::components::Position2D>(positions.as_flattened(), rerun::Points2D::descriptor_positions());
+    let positions3d: Vec<[f32; 3]> = robots
+        .iter()
+        .map(|r| [r.position.x as f32, r.position.y as f32, r.z_m])
+        .collect();
+    let positions3d =
+        vec_batch::<rerun::components::Position3D>(positions3d.as_flattened(), rerun::Points3D::descriptor_positions());
+    let mut points = rerun::Points2D::update_fields();
+    let mut points3d = rerun::Points3D::update_fields();
     if classes_changed {
         points = points.with_class_ids(last.classes.iter().copied());
         points3d = points3d.with_class_ids(last.classes.iter().copied());
@@ -930,8 +939,28 @@ fn log_robots(
     if loads_changed {
         points = points.with_labels(last.labels.iter().map(String::as_str));
     }
-    rec.log("world/robots", &[&points as &dyn rerun::AsComponents, &detail])?;
-    rec.log("world3d/robots", &points3d)
+    rec.log(
+        "world/robots",
+        &[&positions as &dyn rerun::AsComponents, &points, &detail],
+    )?;
+    rec.log("world3d/robots", &[&positions3d as &dyn rerun::AsComponents, &points3d])
+}
+
+/// A column of `Position2D`s or `Position3D`s (`C`) built as one arrow array from their
+/// coordinates in turn: the archetypes' builders convert point by point.
+fn vec_batch<C: rerun::Loggable>(
+    coords: &[f32],
+    descriptor: rerun::ComponentDescriptor,
+) -> rerun::SerializedComponentBatch {
+    use rerun::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array};
+    use rerun::external::arrow::datatypes::DataType;
+    use std::sync::Arc;
+
+    let DataType::FixedSizeList(item, dims) = C::arrow_datatype() else {
+        unreachable!("a position is a fixed-size list of floats")
+    };
+    let vectors = FixedSizeListArray::new(item, dims, Arc::new(Float32Array::from(coords.to_vec())), None);
+    rerun::SerializedComponentBatch::new(Arc::new(vectors) as ArrayRef, descriptor)
 }
 
 /// What does not change from round to round, logged once.
