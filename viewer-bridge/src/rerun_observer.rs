@@ -922,14 +922,18 @@ fn log_robots(
         .with_component_from_data("x", dense(&mut robots.iter().map(|r| r.position.x)))
         .with_component_from_data("y", dense(&mut robots.iter().map(|r| r.position.y)));
     let positions: Vec<[f32; 2]> = robots.iter().map(|r| to_2d(r.position)).collect();
-    let positions =
-        vec_batch::<rerun::components::Position2D>(positions.as_flattened(), rerun::Points2D::descriptor_positions());
+    let positions = rerun::SerializedComponentBatch::new(
+        Arc::new(vectors::<rerun::components::Position2D>(positions.into_flattened())) as ArrayRef,
+        rerun::Points2D::descriptor_positions(),
+    );
     let positions3d: Vec<[f32; 3]> = robots
         .iter()
         .map(|r| [r.position.x as f32, r.position.y as f32, r.z_m])
         .collect();
-    let positions3d =
-        vec_batch::<rerun::components::Position3D>(positions3d.as_flattened(), rerun::Points3D::descriptor_positions());
+    let positions3d = rerun::SerializedComponentBatch::new(
+        Arc::new(vectors::<rerun::components::Position3D>(positions3d.into_flattened())) as ArrayRef,
+        rerun::Points3D::descriptor_positions(),
+    );
     let mut points = rerun::Points2D::update_fields();
     let mut points3d = rerun::Points3D::update_fields();
     if classes_changed {
@@ -946,21 +950,17 @@ fn log_robots(
     rec.log("world3d/robots", &[&positions3d as &dyn rerun::AsComponents, &points3d])
 }
 
-/// A column of `Position2D`s or `Position3D`s (`C`) built as one arrow array from their
-/// coordinates in turn: the archetypes' builders convert point by point.
-fn vec_batch<C: rerun::Loggable>(
-    coords: &[f32],
-    descriptor: rerun::ComponentDescriptor,
-) -> rerun::SerializedComponentBatch {
-    use rerun::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array};
+/// The arrow array of a column of fixed-size float vectors `C` (`Vec2D`, `Position2D`,
+/// `Position3D`) from their coordinates in turn: one array for the column, where the
+/// archetypes' builders convert vector by vector.
+fn vectors<C: rerun::Loggable>(coords: Vec<f32>) -> rerun::external::arrow::array::FixedSizeListArray {
+    use rerun::external::arrow::array::{FixedSizeListArray, Float32Array};
     use rerun::external::arrow::datatypes::DataType;
-    use std::sync::Arc;
 
     let DataType::FixedSizeList(item, dims) = C::arrow_datatype() else {
-        unreachable!("a position is a fixed-size list of floats")
+        unreachable!("a vector is a fixed-size list of floats")
     };
-    let vectors = FixedSizeListArray::new(item, dims, Arc::new(Float32Array::from(coords.to_vec())), None);
-    rerun::SerializedComponentBatch::new(Arc::new(vectors) as ArrayRef, descriptor)
+    FixedSizeListArray::new(item, dims, std::sync::Arc::new(Float32Array::from(coords)), None)
 }
 
 /// What does not change from round to round, logged once.
@@ -1120,19 +1120,15 @@ impl Trails {
 /// The `LineStrip2D` column of strips of `lengths` points taken in turn from `points`, built
 /// as one arrow array: the archetype's builder makes a vector per strip, thousands a round.
 fn strips(points: &[[f32; 2]], lengths: impl Iterator<Item = usize>) -> rerun::SerializedComponentBatch {
-    use rerun::external::arrow::array::{ArrayRef, FixedSizeListArray, Float32Array, ListArray};
+    use rerun::external::arrow::array::{ArrayRef, ListArray};
     use rerun::external::arrow::buffer::OffsetBuffer;
     use rerun::external::arrow::datatypes::DataType;
     use std::sync::Arc;
 
-    let coords = Float32Array::from(points.as_flattened().to_vec());
-    let DataType::FixedSizeList(point_field, 2) = <rerun::datatypes::Vec2D as rerun::Loggable>::arrow_datatype() else {
-        unreachable!("a Vec2D is two floats")
-    };
+    let points = vectors::<rerun::datatypes::Vec2D>(points.as_flattened().to_vec());
     let DataType::List(strip_field) = <rerun::components::LineStrip2D as rerun::Loggable>::arrow_datatype() else {
         unreachable!("a LineStrip2D is a list of Vec2D")
     };
-    let points = FixedSizeListArray::new(point_field, 2, Arc::new(coords), None);
     let offsets = OffsetBuffer::from_lengths(lengths);
     let strips = ListArray::new(strip_field, offsets, Arc::new(points), None);
     rerun::SerializedComponentBatch::new(Arc::new(strips) as ArrayRef, rerun::LineStrips2D::descriptor_strips())
