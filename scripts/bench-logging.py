@@ -3,8 +3,10 @@
 
 For each config (default: configs/bench-1000.xml and configs/bench-10000.xml) it runs, in
 turn and PAIRS times, `smartteams run` headless (--no-viewer), to an .rrd file (--rrd) and
-live (--connect) to a `rerun server` it starts on a free port of 127.0.0.1 (and stops, by
-its process id, after each run, so every live run starts on an empty server). It prints the
+live (--connect) to a headless gRPC receiver, `rerun --serve-grpc`, that it starts on a free
+port of 127.0.0.1 (and stops, by its process id, after each run, so every live run starts on
+an empty receiver). A run that warns (a stream the receiver refused or cut) stops the
+benchmark: its time would not include sending. It prints the
 rounds/s of each (median, min-max), the ratios of the logged runs' wall time to the
 headless one's (median of the pairs), the simulation thread's share of logging against the
 headless round, and the recording's size.
@@ -52,7 +54,10 @@ def free_port():
 
 
 def run(binary, config, extra):
-    out = subprocess.run([binary, "run", str(config), *extra], capture_output=True, text=True, check=True).stdout
+    done = subprocess.run([binary, "run", str(config), *extra], capture_output=True, text=True, check=True)
+    if "warning" in done.stderr:
+        raise SystemExit(f"bench-logging: {' '.join(extra)}: {done.stderr.strip()}")
+    out = done.stdout
     m = re.search(r"(\d+) rounds with \d+ robots in ([0-9.]+) s", out)
     rounds, secs = int(m.group(1)), float(m.group(2))
     sim = re.search(r"logging ([0-9.]+) s on the simulation thread", out)
@@ -62,7 +67,10 @@ def run(binary, config, extra):
 def live_run(binary, rerun, config):
     port = free_port()
     server = subprocess.Popen(
-        [rerun, "server", "--host", "127.0.0.1", "-p", str(port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        # `rerun server` is a data server: it refuses a stream (the SDK then drops the data).
+        [rerun, "--serve-grpc", "--bind", "127.0.0.1", "--port", str(port)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
     )
     try:
         deadline = time.monotonic() + 30
@@ -72,7 +80,7 @@ def live_run(binary, rerun, config):
                 break
             except OSError:
                 if server.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError(f"rerun server did not start on port {port}")
+                    raise RuntimeError(f"rerun --serve-grpc did not start on port {port}")
                 time.sleep(0.05)
         return run(binary, config, [f"--connect=127.0.0.1:{port}"])
     finally:

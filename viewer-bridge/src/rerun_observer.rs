@@ -335,14 +335,14 @@ impl RerunObserver {
         std::mem::forget(self.rec.clone());
     }
 
-    /// How long metric values may wait before they are sent: for a file, as long as its
-    /// batcher holds rows ([`crate::viewer::file_batching`]); for a live viewer, Rerun's
-    /// default batching interval (its charts move five times a second; the world's rows go
-    /// out sooner).
+    /// How long metric values may wait before they are sent: as long as the stream's batcher
+    /// holds rows ([`crate::viewer::file_batching`] for a file,
+    /// [`crate::viewer::live_batching`] for a live viewer, whose charts then move five times a
+    /// second).
     fn metrics_window(&self) -> std::time::Duration {
         match self.when_behind {
             WhenBehind::Wait => crate::viewer::file_batching().flush_tick,
-            WhenBehind::SkipWorld => rerun::log::ChunkBatcherConfig::DEFAULT.flush_tick,
+            WhenBehind::SkipWorld => crate::viewer::live_batching().flush_tick,
         }
     }
 
