@@ -20,11 +20,11 @@
 //! The simulation thread copies each round into a frame; a logging thread builds the
 //! archetypes (see [`RerunObserver`]).
 
-use sim_core::engine::Simulation;
+use sim_core::engine::{CoreLoan, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::io::{Observer, ObserverError};
 use sim_core::spatial::{Aabb, RegionQuadtree};
-use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, RoundMetrics, RoundReport};
+use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, Robot, RobotType, RoundMetrics, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
 
@@ -160,6 +160,8 @@ pub struct RerunObserver {
     closing: std::time::Duration,
     /// Wall time the logging thread spent logging (known once it has finished).
     worker_busy: std::time::Duration,
+    /// The round's pollers' cores, lent to the logging thread while it has worlds to log.
+    core_loan: Option<std::sync::Arc<CoreLoan>>,
 }
 
 impl RerunObserver {
@@ -187,7 +189,17 @@ impl RerunObserver {
             busy: std::time::Duration::ZERO,
             closing: std::time::Duration::ZERO,
             worker_busy: std::time::Duration::ZERO,
+            core_loan: None,
         }
+    }
+
+    /// Lend `loan` to the logging thread from each logged world until it has logged all it
+    /// was given (see [`sim_core::engine::with_hot_workers_lending`]): with hot workers
+    /// polling on every core, the logging thread would otherwise wait for the scheduler to
+    /// take a core from one, and the round for the one it took.
+    pub fn with_core_loan(mut self, loan: std::sync::Arc<CoreLoan>) -> Self {
+        self.core_loan = Some(loan);
+        self
     }
 
     /// What to do when the logging thread falls behind (default [`WhenBehind::Wait`]).
@@ -237,14 +249,19 @@ impl RerunObserver {
 
     /// A copy of what the world shows after this round: rows and copies, so that the
     /// logging thread does the rest (rasters, coarse regions, sorting links) beside the next
-    /// round.
+    /// round. On a worker of the round's pool (the CLI's runs), two workers make the copies.
     fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
         let final_round = sim.round() >= sim.total_rounds();
-        let robots = robot_rows(sim);
-        let treasures = treasure_rows(sim);
-        let paths = planned_paths(sim);
-        let links =
-            report.map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), self.opts.max_links));
+        let max_links = self.opts.max_links;
+        // The robots and types are shared with the other worker; the simulation is not `Sync`.
+        let (robots, types) = (sim.robots(), sim.types());
+        let ((robots, paths), (treasures, links)) = beside_on_pool(
+            || (robot_rows(robots, types), planned_paths(robots)),
+            || {
+                let links = report.map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), max_links));
+                (treasure_rows(sim), links)
+            },
+        );
         let explored = self.explored_if_due(sim, final_round);
         let known = self.known_if_due(sim, final_round);
         World {
@@ -317,6 +334,9 @@ impl RerunObserver {
         }
         if frame.world.is_some() {
             self.logged_rounds += 1;
+            if let Some(loan) = &self.core_loan {
+                loan.lend();
+            }
         }
         if tx.send(frame).is_err() {
             // The thread stopped: its result says why.
@@ -357,6 +377,21 @@ impl RerunObserver {
         }
         Ok(())
     }
+}
+
+/// `a` (offered to the pool's other workers) beside `b` (on this thread) when called on a
+/// rayon worker, such as the pool running the rounds; one after the other elsewhere (no pool
+/// is started for them).
+fn beside_on_pool<A: Send, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B) -> (A, B) {
+    if rayon::current_thread_index().is_none() {
+        return (a(), b());
+    }
+    let mut out_a = None;
+    let out_b = rayon::in_place_scope(|scope| {
+        scope.spawn(|_| out_a = Some(a()));
+        b()
+    });
+    (out_a.expect("the scope ran `a`"), out_b)
 }
 
 /// One round as the logging thread needs it: owned copies, no references into the simulation.
@@ -417,16 +452,16 @@ struct KnownRegion {
 }
 
 /// One row per robot: what the world shows of it.
-fn robot_rows(sim: &Simulation) -> Vec<RobotRow> {
-    sim.robots()
+fn robot_rows(robots: &[Robot], types: &[RobotType]) -> Vec<RobotRow> {
+    robots
         .iter()
         .map(|r| RobotRow {
             id: r.id.get(),
             type_index: r.type_index,
-            class: class_of(sim, r.type_index, r.alive),
+            class: class_of(types, r.type_index, r.alive),
             alive: r.alive,
             position: r.position,
-            z_m: sim.types()[r.type_index].radius_m as f32,
+            z_m: types[r.type_index].radius_m as f32,
             energy: r.energy,
             action: r.last_action.0.name(),
             outcome: r.last_action.1,
@@ -461,9 +496,9 @@ struct Paths {
     points: Vec<[f32; 2]>,
 }
 
-fn planned_paths(sim: &Simulation) -> Paths {
+fn planned_paths(robots: &[Robot]) -> Paths {
     let mut paths = Paths::default();
-    for r in sim.robots().iter().filter(|r| r.alive && !r.path.is_empty()) {
+    for r in robots.iter().filter(|r| r.alive && !r.path.is_empty()) {
         paths.classes.push(r.type_index as u16);
         paths.lengths.push(r.path.len() + 1);
         paths.points.push(to_2d(r.position));
@@ -563,12 +598,8 @@ pub fn sample_links<I: Iterator<Item = Link>>(
 }
 
 /// The class id of a robot of type `type_index` (disabled robots share one extra class).
-fn class_of(sim: &Simulation, type_index: usize, alive: bool) -> u16 {
-    if alive {
-        type_index as u16
-    } else {
-        sim.types().len() as u16
-    }
+fn class_of(types: &[RobotType], type_index: usize, alive: bool) -> u16 {
+    if alive { type_index as u16 } else { types.len() as u16 }
 }
 
 /// Colours of robot types, cycled.
@@ -611,7 +642,10 @@ fn log_frames(
     frames: &crossbeam_channel::Receiver<Frame>,
     mut logger: Logger,
     progress: &Progress,
+    loan: Option<&CoreLoan>,
 ) -> rerun::RecordingStreamResult<std::time::Duration> {
+    // The cores go back when the queue is empty, and whenever this thread stops.
+    let _give_back = GiveBackOnDrop(loan);
     let mut busy = std::time::Duration::ZERO;
     for frame in frames {
         let t0 = std::time::Instant::now();
@@ -629,10 +663,22 @@ fn log_frames(
         }
         busy += t0.elapsed();
         progress.tick();
+        if frames.is_empty() {
+            loan.map(CoreLoan::give_back);
+        }
     }
     // The queue closed: the run ended (or stopped), so nothing may stay buffered.
     logger.metrics.send(rec)?;
     Ok(busy)
+}
+
+/// Gives the loan back when dropped.
+struct GiveBackOnDrop<'a>(Option<&'a CoreLoan>);
+
+impl Drop for GiveBackOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.map(CoreLoan::give_back);
+    }
 }
 
 /// The metric values of the rounds not sent yet, a column per metric, sent as one chunk per
@@ -1178,6 +1224,7 @@ impl Observer for RerunObserver {
         let rec = self.rec.clone();
         let logger = Logger::new(sim, &self.opts, self.metrics_window());
         let progress = std::sync::Arc::clone(&self.progress);
+        let loan = self.core_loan.clone();
         progress.tick();
         let map = sim.shared_map();
         self.worker = Some(
@@ -1188,7 +1235,7 @@ impl Observer for RerunObserver {
                     // The map's raster and outlines are built here, beside the first rounds.
                     layers::log_static_map(&rec, &map)?;
                     drop(map);
-                    log_frames(&rec, &rx, logger, &progress)
+                    log_frames(&rec, &rx, logger, &progress, loan.as_deref())
                 })?,
         );
         self.frames = Some(tx);

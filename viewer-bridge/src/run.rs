@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result};
 use sim_core::agent::StrategyRegistry;
-use sim_core::engine::{Simulation, TurnSharing, with_hot_workers};
+use sim_core::engine::{CoreLoan, Simulation, TurnSharing, with_hot_workers_lending};
 use sim_core::io::Observer;
 use sim_core::io::{Checkpoint, CheckpointWriter, RunSource, SimConfig};
 use sim_core::io::{MetricsCsv, write_robot_stats};
@@ -218,11 +218,15 @@ pub fn execute(
     let setup = started.elapsed();
     let mut outputs = Outputs::open(run, &sim, resumed)?;
     let pool = start_workers(run.threads)?;
-    // With nothing to log, the workers keep their cores between rounds (see
-    // `with_hot_workers`); a recording's logging thread needs a core of its own.
-    let hot = outputs.rerun.is_none() && extra.is_empty();
+    // The workers keep their cores between rounds (see `with_hot_workers`), lending them to
+    // the recording's logging thread while it has work; viewers of the caller's are not
+    // known to lend them back, so with those the workers sleep between parallel steps.
+    let loan = extra.is_empty().then(|| Arc::new(CoreLoan::default()));
+    if let (Some(rerun), Some(loan)) = (outputs.rerun.take(), &loan) {
+        outputs.rerun = Some(rerun.with_core_loan(Arc::clone(loan)));
+    }
     let t0 = Instant::now();
-    let result = run_rounds(&mut sim, &pool, hot, &mut outputs.observers(extra));
+    let result = run_rounds(&mut sim, &pool, loan.as_deref(), &mut outputs.observers(extra));
     let elapsed = t0.elapsed();
     // Whatever happened, keep the outputs of the rounds that were played; a run stopped by
     // a signal also writes its checkpoint, whatever the round.
@@ -433,18 +437,18 @@ pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
 /// stop signal ([`crate::stop`]): the round in progress is finished, and the observers are
 /// told the run ended either way. Returns the signal, if one stopped the run.
 ///
-/// `hot`: the whole loop runs on the pool with its workers kept awake between parallel
-/// steps ([`with_hot_workers`]), as `smartteams-bench` runs; otherwise each round wakes
-/// them. The results are the same.
+/// With a `loan`, the whole loop runs on the pool with its workers kept awake between
+/// parallel steps and lending their cores on `loan` ([`with_hot_workers_lending`]), as
+/// `smartteams-bench` runs; otherwise each round wakes them. The results are the same.
 fn run_rounds(
     sim: &mut Simulation,
     pool: &rayon::ThreadPool,
-    hot: bool,
+    loan: Option<&CoreLoan>,
     observers: &mut [&mut (dyn Observer + Send)],
 ) -> Result<Option<Signal>, sim_core::io::ObserverError> {
-    if hot {
+    if let Some(loan) = loan {
         pool.install(|| {
-            with_hot_workers(|| {
+            with_hot_workers_lending(loan, || {
                 play_rounds(sim, observers, |sim| {
                     sim.step();
                 })

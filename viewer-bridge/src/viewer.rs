@@ -117,10 +117,23 @@ pub fn open(
     Ok(rec)
 }
 
-/// Lower the calling thread's scheduling priority to the least (nice 19 on Linux): logging
-/// runs beside the rounds without taking their cores. Where that is not allowed, nothing.
+/// Lower the calling thread's scheduling priority to the least: logging runs beside the
+/// rounds without taking their cores. On Linux that is `SCHED_IDLE`, which a waking round
+/// thread preempts at once (a nice-19 thread keeps the core to the end of its slice, about a
+/// millisecond, while the round waits for the thread it holds up); elsewhere the lowest
+/// priority. Where neither is allowed, nothing.
 pub fn lower_priority() {
-    let _ = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
+    #[cfg(target_os = "linux")]
+    let idle = thread_priority::set_thread_priority_and_policy(
+        thread_priority::thread_native_id(),
+        thread_priority::ThreadPriority::Min,
+        thread_priority::ThreadSchedulePolicy::Normal(thread_priority::NormalThreadSchedulePolicy::Idle),
+    );
+    #[cfg(not(target_os = "linux"))]
+    let idle: Result<(), ()> = Err(());
+    if idle.is_err() {
+        let _ = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
+    }
 }
 
 /// The stream of `builder` to `target`.

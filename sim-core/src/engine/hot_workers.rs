@@ -4,19 +4,17 @@
 //! with sequential ones (step 3, the robot index). Between parallel steps rayon's idle
 //! workers go to sleep, and the next step waits for them to wake, which is long against a
 //! short round. [`with_hot_workers`] keeps them polling for work instead, at the price of a
-//! busy core during the sequential steps.
+//! busy core during the sequential steps. A [`CoreLoan`] lets another thread (a recording's
+//! logging thread) have the pollers' cores while it has work.
 
 use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Condvar, Mutex, PoisonError};
 
 thread_local! {
     /// This thread is polling for work in [`with_hot_workers`] already.
     static POLLING: Cell<bool> = const { Cell::new(false) };
 }
-
-/// Jobs the pollers ran, for the tests to see that they took part.
-#[cfg(test)]
-static POLLED_JOBS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// Run `f` with the current rayon pool's other workers kept awake: each polls for work
 /// (executing any it finds, as an idle worker would after waking) until `f` returns or
@@ -37,6 +35,25 @@ static POLLED_JOBS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64:
 /// assert_eq!(sum, 499_500);
 /// ```
 pub fn with_hot_workers<R>(f: impl FnOnce() -> R) -> R {
+    with_hot_workers_lending(&CoreLoan::default(), f)
+}
+
+/// [`with_hot_workers`] whose pollers sleep while `loan` is lent
+/// ([`CoreLoan::lend`]): the caller then runs the parallel steps' jobs alone (rayon's
+/// `join` runs what nobody took), and the borrower has the pollers' cores without waiting
+/// for the scheduler to take them from busy pollers. Results do not change
+/// (`lent_pollers_run_no_job_and_come_back_when_given_back`).
+///
+/// ```
+/// use rayon::prelude::*;
+/// use sim_core::engine::{CoreLoan, with_hot_workers_lending};
+/// let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+/// let loan = CoreLoan::default();
+/// loan.lend();
+/// let sum: u64 = pool.install(|| with_hot_workers_lending(&loan, || (0..1000u64).into_par_iter().sum()));
+/// assert_eq!(sum, 499_500);
+/// ```
+pub fn with_hot_workers_lending<R>(loan: &CoreLoan, f: impl FnOnce() -> R) -> R {
     // At most one core each besides the caller's: on a pool with more threads than cores,
     // pollers would take turns on the cores with the caller's sequential steps.
     let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
@@ -48,35 +65,89 @@ pub fn with_hot_workers<R>(f: impl FnOnce() -> R) -> R {
     let stop = AtomicBool::new(false);
     rayon::in_place_scope(|scope| {
         for _ in 0..pollers {
-            scope.spawn(|_| poll(&stop, caller));
+            scope.spawn(|_| poll(&stop, loan, caller));
         }
         // Stops the pollers however `f` ends (the scope waits for them).
-        let _stop = StopOnDrop(&stop);
+        let _stop = StopOnDrop { stop: &stop, loan };
         f()
     })
 }
 
-/// Sets the flag when dropped.
-struct StopOnDrop<'a>(&'a AtomicBool);
+/// The cores of [`with_hot_workers_lending`]'s pollers, lent to another thread while it has
+/// work: [`lend`](Self::lend) when work is handed to that thread, [`give_back`](Self::give_back)
+/// when it has none left. Not lent when made.
+#[derive(Debug, Default)]
+pub struct CoreLoan {
+    lent: AtomicBool,
+    /// Held while the flag is cleared or a poller decides to sleep, so no wake-up is missed.
+    lock: Mutex<()>,
+    given_back: Condvar,
+    /// Jobs the pollers ran, for the tests to see whether they took part.
+    #[cfg(test)]
+    polled_jobs: std::sync::atomic::AtomicU64,
+}
+
+impl CoreLoan {
+    /// Lend the pollers' cores: each poller goes to sleep once it has finished the job it
+    /// runs. O(1).
+    pub fn lend(&self) {
+        self.lent.store(true, Ordering::Release);
+    }
+
+    /// Take the cores back: sleeping pollers wake and poll again.
+    pub fn give_back(&self) {
+        if self.lent.swap(false, Ordering::AcqRel) {
+            self.wake_all();
+        }
+    }
+
+    /// Whether the cores are lent.
+    pub fn is_lent(&self) -> bool {
+        self.lent.load(Ordering::Acquire)
+    }
+
+    /// Sleep while the cores are lent and `stop` is not set.
+    fn sleep_while_lent(&self, stop: &AtomicBool) {
+        let guard = self.lock.lock().unwrap_or_else(PoisonError::into_inner);
+        let _guard = self
+            .given_back
+            .wait_while(guard, |()| self.is_lent() && !stop.load(Ordering::Acquire))
+            .unwrap_or_else(PoisonError::into_inner);
+    }
+
+    fn wake_all(&self) {
+        let _guard = self.lock.lock().unwrap_or_else(PoisonError::into_inner);
+        self.given_back.notify_all();
+    }
+}
+
+/// Stops the pollers when dropped, waking those asleep on the loan.
+struct StopOnDrop<'a> {
+    stop: &'a AtomicBool,
+    loan: &'a CoreLoan,
+}
 
 impl Drop for StopOnDrop<'_> {
     fn drop(&mut self) {
-        self.0.store(true, Ordering::Release);
+        self.stop.store(true, Ordering::Release);
+        self.loan.wake_all();
     }
 }
 
 /// Execute pool work as it appears until `stop`. Returns at once on the thread that runs
 /// `f` (`caller`: it would wait here for itself) and on a thread polling already (one
 /// poller a thread is enough), so that no thread can end up waiting on work it holds up.
-fn poll(stop: &AtomicBool, caller: Option<usize>) {
+fn poll(stop: &AtomicBool, loan: &CoreLoan, caller: Option<usize>) {
     if rayon::current_thread_index() == caller || POLLING.with(Cell::get) {
         return;
     }
     POLLING.with(|p| p.set(true));
     while !stop.load(Ordering::Acquire) {
-        if rayon::yield_now() == Some(rayon::Yield::Executed) {
+        if loan.is_lent() {
+            loan.sleep_while_lent(stop);
+        } else if rayon::yield_now() == Some(rayon::Yield::Executed) {
             #[cfg(test)]
-            POLLED_JOBS.fetch_add(1, Ordering::Relaxed);
+            loan.polled_jobs.fetch_add(1, Ordering::Relaxed);
         } else {
             std::hint::spin_loop();
         }
@@ -91,7 +162,7 @@ mod tests {
 
     use rayon::prelude::*;
 
-    use super::{POLLED_JOBS, with_hot_workers};
+    use super::{CoreLoan, with_hot_workers, with_hot_workers_lending};
 
     /// Runs `f` on its own thread and fails if it has not returned within `limit`: a job
     /// lost between the pollers would otherwise hang the test run.
@@ -146,28 +217,62 @@ mod tests {
         assert_eq!(ran.load(Ordering::Relaxed), 100);
     }
 
+    fn cores() -> usize {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    }
+
     /// Nested parallel work inside `with_hot_workers` gives what it gives without it, on
     /// pools of one to four threads (a lost job would hang or change the sums); where a
     /// core is free for one, the poller runs some of the jobs; a panic stops the pollers.
-    /// One test, so that no other test's pollers add to the count of polled jobs.
     #[test]
     fn hot_workers_run_every_job_take_part_and_stop_after_a_panic() {
         within(Duration::from_mins(2), || {
-            let cores = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
             for threads in 1..=4 {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let want = pool.install(nested_sums);
-                let polled_before = POLLED_JOBS.load(Ordering::Relaxed);
-                let got = pool.install(|| with_hot_workers(nested_sums));
-                let polled = POLLED_JOBS.load(Ordering::Relaxed) - polled_before;
+                let loan = CoreLoan::default();
+                let got = pool.install(|| with_hot_workers_lending(&loan, nested_sums));
+                let polled = loan.polled_jobs.load(Ordering::Relaxed);
                 assert_eq!(got, want, "{threads} threads");
                 // With a core for each, the pool's one other worker is the poller: it takes
                 // part. (With more threads than cores, sleeping workers may take every job.)
-                if threads == 2 && cores >= 2 {
+                if threads == 2 && cores() >= 2 {
                     assert!(polled > 0, "{threads} threads: the poller ran no job");
                 }
                 a_panic_reaches_the_caller(threads);
             }
+        });
+    }
+
+    /// While the loan is lent the poller sleeps: the caller runs every job, with the same
+    /// sums; given back, the poller takes part again; a loan never given back does not keep
+    /// the pollers from stopping.
+    #[test]
+    fn lent_pollers_run_no_job_and_come_back_when_given_back() {
+        within(Duration::from_mins(2), || {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+            let want = pool.install(nested_sums);
+            let loan = CoreLoan::default();
+            loan.lend();
+            let (lent, polled_while_lent, given_back) = pool.install(|| {
+                with_hot_workers_lending(&loan, || {
+                    let lent = nested_sums();
+                    let polled = loan.polled_jobs.load(Ordering::Relaxed);
+                    loan.give_back();
+                    (lent, polled, nested_sums())
+                })
+            });
+            assert_eq!(lent, want);
+            assert_eq!(polled_while_lent, 0, "a poller ran jobs on lent cores");
+            assert_eq!(given_back, want);
+            if cores() >= 2 {
+                assert!(
+                    loan.polled_jobs.load(Ordering::Relaxed) > 0,
+                    "the poller never came back"
+                );
+            }
+            loan.lend();
+            assert_eq!(pool.install(|| with_hot_workers_lending(&loan, nested_sums)), want);
         });
     }
 }

@@ -8,7 +8,7 @@ mod round;
 mod scenario;
 mod simulation;
 
-pub use hot_workers::with_hot_workers;
+pub use hot_workers::{CoreLoan, with_hot_workers, with_hot_workers_lending};
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
 pub use simulation::{
