@@ -290,9 +290,11 @@ impl RerunObserver {
         Some(sim.explored().tree().clone())
     }
 
-    /// Copies of the known maps that changed since they were last logged, every
+    /// The coarse regions of the known maps that changed since they were last logged, every
     /// `known_every` rounds and at the final round (`None` in between or when known regions
-    /// are off).
+    /// are off). The regions are worked out here, on the round's workers, rather than trees
+    /// copied for the logging thread: a region is a few dozen boxes, a tree thousands of
+    /// nodes.
     fn known_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<Vec<ChangedKnown>> {
         let round = sim.round();
         match self.opts.known_every {
@@ -304,11 +306,13 @@ impl RerunObserver {
                     if let Some(d) = dirty.filter(|d| **d) {
                         *d = false;
                         if let Some(map) = sim.known_map(robot.id) {
-                            changed.push((robot.id.index(), map.tree().clone()));
+                            changed.push((robot.id.index(), map.tree()));
                         }
                     }
                 }
-                Some(changed)
+                Some(map_on_pool(&changed, |&(i, tree)| {
+                    (i, layers::coarse_known_boxes(tree))
+                }))
             }
             _ => None,
         }
@@ -394,6 +398,17 @@ fn beside_on_pool<A: Send, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> 
     (out_a.expect("the scope ran `a`"), out_b)
 }
 
+/// `f` of each item, in order: spread over the pool's workers when called on a rayon worker,
+/// one after the other elsewhere (no pool is started for them).
+fn map_on_pool<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync + Send) -> Vec<U> {
+    use rayon::prelude::*;
+    if rayon::current_thread_index().is_some() {
+        items.par_iter().map(f).collect()
+    } else {
+        items.iter().map(f).collect()
+    }
+}
+
 /// One round as the logging thread needs it: owned copies, no references into the simulation.
 struct Frame {
     round: u64,
@@ -419,8 +434,9 @@ struct World {
     cell_m: f64,
 }
 
-/// A robot (by index) whose known map changed, and a copy of its tree.
-type ChangedKnown = (usize, RegionQuadtree);
+/// A robot (by index) whose known map changed, and its coarse region
+/// ([`layers::coarse_known_boxes`]).
+type ChangedKnown = (usize, Vec<Aabb>);
 
 struct RobotRow {
     id: u32,
@@ -782,7 +798,7 @@ impl Logger {
         if let Some(tree) = &world.explored {
             self.log_explored(rec, tree)?;
         }
-        if let Some(changed) = &world.known {
+        if let Some(changed) = world.known.take() {
             for region in self.known_regions(changed, &world.robots) {
                 log_known_region(rec, &region)?;
             }
@@ -830,17 +846,16 @@ impl Logger {
 
     /// The known regions to log: those of the changed robots whose coarse region changed, as
     /// an entity each or, in large swarms, as the whole region set of each type with a change.
-    fn known_regions(&mut self, changed: &[ChangedKnown], robots: &[RobotRow]) -> Vec<KnownRegion> {
+    fn known_regions(&mut self, changed: Vec<ChangedKnown>, robots: &[RobotRow]) -> Vec<KnownRegion> {
         let per_robot = robots.len() <= self.known_per_robot_max;
         let mut known = Vec::new();
         let mut type_changed = vec![false; self.type_names.len()];
-        for (i, tree) in changed {
-            let boxes = layers::coarse_known_boxes(tree);
-            if self.known_logged[*i] == boxes {
+        for (i, boxes) in changed {
+            if self.known_logged[i] == boxes {
                 continue;
             }
-            self.known_logged[*i].clone_from(&boxes);
-            let robot = &robots[*i];
+            self.known_logged[i].clone_from(&boxes);
+            let robot = &robots[i];
             if per_robot {
                 known.push(KnownRegion {
                     entity: format!("world/known/{}", robot.id).into(),
