@@ -331,6 +331,11 @@ impl RerunObserver {
                 if self.progress.idle() >= STALL_TIMEOUT {
                     frame.world = None;
                     self.skipped_rounds += 1;
+                    // A stalled logging thread has no use for the cores: the rounds take
+                    // them back until a world is logged again.
+                    if let Some(loan) = &self.core_loan {
+                        loan.give_back();
+                    }
                     break;
                 }
                 std::thread::sleep(std::time::Duration::from_micros(200));
