@@ -80,7 +80,7 @@ pub(crate) fn file_batching() -> rerun::log::ChunkBatcherConfig {
 }
 
 /// How Rerun groups rows into chunks for a live viewer: Rerun's default (rows wait at most
-/// 200 ms, or until 1 MiB has gathered) rather than the SDK's low-latency setting for gRPC
+/// 200 ms, or until 2 MiB have gathered) rather than the SDK's low-latency setting for gRPC
 /// (8 ms), which makes a chunk of nearly every row of a fast run and costs more to encode and
 /// send than the rows themselves. The charts' values wait as long
 /// ([`crate::rerun_observer::RerunObserver`]'s metrics window). Being explicit, it is not
