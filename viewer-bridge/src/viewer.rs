@@ -168,21 +168,50 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             if !reachable {
                 bail!("no Rerun viewer listens at {url}: start one (`rerun`) or use --spawn / --rrd");
             }
-            builder
+            let rec = builder
                 .batcher_config(live_batching())
                 .connect_grpc_opts(url.clone())
-                .with_context(|| format!("cannot connect to {url}"))?
+                .with_context(|| format!("cannot connect to {url}"))?;
+            check_receiver(&rec, url)?;
+            rec
         }
-        ViewerTarget::Spawn { port } => builder
-            .batcher_config(live_batching())
-            .spawn_opts(&rerun::SpawnOptions {
-                port: *port,
-                ..rerun::SpawnOptions::default()
-            })
-            .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?,
+        ViewerTarget::Spawn { port } => {
+            let rec = builder
+                .batcher_config(live_batching())
+                .spawn_opts(&rerun::SpawnOptions {
+                    port: *port,
+                    ..rerun::SpawnOptions::default()
+                })
+                .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?;
+            // Something else may be listening on the port (a viewer there is used instead).
+            check_receiver(&rec, &format!("rerun+http://127.0.0.1:{port}/proxy"))?;
+            rec
+        }
     };
     Ok(rec)
 }
+
+/// Fail if the server at `url` refuses the stream, as `rerun server` (a data server, not a
+/// viewer's proxy) does: the SDK would otherwise drop every round and say so only at the
+/// end. The refusal comes back a moment after the first messages, so the stream is flushed
+/// twice, [`REFUSAL_WAIT`] apart (at most a second each). A receiver slow to take the first
+/// messages is not an error here: the end of the run copes with it.
+fn check_receiver(rec: &rerun::RecordingStream, url: &str) -> Result<()> {
+    for wait in [Duration::ZERO, REFUSAL_WAIT] {
+        std::thread::sleep(wait);
+        if let Err(rerun::sink::SinkFlushError::Failed { message }) = rec.flush_with_timeout(Duration::from_secs(1)) {
+            bail!(
+                "{url} refused the stream: it is not a viewer (`rerun server` is a data server); \
+                 stream to a viewer (`rerun`) or a headless receiver (`rerun --serve-grpc`) ({message})"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// How long [`check_receiver`] gives a server to refuse a stream (a loopback server answers
+/// within milliseconds).
+const REFUSAL_WAIT: Duration = Duration::from_millis(100);
 
 #[cfg(test)]
 mod tests {

@@ -456,27 +456,34 @@ fn view_logs_the_maps_cells() {
 /// second later), and a second receiver handed the same port would fail to bind while the
 /// first one's listener made it look started.
 fn receiver(python: &Path, save: &Path) -> (Child, u16) {
-    static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
-    let _one_at_a_time = STARTING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    // A port picked free can be taken again before the receiver binds it (a receiver just
-    // killed by another test may still hold it): then the receiver exits, and a new port
-    // is tried.
-    for _ in 0..5 {
-        let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
-        let mut child = Command::new(rerun_bin(python))
+    listening_on_a_free_port(|port| {
+        Command::new(rerun_bin(python))
             .args(["--bind", "127.0.0.1", "--port", &port.to_string(), "--save"])
             .arg(save)
             .stdout(Stdio::null())
             .stderr(Stdio::null())
             .spawn()
-            .unwrap();
+            .unwrap()
+    })
+}
+
+/// A process `start`ed on a free local port, once it listens there.
+fn listening_on_a_free_port(start: impl Fn(u16) -> Child) -> (Child, u16) {
+    static STARTING: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _one_at_a_time = STARTING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    // A port picked free can be taken again before the process binds it (a receiver just
+    // killed by another test may still hold it): then the process exits, and a new port
+    // is tried.
+    for _ in 0..5 {
+        let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+        let mut child = start(port);
         if listening(&mut child, port) {
             return (child, port);
         }
         let _ = child.kill();
         let _ = child.wait();
     }
-    panic!("no rerun receiver started in 5 attempts");
+    panic!("no rerun process started listening in 5 attempts");
 }
 
 /// Whether `child` listens on `port` within 30 s, and still does a moment later.
@@ -751,6 +758,46 @@ fn bad_viewer_options_are_clear_errors() {
     // as free could be taken meanwhile by another test's receiver.
     let err = run(&["--connect=127.0.0.1:1"]);
     assert!(err.contains("no Rerun viewer listens"), "{err}");
+}
+
+/// `--connect` to a `rerun server` (a data server, which refuses streams) fails at once
+/// with an error naming the address and what to stream to, instead of playing the rounds
+/// and losing them.
+#[test]
+fn a_server_that_refuses_the_stream_is_a_clear_error_before_any_round() {
+    let Some(python) = python("a_server_that_refuses_the_stream_is_a_clear_error_before_any_round") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (mut server, port) = listening_on_a_free_port(|port| {
+        Command::new(rerun_bin(&python))
+            .args(["server", "--host", "127.0.0.1", "-p", &port.to_string()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    });
+    let metrics = dir.path().join("m.csv");
+    let out = demo_run(100_000)
+        .arg(format!("--connect=127.0.0.1:{port}"))
+        .arg("--metrics")
+        .arg(&metrics)
+        .output()
+        .unwrap();
+    server.kill().unwrap();
+    server.wait().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!("127.0.0.1:{port}"))
+            && err.contains("refused the stream")
+            && err.contains("rerun --serve-grpc"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    // No round was played: the metrics file holds its header at most.
+    let rows = std::fs::read_to_string(&metrics).unwrap_or_default().lines().count();
+    assert!(rows <= 1, "{rows} lines of metrics");
 }
 
 /// Ctrl-C on a run streaming to a live viewer ends the stream as the end of a run does:
