@@ -222,8 +222,8 @@ pub fn execute(
     // the recording's logging thread while it has work; viewers of the caller's are not
     // known to lend them back, so with those the workers sleep between parallel steps.
     let loan = extra.is_empty().then(|| Arc::new(CoreLoan::default()));
-    if let (Some(rerun), Some(loan)) = (outputs.rerun.take(), &loan) {
-        outputs.rerun = Some(rerun.with_core_loan(Arc::clone(loan)));
+    if let Some(loan) = &loan {
+        outputs.rerun = outputs.rerun.take().map(|r| r.with_core_loan(Arc::clone(loan)));
     }
     let t0 = Instant::now();
     let result = run_rounds(&mut sim, &pool, loan.as_deref(), &mut outputs.observers(extra));

@@ -117,6 +117,48 @@ fn through_library(g: &Golden, threads: usize) -> Outcome {
     csv_crcs(dir.path(), summary.digest)
 }
 
+/// Counts the rounds it is told of.
+struct Rounds(u64);
+
+impl sim_core::io::Observer for Rounds {
+    fn on_round(
+        &mut self,
+        _sim: &sim_core::engine::Simulation,
+        _report: &sim_core::world::RoundReport,
+    ) -> Result<(), sim_core::io::ObserverError> {
+        self.0 += 1;
+        Ok(())
+    }
+}
+
+/// A caller's own observer runs beside the run's recording: both see every round, and the
+/// digest is the one without them.
+#[test]
+fn a_callers_observer_and_the_recording_both_see_every_round() {
+    let g = &GOLDEN[0];
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("run.rrd");
+    let mut argv = vec!["smartteams".to_owned()];
+    argv.extend(run_args(g, 2, dir.path()).into_iter().filter(|a| a != "--no-viewer"));
+    argv.extend(["--quiet".to_owned(), "--rrd".to_owned(), rrd.display().to_string()]);
+    let Command::Run(args) = Cli::try_parse_from(argv).unwrap().command else {
+        unreachable!("a run command")
+    };
+    let run = args.resolve().unwrap();
+    let mut rounds = Rounds(0);
+    let summary = execute(&run, &StrategyRegistry::with_builtins(), &mut [&mut rounds]).unwrap();
+    assert_eq!(rounds.0, g.rounds);
+    let recording = summary.recording.expect("the run was recorded");
+    assert_eq!(recording.logged_rounds, g.rounds + 1, "round 0 and every round after");
+    assert!(std::fs::metadata(&rrd).unwrap().len() > 0);
+    let want = Outcome {
+        digest: g.digest,
+        metrics_crc: g.metrics_crc,
+        robots_crc: g.robots_crc,
+    };
+    assert_eq!(csv_crcs(dir.path(), summary.digest), want);
+}
+
 /// Through the binary, reading the digest from its summary.
 fn through_binary(g: &Golden, threads: usize) -> Outcome {
     let dir = tempfile::tempdir().unwrap();
