@@ -292,9 +292,8 @@ impl RerunObserver {
 
     /// The coarse regions of the known maps that changed since they were last logged, every
     /// `known_every` rounds and at the final round (`None` in between or when known regions
-    /// are off). The regions are worked out here, on the round's workers, rather than trees
-    /// copied for the logging thread: a region is a few dozen boxes, a tree thousands of
-    /// nodes.
+    /// are off). Worked out here, on the round's workers, so that a frame carries a few dozen
+    /// boxes a robot, not a tree of thousands of nodes.
     fn known_if_due(&mut self, sim: &Simulation, final_round: bool) -> Option<Vec<ChangedKnown>> {
         let round = sim.round();
         match self.opts.known_every {
