@@ -33,17 +33,6 @@ pub(crate) struct Entry {
     pub(crate) cell: (i32, i32),
 }
 
-impl Entry {
-    /// Whether this entry of a run given with `cell` (see
-    /// [`RobotIndex::for_each_run_near`]) is a robot within the closed disc of squared
-    /// radius `r2` around `p`, as [`RobotIndex::for_each_within`] decides.
-    #[inline]
-    pub(crate) fn is_within(&self, cell: Option<(i32, i32)>, p: DVec2, r2: f64) -> bool {
-        // Other cells may share a hashed bucket; each robot belongs to its own cell's run.
-        cell.is_none_or(|c| self.cell == c) && self.position.distance_squared(p) <= r2
-    }
-}
-
 /// How cells map to buckets.
 #[derive(Clone, Copy, Debug)]
 enum Layout {
@@ -65,6 +54,10 @@ pub struct RobotIndex {
     /// `starts[b]..starts[b + 1]` are bucket b's entries.
     starts: Vec<u32>,
     entries: Vec<Entry>,
+    /// The entries' x and y, in their order: a query's distance test reads these columns,
+    /// 64 robots a mask, without a branch per robot.
+    xs: Vec<f64>,
+    ys: Vec<f64>,
     scratch: Vec<(u32, Entry)>,
 }
 
@@ -74,6 +67,33 @@ pub struct RobotIndex {
 fn cell_at(p: DVec2, cell_m: f64) -> (i32, i32) {
     // `as` saturates, so far-away or non-finite positions land in edge cells, never UB.
     (floor(p.x / cell_m) as i32, floor(p.y / cell_m) as i32)
+}
+
+/// Bit k set where point k of the columns (at most 64) is within the closed disc of squared
+/// radius `r2` around `p`, as `position.distance_squared(p) <= r2` decides it, bit for bit
+/// (the same differences, products and sum), without a branch.
+#[inline]
+fn within_mask(xs: &[f64], ys: &[f64], p: DVec2, r2: f64) -> u64 {
+    debug_assert!(xs.len() <= 64 && xs.len() == ys.len());
+    let test = |x: f64, y: f64| {
+        let (dx, dy) = (x - p.x, y - p.y);
+        dx * dx + dy * dy <= r2
+    };
+    let mut bits = 0u64;
+    let (xc, yc) = (xs.chunks_exact(8), ys.chunks_exact(8));
+    let done = xs.len() - xc.remainder().len();
+    for (c, (x8, y8)) in xc.zip(yc).enumerate() {
+        // Eight at a time, in lanes the compiler packs into vector compares.
+        let mut byte = 0u8;
+        for k in 0..8 {
+            byte |= u8::from(test(x8[k], y8[k])) << k;
+        }
+        bits |= u64::from(byte) << (8 * c);
+    }
+    for k in done..xs.len() {
+        bits |= u64::from(test(xs[k], ys[k])) << k;
+    }
+    bits
 }
 
 /// The corners `lo`, `hi` of a rectangle of cells grown to hold `cell`.
@@ -101,6 +121,8 @@ impl RobotIndex {
             dense_allowed: false,
             starts: vec![0, 0],
             entries: Vec::new(),
+            xs: Vec::new(),
+            ys: Vec::new(),
             scratch: Vec::new(),
         }
     }
@@ -215,6 +237,10 @@ impl RobotIndex {
             *at -= 1;
             self.entries[*at as usize] = e;
         }
+        self.xs.clear();
+        self.xs.extend(self.entries.iter().map(|e| e.position.x));
+        self.ys.clear();
+        self.ys.extend(self.entries.iter().map(|e| e.position.y));
     }
 
     /// Number of robots indexed.
@@ -243,12 +269,40 @@ impl RobotIndex {
         radius_m: f64,
         mut visit: impl FnMut(RobotId, DVec2) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
+        self.try_for_each_entry_within(p, radius_m, |i| {
+            let e = &self.entries[i];
+            visit(e.id, e.position)
+        })
+    }
+
+    /// [`try_for_each_within`](Self::try_for_each_within) that gives each robot's place in
+    /// [`entries`](Self::entries), for callers that keep data of their own beside the
+    /// entries. Cost: a mask of 64 distance tests at a time over the cells the disc
+    /// touches, then a visit per robot in the disc. The same robots in the same order as
+    /// a test per entry: `runs_hold_the_disc_in_the_walks_order`.
+    pub(crate) fn try_for_each_entry_within(
+        &self,
+        p: DVec2,
+        radius_m: f64,
+        mut visit: impl FnMut(usize) -> ControlFlow<()>,
+    ) -> ControlFlow<()> {
         let r2 = radius_m * radius_m;
-        self.try_for_each_run_near(p, radius_m, |_, run, cell| {
-            for e in run {
-                if e.is_within(cell, p, r2) {
-                    visit(e.id, e.position)?;
+        self.try_for_each_run_near(p, radius_m, |start, run, cell| {
+            let end = start + run.len();
+            let mut a = start;
+            while a < end {
+                let b = end.min(a + 64);
+                let mut bits = within_mask(&self.xs[a..b], &self.ys[a..b], p, r2);
+                while bits != 0 {
+                    let i = a + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    // Other cells may share a hashed bucket; each robot belongs to its own
+                    // cell's run.
+                    if cell.is_none_or(|c| self.entries[i].cell == c) {
+                        visit(i)?;
+                    }
                 }
+                a = b;
             }
             ControlFlow::Continue(())
         })
@@ -394,6 +448,7 @@ impl RobotIndex {
         std::mem::size_of::<Self>()
             + self.starts.capacity() * 4
             + self.entries.capacity() * std::mem::size_of::<Entry>()
+            + (self.xs.capacity() + self.ys.capacity()) * 8
             + self.scratch.capacity() * std::mem::size_of::<(u32, Entry)>()
     }
 }
@@ -413,7 +468,7 @@ mod tests {
         /// start, and, with each run's cell test, hold every robot in the disc once, in
         /// `for_each_within`'s order (contact lists and budgeted delivery read runs and rely
         /// on both), for either layout and a crowd that halves the cells; and so do a dense
-        /// layout's runs as ranges.
+        /// layout's runs as ranges and the walk by places in the entries.
         #[test]
         fn runs_hold_the_disc_in_the_walks_order(
             points in proptest::collection::vec((-20.0f64..20.0, -20.0f64..20.0), 0..300),
@@ -446,6 +501,13 @@ mod tests {
                     }
                 });
                 prop_assert_eq!(&from_runs, &walk);
+                // The walk by places in the entries (64 distance tests a mask): the same.
+                let mut by_place = Vec::new();
+                let _ = index.try_for_each_entry_within(p, r, |i| {
+                    by_place.push(index.entries()[i].id);
+                    std::ops::ControlFlow::Continue(())
+                });
+                prop_assert_eq!(&by_place, &walk);
                 // The dense layout's runs as ranges: the same robots in the same order, when
                 // given (dense layouts of at most four rows).
                 let mut ranges = [(0, 0); 4];

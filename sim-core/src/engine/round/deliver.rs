@@ -224,24 +224,20 @@ impl Sends<'_> {
                 accept(k);
             }
         }
-        // The walk of `senders.try_for_each_within`, with each entry's sends beside it.
-        let r2 = self.max_range * self.max_range;
-        let _ = self
-            .senders
-            .try_for_each_run_near(here, self.max_range, |start, run, cell| {
-                for (e, &(range_m, b0, b1)) in run.iter().zip(&self.by_entry[start..]) {
-                    if !e.is_within(cell, here, r2) || e.id.index() == r || !within_range(e.position, here, range_m) {
-                        continue;
-                    }
-                    for &(k, bytes) in &self.broadcasts[b0 as usize..b1 as usize] {
-                        if !fits(bytes) {
-                            return ControlFlow::Break(());
-                        }
-                        accept(k);
-                    }
+        let entries = self.senders.entries();
+        let _ = self.senders.try_for_each_entry_within(here, self.max_range, |i| {
+            let (e, &(range_m, b0, b1)) = (&entries[i], &self.by_entry[i]);
+            if e.id.index() == r || !within_range(e.position, here, range_m) {
+                return ControlFlow::Continue(());
+            }
+            for &(k, bytes) in &self.broadcasts[b0 as usize..b1 as usize] {
+                if !fits(bytes) {
+                    return ControlFlow::Break(());
                 }
-                ControlFlow::Continue(())
-            });
+                accept(k);
+            }
+            ControlFlow::Continue(())
+        });
         for w in lo..hi {
             let mut bits = std::mem::take(&mut accepted[w]);
             used[w] |= bits;
