@@ -224,6 +224,8 @@ impl Sends<'_> {
                 accept(k);
             }
         }
+        // Senders within the widest range, in the index's walk order, each read with its
+        // sends beside it (`by_entry` follows the entries).
         let entries = self.senders.entries();
         let _ = self.senders.try_for_each_entry_within(here, self.max_range, |i| {
             let (e, &(range_m, b0, b1)) = (&entries[i], &self.by_entry[i]);
