@@ -7,7 +7,7 @@ use sim_core::agent::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, TestWorld, blocked,
 };
 use sim_core::glam::DVec2;
-use sim_core::spatial::RobotId;
+use sim_core::spatial::{PieceMemo, RobotId};
 use sim_core::world::{Action, Inbox, Message, Outcome, Payload, Recipient, StrategyEvent};
 
 const EPS: f64 = 1e-9;
@@ -328,6 +328,51 @@ fn navigator_frontier_route_leaves_the_known_disc() {
     // The nearest frontier is about 3 m (the disc's radius, to a cell) away.
     let d = last.distance(p);
     assert!((1.5..=4.5).contains(&d), "{d}");
+}
+
+/// A 40 × 11 open room, 1 m cells, the robot at (5.5, 5.5), knowing every cell left of
+/// x = `known_to` except the pocket cell (8, 5), 3 m to its right.
+fn room_with_a_pocket(known_to: u32) -> TestWorld {
+    let mut rows: Vec<String> = (0..11).map(|_| ".".repeat(40)).collect();
+    rows[5] = format!("{}R{}", ".".repeat(5), ".".repeat(34));
+    let mut w = TestWorld::from_ascii(&rows.join("\n"), 1.0).unwrap();
+    for x in 0..known_to {
+        for y in 0..11u32 {
+            if (x, y) != (8, 5) {
+                w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5), 0.75);
+            }
+        }
+    }
+    w
+}
+
+#[test]
+fn frontiers_that_reveal_little_are_left_for_last() {
+    let pocket = DVec2::new(8.5, 5.5);
+    let target = |w: &mut TestWorld, reveal_first: f64| {
+        let ctx = w.ctx();
+        let seen_cost_m = 2.0 * ctx.kind.view_radius_m;
+        let route = Navigator::nearest_frontier_route(&ctx, &mut PieceMemo::default(), seen_cost_m, reveal_first)
+            .expect("a frontier");
+        *route.waypoints.last().unwrap()
+    };
+    // Known up to x = 34. The pocket: a walk of about 3 m, and its 6 m view holds one
+    // unknown cell of about 113 (known part 0.99): 3 + 12 × 0.99 ≈ 15 m. The edge at x = 34:
+    // a walk of about 29 m, half its view unknown: 29 + 12 × 0.5 ≈ 35 m.
+    let mut w = room_with_a_pocket(34);
+    assert!(
+        target(&mut w, 0.0).distance(pocket) < 1.0,
+        "ranked alike, the pocket is nearer"
+    );
+    // Taking first what has at least 15 % of its view unknown, the edge wins.
+    let edge = target(&mut w, 0.15);
+    assert!(edge.x >= 33.0, "the edge at x = 34 first, got {edge}");
+    // With the room known but for the pocket, the pocket is still found.
+    let mut w = room_with_a_pocket(40);
+    assert!(
+        target(&mut w, 0.15).distance(pocket) < 1.0,
+        "the pocket, once nothing else is left"
+    );
 }
 
 // ---------------------------------------------------------------- Team

@@ -50,9 +50,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "tactics.xml",
         rounds: 600,
-        digest: 0x860a_5c4d_af05_2abd,
-        metrics_crc: 0x6ba9_c006,
-        robots_crc: 0x1788_791d,
+        digest: 0xa0bb_0055_12e8_2321,
+        metrics_crc: 0x8e71_e678,
+        robots_crc: 0x75b4_7542,
     },
     Golden {
         config: "bench-1000.xml",

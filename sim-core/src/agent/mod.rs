@@ -19,6 +19,6 @@ pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, Ta
 pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, REPLAN_WITHIN_VIEW,
-    SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath, Tactic, Team, Teaming, blocked,
+    REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath, Tactic, Team, Teaming, blocked,
 };
 pub use testing::TestWorld;

@@ -218,14 +218,16 @@ pub(super) struct Frontier {
 impl Frontier {
     /// An explorer that shares with `sharing` (`None`: alone) and searches again once its
     /// target is known and nearer than `replan_within_view` of its view radius. With
-    /// `seen_cost_views` it ranks frontiers by the walk to their targets, charging that many
-    /// view radii for a view round the target already known; without, by the walk to the
-    /// pieces holding them (see `FrontierSeeking::with_ranking_by_target`).
-    pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64, seen_cost_views: Option<f64>) -> Self {
+    /// `by_target` = (`seen_cost_views`, `reveal_first`) it ranks frontiers by the walk to
+    /// their targets, charging that many view radii for a view round the target already
+    /// known, and takes those with `reveal_first` of their view unknown first; without, by
+    /// the walk to the pieces holding them (see `FrontierSeeking::with_ranking_by_target`).
+    pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64, by_target: Option<(f64, f64)>) -> Self {
         let mut core = Explorer::default();
         core.frontier = FrontierSeeking::default()
             .with_replan_within_view(replan_within_view)
-            .with_ranking_by_target(seen_cost_views);
+            .with_ranking_by_target(by_target.map(|(seen, _)| seen))
+            .with_reveal_first(by_target.map_or(0.0, |(_, reveal)| reveal));
         Self {
             core,
             sharing,

@@ -12,7 +12,7 @@ mod worker;
 
 use std::ops::RangeInclusive;
 
-use crate::agent::{REPLAN_WITHIN_VIEW, SEEN_COST_VIEWS, StrategyRegistry};
+use crate::agent::{REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry};
 
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
@@ -50,13 +50,15 @@ fn register_builtins(r: &mut StrategyRegistry) {
     r.register(
         "frontier",
         "frontier exploration: walks to the nearest boundary between known free space and the unknown \
-         (by route, plus seen_cost_views view radii (2) for a view round it already known), \
-         searching again once its target is seen nearer than replan_within_view of its view radius (0.5)",
+         (by route, plus seen_cost_views view radii (2) for a view round it already known; those with \
+         reveal_first (0.15) of their view unknown first), searching again once its target is seen nearer \
+         than replan_within_view of its view radius (0.5)",
         |p| {
-            p.only(&["replan_within_view", "seen_cost_views"])?;
+            p.only(&["replan_within_view", "seen_cost_views", "reveal_first"])?;
             let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
             let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
-            Ok(Box::new(frontier::Frontier::new(None, replan, Some(seen))))
+            let reveal = p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?;
+            Ok(Box::new(frontier::Frontier::new(None, replan, Some((seen, reveal)))))
         },
     );
     r.register(

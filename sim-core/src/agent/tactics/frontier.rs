@@ -22,6 +22,11 @@ pub const REPLAN_WITHIN_VIEW: f64 = 0.25;
 /// "Exploration quality").
 pub const SEEN_COST_VIEWS: f64 = 2.0;
 
+/// `reveal_first` of the `frontier` strategy and tactic, by default: frontiers with at least
+/// 15 % of the view round them unknown are taken before those that reveal less, which are
+/// left for last (BENCHMARKS.md, "Exploration quality").
+pub const REVEAL_FIRST: f64 = 0.15;
+
 fn default_replan_within_view() -> f64 {
     REPLAN_WITHIN_VIEW
 }
@@ -41,6 +46,11 @@ pub struct FrontierSeeking {
     /// holding them.
     #[serde(default)]
     by_target: Option<f64>,
+    /// Ranking by target, take frontiers with at least this part of their view unknown
+    /// before the rest (0, the default: all alike; see
+    /// [`Navigator::nearest_frontier_route`]).
+    #[serde(default)]
+    reveal_first: f64,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
@@ -55,6 +65,7 @@ impl Default for FrontierSeeking {
         Self {
             replan_within_view: REPLAN_WITHIN_VIEW,
             by_target: None,
+            reveal_first: 0.0,
             nav: Navigator::default(),
             target: None,
             failed_at: None,
@@ -78,6 +89,14 @@ impl FrontierSeeking {
     #[must_use]
     pub fn with_ranking_by_target(mut self, seen_cost_views: Option<f64>) -> Self {
         self.by_target = seen_cost_views;
+        self
+    }
+
+    /// Ranking by target, take frontiers with at least `fraction` of the view round them
+    /// unknown before those that reveal less (0: all alike).
+    #[must_use]
+    pub fn with_reveal_first(mut self, fraction: f64) -> Self {
+        self.reveal_first = fraction;
         self
     }
 
@@ -110,13 +129,13 @@ impl FrontierSeeking {
         });
         let need_plan = self.nav.is_idle() || revealed_near;
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            let (memo, by_target) = (&mut self.memo, self.by_target);
+            let (memo, by_target, reveal_first) = (&mut self.memo, self.by_target, self.reveal_first);
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
                 if let Some(views) = by_target
                     && avoid.is_empty()
                 {
-                    return Navigator::nearest_frontier_route(ctx, memo, views * ctx.kind.view_radius_m);
+                    return Navigator::nearest_frontier_route(ctx, memo, views * ctx.kind.view_radius_m, reveal_first);
                 }
                 Navigator::frontier_route_memo(ctx, memo, &avoid, avoid_radius_m, max_detour_m)
                     .or_else(|| Navigator::frontier_route_memo(ctx, memo, &[], 0.0, f64::INFINITY))

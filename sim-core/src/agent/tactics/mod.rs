@@ -30,7 +30,7 @@ mod team;
 pub use boundary::BoundaryFollowing;
 pub use collision::CollisionAvoidance;
 pub use energy::EnergyManagement;
-pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW, SEEN_COST_VIEWS};
+pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS};
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};
@@ -131,11 +131,17 @@ impl TacticRegistry {
         r.register(
             "frontier",
             "walks to the nearest frontier (known free space next to the unknown) by route, plus seen_cost_views \
-             view radii (2) for a view round it already known, and publishes it as the goal",
+             view radii (2) for a view round it already known, those with reveal_first (0.15) of their view \
+             unknown first, and publishes it as the goal",
             |p| {
-                p.only(&["seen_cost_views"])?;
+                p.only(&["seen_cost_views", "reveal_first"])?;
                 let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
-                Ok(Box::new(FrontierSeeking::default().with_ranking_by_target(Some(seen))))
+                let reveal = p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?;
+                Ok(Box::new(
+                    FrontierSeeking::default()
+                        .with_ranking_by_target(Some(seen))
+                        .with_reveal_first(reveal),
+                ))
             },
         );
         r.register(

@@ -150,9 +150,23 @@ impl Navigator {
     /// A frontier's cost is also charged `seen_cost_m` times the part of the view round its
     /// target that the robot knows already ([`KnownMap::known_fraction_near`]): of two
     /// frontiers about as near, the one with more unknown round it is taken (0: by route
-    /// only).
-    pub fn nearest_frontier_route(ctx: &Ctx, memo: &mut PieceMemo, seen_cost_m: f64) -> Option<Route> {
-        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, Ranking::ByTarget { seen_cost_m })
+    /// only). Frontiers whose view round the target is at least `reveal_first` unknown are
+    /// taken before the rest, which are searched for only when there is none of those (0:
+    /// all alike): corners that reveal little are left for last rather than walked into.
+    pub fn nearest_frontier_route(
+        ctx: &Ctx,
+        memo: &mut PieceMemo,
+        seen_cost_m: f64,
+        reveal_first: f64,
+    ) -> Option<Route> {
+        let by_target = |max_known| Ranking::ByTarget { seen_cost_m, max_known };
+        if reveal_first > 0.0
+            && let Some(route) =
+                Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, by_target(1.0 - reveal_first))
+        {
+            return Some(route);
+        }
+        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, by_target(1.0))
     }
 
     /// A frontier search (see [`frontier_route_memo`](Self::frontier_route_memo)) ranking
@@ -195,12 +209,16 @@ impl Navigator {
                 |n, d, reached| search.goal(n, d, p, reached),
                 SEARCH_BUDGET,
             ),
-            Ranking::ByTarget { seen_cost_m } => nav.search_nearest_goal(
+            Ranking::ByTarget { seen_cost_m, max_known } => nav.search_nearest_goal(
                 p,
                 start_hint,
                 terrain,
                 |m| search.usable(m),
-                |n, d, at, reached| search.goal(n, d, at, reached),
+                |n, d, at, reached| {
+                    search
+                        .goal(n, d, at, reached)
+                        .filter(|&(_, t)| max_known >= 1.0 || known.known_fraction_near(t, view_m) <= max_known)
+                },
                 &|t| seen_cost_m * known.known_fraction_near(t, view_m),
                 SEARCH_BUDGET,
             ),
@@ -239,8 +257,9 @@ enum Ranking {
     /// piece with one wins, its target the unknown point nearest to the robot.
     ByEntry,
     /// By the walk to the target itself, plus `seen_cost_m` times the part of the view round
-    /// it already known (see [`Navigator::nearest_frontier_route`]).
-    ByTarget { seen_cost_m: f64 },
+    /// it already known, among the targets with at most `max_known` of that view known
+    /// (see [`Navigator::nearest_frontier_route`]).
+    ByTarget { seen_cost_m: f64, max_known: f64 },
 }
 
 /// A frontier search under way (see [`Navigator::frontier_route_memo`]): what it looks
