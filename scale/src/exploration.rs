@@ -18,7 +18,7 @@ use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap};
-use sim_core::world::{Action, MapData, RobotType};
+use sim_core::world::{Action, HomeBase, MapData, RobotType};
 
 /// The registry name of [`GreedyReference`].
 pub const GREEDY_REFERENCE: &str = "greedy_reference";
@@ -258,18 +258,7 @@ pub struct Exploration {
 /// [`GREEDY_REFERENCE`]) from the map's home until 98 % of the free area is explored or
 /// `max_rounds` have passed.
 pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) -> Result<Exploration> {
-    let mut registry = StrategyRegistry::with_builtins();
-    registry.register(GREEDY_REFERENCE, "greedy nearest-frontier reference explorer", |_| {
-        Ok(Box::new(GreedyReference::default()))
-    });
-    let scenario = ScenarioBuilder::new(Arc::clone(map))
-        .with_name("exploration")
-        .with_seed(1)
-        .with_rounds(max_rounds)
-        .with_types(vec![explorer_robot()])
-        .with_group(Group::new(strategy, 0, robots))
-        .build(&registry)?;
-    let mut sim = Simulation::new(scenario)?;
+    let mut sim = simulation(map, strategy, robots, max_rounds)?;
     while sim.round() < max_rounds {
         let m = sim.step().metrics;
         if m.explored_98_round > 0 {
@@ -285,6 +274,48 @@ pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64)
         at_98,
         distance_m: m.distance_m,
         overlap_m: m.overlap_m,
+    })
+}
+
+/// The simulation of [`explore`]: `robots` robots running `strategy` from `map`'s home.
+fn simulation(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) -> Result<Simulation> {
+    let mut registry = StrategyRegistry::with_builtins();
+    registry.register(GREEDY_REFERENCE, "greedy nearest-frontier reference explorer", |_| {
+        Ok(Box::new(GreedyReference::default()))
+    });
+    let scenario = ScenarioBuilder::new(Arc::clone(map))
+        .with_name("exploration")
+        .with_seed(1)
+        .with_rounds(max_rounds)
+        .with_types(vec![explorer_robot()])
+        .with_group(Group::new(strategy, 0, robots))
+        .build(&registry)?;
+    Ok(Simulation::new(scenario)?)
+}
+
+/// `k` more starts for a map: where the reference robot stands at `k` evenly spaced rounds
+/// of its run from home to 90 % explored (so each is free, reachable and inside the part to
+/// explore). Fewer if the run never reaches 90 % within `max_rounds`.
+pub fn starts_along_the_reference(map: &Arc<MapData>, k: usize, max_rounds: u64) -> Result<Vec<DVec2>> {
+    let mut sim = simulation(map, GREEDY_REFERENCE, 1, max_rounds)?;
+    let mut path = Vec::new();
+    while sim.round() < max_rounds && sim.step().metrics.explored_90_round == 0 {
+        path.push(sim.robots()[0].position);
+    }
+    if sim.report().metrics.explored_90_round == 0 {
+        return Ok(Vec::new());
+    }
+    Ok((1..=k).map(|i| path[path.len() * i / (k + 1)]).collect())
+}
+
+/// `map` with its home moved to a disc of 0.2 m round `start` (the start of every robot).
+pub fn starting_at(map: &MapData, start: DVec2) -> Arc<MapData> {
+    Arc::new(MapData {
+        home: HomeBase::Disc {
+            center: start,
+            radius_m: 0.2,
+        },
+        ..map.clone()
     })
 }
 

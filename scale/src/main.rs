@@ -180,6 +180,11 @@ enum Scenario {
         /// Only the maps whose name contains this.
         #[arg(long)]
         only: Option<String>,
+        /// Also start both explorers from this many points along the reference's run from
+        /// home, and print each map's ratios from every start and their means instead of
+        /// the table (teams are not run). Slow on the 1 m example maps.
+        #[arg(long, default_value_t = 0)]
+        starts: usize,
     },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
@@ -234,7 +239,14 @@ fn run(cli: &Cli) -> Result<()> {
             ref data,
             ref teams,
             ref only,
-        } => exploration(strategy, data.as_deref(), teams, only.as_deref(), cli.rounds),
+            starts,
+        } => {
+            if starts > 0 {
+                exploration_from_starts(strategy, data.as_deref(), only.as_deref(), starts, cli.rounds)
+            } else {
+                exploration(strategy, data.as_deref(), teams, only.as_deref(), cli.rounds)
+            }
+        }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
         Scenario::Scaling { ref scenario, turns } => {
             let threads = if cli.threads.is_empty() {
@@ -536,6 +548,80 @@ fn fig4(out: &std::path::Path, quick: bool, plots: bool) -> Result<()> {
 }
 
 /// The exploration-quality table (see `Scenario::Exploration`).
+/// The comparison set of `exploration`, the maps whose name contains `only`.
+fn exploration_maps(data: Option<&std::path::Path>, only: Option<&str>) -> Result<Vec<scale::exploration::NamedMap>> {
+    let workspace = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let from_env = std::env::var_os("SMARTTEAMS_DATA").map(std::path::PathBuf::from);
+    let data = data.map(std::path::Path::to_path_buf).or(from_env);
+    let mut maps = scale::exploration::comparison_maps(&workspace, data.as_deref())?;
+    maps.retain(|(n, _)| only.is_none_or(|o| n.contains(o)));
+    Ok(maps)
+}
+
+/// `a / b` of two milestones' distances, or `-`.
+fn ratio(a: Option<(u64, f64)>, b: Option<(u64, f64)>) -> String {
+    distance_ratio(a, b).map_or("-".to_owned(), |r| format!("{r:.2}"))
+}
+
+/// `a / b` of two milestones' distances, if both were reached.
+fn distance_ratio(a: Option<(u64, f64)>, b: Option<(u64, f64)>) -> Option<f64> {
+    match (a, b) {
+        (Some((_, a)), Some((_, b))) if b > 0.0 => Some(a / b),
+        _ => None,
+    }
+}
+
+/// `exploration --starts K`: each map from home and from `k` points along the reference's
+/// run, both explorers from each; the ratios of `strategy` to the reference at every start,
+/// each map's means, and the means over every run.
+fn exploration_from_starts(
+    strategy: &str,
+    data: Option<&std::path::Path>,
+    only: Option<&str>,
+    k: usize,
+    max_rounds: u64,
+) -> Result<()> {
+    use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
+    println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
+    let (mut all90, mut all98) = (Vec::new(), Vec::new());
+    for (name, map) in exploration_maps(data, only)? {
+        let starts = starts_along_the_reference(&map, k, max_rounds)?;
+        let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
+        let (mut cells, mut at90, mut at98) = (Vec::new(), Vec::new(), Vec::new());
+        for m in maps {
+            let built_in = explore(&m, strategy, 1, max_rounds)?;
+            let reference = explore(&m, GREEDY_REFERENCE, 1, max_rounds)?;
+            cells.push(format!(
+                "{} / {}",
+                ratio(built_in.at_90, reference.at_90),
+                ratio(built_in.at_98, reference.at_98)
+            ));
+            at90.extend(distance_ratio(built_in.at_90, reference.at_90));
+            at98.extend(distance_ratio(built_in.at_98, reference.at_98));
+        }
+        println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
+        all90.extend(at90);
+        all98.extend(at98);
+    }
+    println!(
+        "mean over every start: {} to 90 % ({} runs), {} to 98 % ({} runs)",
+        mean(&all90),
+        all90.len(),
+        mean(&all98),
+        all98.len()
+    );
+    Ok(())
+}
+
+/// The mean of `xs` to two places, or `-`.
+fn mean(xs: &[f64]) -> String {
+    if xs.is_empty() {
+        "-".to_owned()
+    } else {
+        format!("{:.2}", xs.iter().sum::<f64>() / xs.len() as f64)
+    }
+}
+
 fn exploration(
     strategy: &str,
     data: Option<&std::path::Path>,
@@ -543,20 +629,13 @@ fn exploration(
     only: Option<&str>,
     max_rounds: u64,
 ) -> Result<()> {
-    use scale::exploration::{GREEDY_REFERENCE, comparison_maps, explore};
-    let workspace = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let from_env = std::env::var_os("SMARTTEAMS_DATA").map(std::path::PathBuf::from);
-    let data = data.map(std::path::Path::to_path_buf).or(from_env);
-    let maps = comparison_maps(&workspace, data.as_deref())?;
-    let ratio = |a: Option<(u64, f64)>, b: Option<(u64, f64)>| match (a, b) {
-        (Some((_, a)), Some((_, b))) if b > 0.0 => format!("{:.2}", a / b),
-        _ => "-".to_owned(),
-    };
+    use scale::exploration::{GREEDY_REFERENCE, explore};
+    let maps = exploration_maps(data, only)?;
     println!(
         "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
     );
     let (mut sum90, mut n90) = (0.0, 0);
-    for (name, map) in maps.iter().filter(|(n, _)| only.is_none_or(|o| n.contains(o))) {
+    for (name, map) in &maps {
         let reference = explore(map, GREEDY_REFERENCE, 1, max_rounds)?;
         let built_in = explore(map, strategy, 1, max_rounds)?;
         if let (Some((_, a)), Some((_, b))) = (built_in.at_90, reference.at_90) {

@@ -2,7 +2,11 @@
 
 use std::sync::Arc;
 
-use scale::exploration::{GREEDY_REFERENCE, explore, indoor_maps};
+use scale::exploration::{
+    GREEDY_REFERENCE, explore, explorer_robot, indoor_maps, starting_at, starts_along_the_reference,
+};
+use sim_core::agent::StrategyRegistry;
+use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap};
 use sim_core::world::{HomeBase, MapData};
@@ -17,25 +21,54 @@ use sim_core::world::{HomeBase, MapData};
 /// dithers or turns back walks more.
 #[test]
 fn the_reference_walks_a_corridor_straight_to_its_end() {
+    let map = corridor();
+    let run = explore(&map, GREEDY_REFERENCE, 1, 400).unwrap();
+    let (_, d98) = run.at_98.expect("the corridor is explored");
+    assert!((d98 - 24.5).abs() < 1e-6, "walked {d98} m to 98 %");
+    // Straight on: nothing walked through ground already explored until then.
+    assert!(run.overlap_m < 1e-9, "{run:?}");
+}
+
+/// The corridor of `the_reference_walks_a_corridor_straight_to_its_end`.
+fn corridor() -> Arc<MapData> {
     let cell_m = 0.1;
     let grid = Grid::from_size_m(DVec2::ZERO, cell_m, 30.0, 1.6).unwrap();
     let obstacles = ObstacleMap::from_fn(grid, |x, y| {
         let (px, py) = ((f64::from(x) + 0.5) * cell_m, (f64::from(y) + 0.5) * cell_m);
         !(0.3..=29.7).contains(&px) || !(0.3..=1.3).contains(&py)
     });
-    let map = Arc::new(MapData {
+    Arc::new(MapData {
         obstacles,
         home: HomeBase::Disc {
             center: DVec2::new(1.5, 0.8),
             radius_m: 0.3,
         },
         treasures: Vec::new(),
-    });
-    let run = explore(&map, GREEDY_REFERENCE, 1, 400).unwrap();
-    let (_, d98) = run.at_98.expect("the corridor is explored");
-    assert!((d98 - 24.5).abs() < 1e-6, "walked {d98} m to 98 %");
-    // Straight on: nothing walked through ground already explored until then.
-    assert!(run.overlap_m < 1e-9, "{run:?}");
+    })
+}
+
+/// In the corridor the reference walks on at 0.25 m a round from x = 1.5 until 90 % is
+/// explored (round 89, by the reckoning above with 26.46 m instead of 28.812): 88 positions
+/// before it, so three starts are those after rounds 23, 45 and 67, at x ≈ 7.25, 12.75
+/// and 18.25 (a little less: its first legs bend towards the corridor's middle). A run
+/// from a start begins there.
+#[test]
+fn starts_lie_evenly_along_the_references_walk() {
+    let map = corridor();
+    let starts = starts_along_the_reference(&map, 3, 400).unwrap();
+    assert_eq!(starts.len(), 3, "{starts:?}");
+    for (p, x) in starts.iter().zip([7.25, 12.75, 18.25]) {
+        assert!((p.x - x).abs() < 0.01 && (0.425..=1.175).contains(&p.y), "{starts:?}");
+    }
+    let from = starting_at(&map, starts[2]);
+    let scenario = ScenarioBuilder::new(from)
+        .with_rounds(1)
+        .with_types(vec![explorer_robot()])
+        .with_group(Group::new("frontier", 0, 1))
+        .build(&StrategyRegistry::with_builtins())
+        .unwrap();
+    let sim = Simulation::new(scenario).unwrap();
+    assert!(sim.robots()[0].position.distance(starts[2]) <= 0.2);
 }
 
 /// Every indoor map of the comparison set is one connected region the reference explores
