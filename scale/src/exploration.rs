@@ -295,14 +295,15 @@ fn simulation(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) 
 
 /// `k` more starts for a map: where the reference robot stands at `k` evenly spaced rounds
 /// of its run from home to 90 % explored (so each is free, reachable and inside the part to
-/// explore). Fewer if the run never reaches 90 % within `max_rounds`.
+/// explore). None if the run does not reach 90 % within `max_rounds`, or reaches it in its
+/// first round.
 pub fn starts_along_the_reference(map: &Arc<MapData>, k: usize, max_rounds: u64) -> Result<Vec<DVec2>> {
     let mut sim = simulation(map, GREEDY_REFERENCE, 1, max_rounds)?;
     let mut path = Vec::new();
     while sim.round() < max_rounds && sim.step().metrics.explored_90_round == 0 {
         path.push(sim.robots()[0].position);
     }
-    if sim.report().metrics.explored_90_round == 0 {
+    if path.is_empty() || sim.report().metrics.explored_90_round == 0 {
         return Ok(Vec::new());
     }
     Ok((1..=k).map(|i| path[path.len() * i / (k + 1)]).collect())
