@@ -11,7 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use sim_core::glam::DVec2;
 use sim_core::spatial::PartialCells;
 use sim_core::spatial::TreasureIndex;
-use sim_core::spatial::{Aabb, Capsule, Disc, Overlap, Shape, clip_line};
+use sim_core::spatial::{Aabb, Capsule, Disc, DiscBeyond, Overlap, Shape, clip_line};
 use sim_core::spatial::{BitGrid, Region};
 use sim_core::spatial::{CellSet, RegionQuadtree, Square};
 use sim_core::spatial::{Grid, KnownMap, ObstacleMap, RobotId, RobotIndex, TreasureId};
@@ -555,6 +555,38 @@ proptest! {
         let mut b = Vec::new();
         by_disc.tree().for_each_leaf(|sq, v| b.push((sq, v)));
         prop_assert_eq!(a, b);
+    }
+
+    /// `may_mark` never says no where marking would add a cell: against brute force
+    /// (an unknown cell of the map wholly inside the shape), for discs and for views beyond
+    /// the last one, on maps partly known, partly in the map.
+    #[test]
+    fn may_mark_is_true_wherever_marking_adds(w in world_strategy(), seed in any::<u64>()) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut known = KnownMap::new(w.grid);
+        for step in 0..24 {
+            let c = w.random_point(&mut rng);
+            let r = rng.random_range(0.0..5.0) * w.grid.cell_m();
+            let seen = rng.random_bool(0.5).then(|| Disc {
+                center: c + DVec2::from_angle(rng.random_range(0.0..6.3)) * rng.random_range(0.0..1.5) * w.grid.cell_m(),
+                radius: rng.random_range(0.0..5.0) * w.grid.cell_m(),
+            });
+            let shape = DiscBeyond { disc: Disc { center: c, radius: r }, seen };
+            let adds = w.cells().any(|(x, y)| {
+                let cell = w.grid.square(x, y, 0);
+                w.grid.in_map(x, y)
+                    && !known.tree().cell_value(x, y)
+                    && shape.classify(&cell) == Overlap::Contains
+            });
+            let may = known.may_mark(&shape);
+            prop_assert!(may || !adds, "step {step}: marking adds cells, may_mark says no");
+            let before = known.known_cells();
+            known.mark(&shape);
+            prop_assert!(may || known.known_cells() == before);
+            if step % 3 == 0 {
+                known.mark_disc(w.random_point(&mut rng), rng.random_range(0.0..4.0) * w.grid.cell_m());
+            }
+        }
     }
 
     #[test]

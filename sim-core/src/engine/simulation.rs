@@ -8,10 +8,11 @@ use std::time::Duration;
 
 use glam::DVec2;
 use rand::SeedableRng;
+use rayon::prelude::*;
 
 use crate::Result;
 use crate::agent::{DataModule, Mind, Needs, RobotRng, Strategy};
-use crate::engine::round::{Step3, TurnKind};
+use crate::engine::round::{ExploredBuffers, Step3, TurnKind};
 use crate::engine::scenario::{Group, Scenario, ScenarioParts};
 use crate::spatial::{
     BlockMemo, CellSet, Disc, Grid, KnownMap, LazyNavGraph, NavGraph, ObstacleMap, RobotId, RobotIndex, TreasureId,
@@ -213,8 +214,11 @@ pub struct Simulation {
     pub(super) milestones: ExploredMilestones,
     /// Each robot's view disc last marked in `explored`.
     pub(super) explored_views: Vec<Option<Disc>>,
-    /// Free cells each robot was first to see this round (kept to reuse its allocation).
-    pub(super) explored_fresh: Vec<u64>,
+    /// The explored-map update's buffers, kept to reuse their allocations.
+    pub(super) explored_buffers: ExploredBuffers,
+    /// Each robot's terms of the metrics' floating-point sums: energy (0 when dead),
+    /// distance, overlap (see `gather_metric_terms`).
+    pub(super) metric_terms: Vec<[f64; 3]>,
     /// Blocks of `explored` known to be explored (see [`BlockMemo`]).
     pub(super) explored_memo: BlockMemo,
     pub(super) total_free_cells: u64,
@@ -333,9 +337,11 @@ pub struct PhaseTimes {
     pub rounds_side_by_side: u64,
     /// Of `resolve`: putting the unbudgeted sends in the inboxes (parallel by receiver).
     pub fan_out: Duration,
-    /// Beside `resolve`, on another worker when there is one: marking the collective
-    /// explored map (one thread).
+    /// Beside `resolve`: updating the collective explored map (sorting out the views that
+    /// may add to it on all workers, then `explored_marking`).
     pub explored: Duration,
+    /// Of `explored`: marking the views sorted out, in id order (one thread).
+    pub explored_marking: Duration,
     /// Of `other`: taking last round's messages as one shared bag (one thread; the
     /// receivers' inboxes are filled from it in step 2's parallel pass).
     pub inboxes: Duration,
@@ -343,7 +349,10 @@ pub struct PhaseTimes {
     pub discoveries: Duration,
     /// Of `other`: rebuilding the robot indexes (two, side by side).
     pub indexes: Duration,
-    /// Of `other`: crediting explored cells and computing the metrics (one thread).
+    /// Of `other`: crediting explored cells to the robots and gathering the metrics' terms
+    /// (all workers).
+    pub crediting: Duration,
+    /// Of `other`: summing the metrics' terms in id order (one thread).
     pub metrics: Duration,
     /// Of steps 1 and 2, the time strategies spent planning routes and frontiers through
     /// [`Ctx::timed_planning`](crate::agent::Ctx::timed_planning), summed over threads (CPU
@@ -546,25 +555,63 @@ impl Simulation {
 
     /// Metrics for the current state; `known_map_bytes` is [`robot_memory_bytes`](Self::robot_memory_bytes).
     pub(super) fn metrics(
-        &self,
+        &mut self,
         round: u64,
         messages: u64,
         message_bytes: u64,
         known_map_bytes: usize,
     ) -> RoundMetrics {
-        // One pass over the robots for all the sums.
-        let (mut alive, mut energy, mut distance_m, mut units_dug, mut units_delivered) = (0u32, 0.0, 0.0, 0, 0);
-        let mut overlap_m = 0.0;
-        for r in &self.robots {
-            if r.alive {
-                alive += 1;
-                energy += r.energy;
-            }
-            distance_m += r.stats.distance_m;
-            overlap_m += r.stats.overlap_m;
-            units_dug += r.stats.units_dug;
-            units_delivered += r.stats.units_delivered;
+        let tallies = self.gather_metric_terms();
+        self.sum_metrics(round, messages, message_bytes, known_map_bytes, tallies)
+    }
+
+    /// On all workers: each robot's terms of the metrics' floating-point sums, into
+    /// `metric_terms`, and the sums of integers (which no order changes).
+    pub(super) fn gather_metric_terms(&mut self) -> Tallies {
+        let mut terms = std::mem::take(&mut self.metric_terms);
+        terms.resize(self.robots.len(), [0.0; 3]);
+        let tallies = self
+            .robots
+            .par_iter()
+            .zip(&mut terms)
+            .zip(&self.turns)
+            .with_min_len(ROBOTS_A_TASK)
+            .map(|((r, term), turn)| {
+                // A dead robot's energy term is +0.0, which leaves any sum's bits as they are.
+                *term = [
+                    if r.alive { r.energy } else { 0.0 },
+                    r.stats.distance_m,
+                    r.stats.overlap_m,
+                ];
+                Tallies {
+                    alive: u32::from(r.alive),
+                    units_dug: r.stats.units_dug,
+                    units_delivered: r.stats.units_delivered,
+                    known_bytes: turn.known_bytes,
+                }
+            })
+            .reduce(Tallies::default, Tallies::add);
+        self.metric_terms = terms;
+        tallies
+    }
+
+    /// The metrics from the gathered terms: the floating-point sums in id order, on one
+    /// thread, so that their bits do not depend on the thread count.
+    pub(super) fn sum_metrics(
+        &self,
+        round: u64,
+        messages: u64,
+        message_bytes: u64,
+        known_map_bytes: usize,
+        tallies: Tallies,
+    ) -> RoundMetrics {
+        let (mut energy, mut distance_m, mut overlap_m) = (0.0, 0.0, 0.0);
+        for &[e, d, o] in &self.metric_terms {
+            energy += e;
+            distance_m += d;
+            overlap_m += o;
         }
+        let alive = tallies.alive;
         RoundMetrics {
             round,
             explored_fraction: if self.total_free_cells == 0 {
@@ -579,8 +626,8 @@ impl Simulation {
             mean_energy: if alive == 0 { 0.0 } else { energy / f64::from(alive) },
             messages,
             distance_m,
-            units_dug,
-            units_delivered,
+            units_dug: tallies.units_dug,
+            units_delivered: tallies.units_delivered,
             message_bytes,
             strategies_failed: self.strategies_failed,
             known_map_bytes: known_map_bytes as u64,
@@ -616,6 +663,31 @@ impl Simulation {
         x
     }
 }
+
+/// The metrics' sums of integers over the robots, gathered on all workers.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Tallies {
+    alive: u32,
+    units_dug: u64,
+    units_delivered: u64,
+    /// Heap bytes of the known maps after step 2 (see `Turn::known_bytes`).
+    pub(super) known_bytes: usize,
+}
+
+impl Tallies {
+    fn add(self, other: Self) -> Self {
+        Self {
+            alive: self.alive + other.alive,
+            units_dug: self.units_dug + other.units_dug,
+            units_delivered: self.units_delivered + other.units_delivered,
+            known_bytes: self.known_bytes + other.known_bytes,
+        }
+    }
+}
+
+/// Robots a task of the passes over every robot outside steps 1 to 3 (crediting, metrics):
+/// each robot's share is a few loads and stores.
+pub(super) const ROBOTS_A_TASK: usize = 1024;
 
 /// A scenario's robots, agents and treasures, placed for the start of a run.
 struct Placed {
@@ -726,7 +798,8 @@ impl Simulation {
             explored_free_cells: 0,
             milestones: ExploredMilestones::default(),
             explored_views: vec![None; n],
-            explored_fresh: Vec::new(),
+            explored_buffers: ExploredBuffers::default(),
+            metric_terms: Vec::new(),
             explored_memo: BlockMemo::default(),
             total_free_cells,
             report: RoundReport::default(),

@@ -231,6 +231,19 @@ impl KnownMap {
         self.known_cells += added;
     }
 
+    /// Whether [`mark`](Self::mark) of `shape` could mark anything: an unknown cell of the
+    /// map overlaps it. Conservative (a cell the shape covers only in part counts, though
+    /// `mark` leaves it); read-only, so views can be sorted out on all workers before
+    /// they are marked one by one.
+    pub fn may_mark<S: Shape>(&self, shape: &S) -> bool {
+        let clip = self.grid().extent();
+        if clip.contains_box(&shape.bounds()) {
+            self.tree.any_leaf_in(shape, false)
+        } else {
+            self.tree.any_leaf_in(&Clipped { shape, clip }, false)
+        }
+    }
+
     /// The part (0 to 1) of the disc of `radius_m` round `center` that is known, sampled at
     /// the points of a 9 × 9 lattice over the disc's box that lie in the disc and strictly
     /// inside the map (1 when none does). Cost: up to 69 point queries, each a descent of the

@@ -9,9 +9,10 @@
 //!    abilities, capacity), then applies the rest; messages are addressed to whoever was in
 //!    range at send time. A robot whose turn depends on nobody has it in step 2. The rest go
 //!    in id order, or side by side (see `TurnSharing`): the moves settled by strips of the
-//!    map, then the turns taken at once (those at treasures in id order). Meanwhile another
-//!    thread marks the views of step 1 in the collective explored map.
-//! 4. **Observe**: metrics update; the caller notifies observers with the round's report.
+//!    map, then the turns taken at once (those at treasures in id order). Meanwhile the views
+//!    of step 1 are marked in the collective explored map (see `explored`).
+//! 4. **Observe**: metrics update (their terms gathered on all workers, the floating-point
+//!    sums taken in id order); the caller notifies observers with the round's report.
 //!
 //! Randomness comes from generators seeded by (run seed, robot, round), and step 3's outcome
 //! is that of its pass in id order however its work is shared, so results do not depend on
@@ -34,6 +35,7 @@ use std::time::{Duration, Instant};
 
 use explored::ExploredUpdate;
 
+pub(crate) use explored::ExploredBuffers;
 pub use perceive::MAX_MAP_MERGES_PER_ROUND;
 pub(crate) use resolve::{Step3, TurnKind};
 
@@ -67,30 +69,31 @@ impl Simulation {
         let t = Instant::now();
         self.record_discoveries(round, any_news);
         self.phase_times.discoveries += t.elapsed();
-        // 3: resolve, in id order, while another thread marks the collective explored map
-        // (it reads only the start of the round).
+        // 3: resolve, while the collective explored map is updated beside it (it reads only
+        // the start of the round).
         let mut explored = ExploredUpdate::take(self);
         let event_at = self.report.events.len();
         let map = std::sync::Arc::clone(&self.map);
         // Both sides read the turns; neither writes them.
         let turns = std::mem::take(&mut self.turns);
         let t = Instant::now();
-        let ((messages, bytes), explored_took) = rayon::join(
+        let ((messages, bytes), (explored_took, marking_took)) = rayon::join(
             || self.resolve(round, &turns),
             || {
                 let t = Instant::now();
-                explored.run(&map.obstacles, &turns);
-                t.elapsed()
+                let marking = explored.run(&map.obstacles, &turns);
+                (t.elapsed(), marking)
             },
         );
         let took = t.elapsed();
         self.phase_times.resolve += took;
         self.phase_times.explored += explored_took;
+        self.phase_times.explored_marking += marking_took;
         apart += took;
         self.turns = turns;
         let t = Instant::now();
         explored.finish(self, event_at);
-        let mut metrics_took = t.elapsed();
+        let mut crediting_took = t.elapsed();
         if self.radio_limited {
             let t = Instant::now();
             self.deliver_within_budget();
@@ -103,11 +106,13 @@ impl Simulation {
         self.phase_times.indexes += t.elapsed();
         // 4: observe (the caller hands the report to the observers).
         let t = Instant::now();
-        let known_bytes = self.turns.iter().map(|t| t.known_bytes).sum();
-        self.report.metrics = self.metrics(round, messages, bytes, known_bytes);
+        let tallies = self.gather_metric_terms();
+        crediting_took += t.elapsed();
+        self.phase_times.crediting += crediting_took;
+        let t = Instant::now();
+        self.report.metrics = self.sum_metrics(round, messages, bytes, tallies.known_bytes, tallies);
         self.milestones.note(&mut self.report.metrics);
-        metrics_took += t.elapsed();
-        self.phase_times.metrics += metrics_took;
+        self.phase_times.metrics += t.elapsed();
         self.phase_times.other += started.elapsed().saturating_sub(apart);
         &self.report
     }
