@@ -347,8 +347,11 @@ pub struct PhaseTimes {
     pub inboxes: Duration,
     /// Of `other`: crediting first sightings and the strategies' events (one thread).
     pub discoveries: Duration,
-    /// Of `other`: rebuilding the robot indexes (two, side by side).
+    /// Of `other`: rebuilding the robot indexes (two, side by side; each robot's cell and
+    /// place worked out on all workers, then `indexes_in_order`).
     pub indexes: Duration,
+    /// Of `indexes`: counting the buckets and placing the robots in them (one thread).
+    pub indexes_in_order: Duration,
     /// Of `other`: crediting explored cells to the robots and gathering the metrics' terms
     /// (all workers).
     pub crediting: Duration,
@@ -832,7 +835,8 @@ impl Simulation {
     /// positions if someone broadcasts).
     pub(super) fn rebuild_robot_indexes(&mut self) {
         let robots = &self.robots;
-        let positions = || robots.iter().map(|r| (r.id, r.position));
+        let robot = |i: usize| (robots[i].id, robots[i].position);
+        let n = robots.len();
         let view_cell_m = index_cell_m(&self.types);
         // Cells about the radius of the widest contact query (`Bodies::near_move`: two radii
         // and a move around the middle of a move), so that a query covers about 3 × 3
@@ -842,20 +846,31 @@ impl Simulation {
         if self.robot_index_eager {
             // The two are independent: built side by side.
             rayon::join(
-                || robot_index.rebuild(positions(), view_cell_m),
-                || body_index.rebuild(positions(), reach.clamp(0.25, 64.0)),
+                || robot_index.rebuild_from(n, robot, view_cell_m),
+                || body_index.rebuild_from(n, robot, reach.clamp(0.25, 64.0)),
             );
         } else {
-            body_index.rebuild(positions(), reach.clamp(0.25, 64.0));
+            body_index.rebuild_from(n, robot, reach.clamp(0.25, 64.0));
         }
+    }
+
+    /// How long the last rebuild of the robot indexes spent on one thread.
+    pub(super) fn robot_indexes_in_order_time(&self) -> Duration {
+        let view = if self.robot_index_eager {
+            self.robot_index.in_order_time()
+        } else {
+            Duration::ZERO
+        };
+        self.body_index.in_order_time() + view
     }
 
     /// Build the view-sized index from the start-of-round positions (for a round whose
     /// broadcasts need it when it is not built every round).
     pub(super) fn rebuild_robot_index_at_start(&mut self) {
         let view_cell_m = index_cell_m(&self.types);
-        let starts = self.turns.iter().zip(&self.robots).map(|(t, r)| (r.id, t.start));
-        self.robot_index.rebuild(starts, view_cell_m);
+        let (turns, robots) = (&self.turns, &self.robots);
+        self.robot_index
+            .rebuild_from(robots.len(), |i| (robots[i].id, turns[i].start), view_cell_m);
     }
 }
 

@@ -3,8 +3,10 @@
 //! robots nearby).
 //!
 //! Cells of `cell_m` metres are hashed into about two buckets per robot; a rebuild is one
-//! counting sort (O(n), no per-round allocation once warm), and a query looks at the buckets
-//! of the cells its disc covers. Memory is O(robots), whatever the map size.
+//! stable counting sort (O(n), no per-round allocation once warm: each robot's cell, bucket
+//! and copy to its place on all workers, the counts and places on one thread), and a query
+//! looks at the buckets of the cells its disc covers. Memory is O(robots), whatever the map
+//! size.
 //!
 //! An index made with [`RobotIndex::dense_when_compact`] lays the cells out row by row
 //! instead, when the robots' cells span a rectangle of at most about sixteen cells a robot:
@@ -16,8 +18,10 @@
 //! `runs_hold_the_disc_in_the_walks_order`.
 
 use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use crate::spatial::geometry::floor;
 use crate::spatial::ids::RobotId;
@@ -58,7 +62,14 @@ pub struct RobotIndex {
     /// 64 robots a mask, without a branch per robot.
     xs: Vec<f64>,
     ys: Vec<f64>,
-    scratch: Vec<(u32, Entry)>,
+    /// The robots as given, with their cells, before they are sorted into buckets.
+    scratch: Vec<Entry>,
+    /// Each robot's bucket, in the order given.
+    bucket_of: Vec<u32>,
+    /// The robot (place in `scratch`) at each place of `entries`.
+    order: Vec<u32>,
+    /// How long the last rebuild's pass on one thread took.
+    in_order: Duration,
 }
 
 /// The cell of `p` for cells of `cell_m` metres: where a rebuild files a robot and where a
@@ -96,6 +107,37 @@ fn within_mask(xs: &[f64], ys: &[f64], p: DVec2, r2: f64) -> u64 {
     bits
 }
 
+/// Robots a task of a rebuild's parallel passes: each robot's share is a few loads and
+/// stores.
+const ROBOTS_A_TASK: usize = 256;
+
+/// An entry to overwrite.
+const PLACEHOLDER: Entry = Entry {
+    position: DVec2::ZERO,
+    id: RobotId::new(0),
+    cell: (0, 0),
+};
+
+/// On all workers: file every entry in its cell of `cell_m` metres; returns the corners of
+/// the rectangle of cells they span (`(MAX, MAX), (MIN, MIN)` for none).
+fn file_in_cells(entries: &mut [Entry], cell_m: f64) -> ((i32, i32), (i32, i32)) {
+    let none = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+    entries
+        .par_chunks_mut(ROBOTS_A_TASK)
+        .map(|chunk| {
+            let (mut lo, mut hi) = none;
+            for e in chunk {
+                e.cell = cell_at(e.position, cell_m);
+                (lo, hi) = spanning(lo, hi, e.cell);
+            }
+            (lo, hi)
+        })
+        .reduce(
+            || none,
+            |(lo, hi), (l, h)| (spanning(lo, hi, l).0, spanning(lo, hi, h).1),
+        )
+}
+
 /// The corners `lo`, `hi` of a rectangle of cells grown to hold `cell`.
 #[inline]
 fn spanning(lo: (i32, i32), hi: (i32, i32), cell: (i32, i32)) -> ((i32, i32), (i32, i32)) {
@@ -124,6 +166,9 @@ impl RobotIndex {
             xs: Vec::new(),
             ys: Vec::new(),
             scratch: Vec::new(),
+            bucket_of: Vec::new(),
+            order: Vec::new(),
+            in_order: Duration::ZERO,
         }
     }
 
@@ -159,19 +204,46 @@ impl RobotIndex {
     /// Replace the contents with `robots`, using cells of `cell_m` metres (pick about the
     /// typical query radius). Positions must be finite.
     pub fn rebuild(&mut self, robots: impl IntoIterator<Item = (RobotId, DVec2)>, cell_m: f64) {
+        self.scratch.clear();
+        self.scratch.extend(robots.into_iter().map(|(id, position)| Entry {
+            position,
+            id,
+            cell: (0, 0),
+        }));
+        self.sort_scratch(cell_m);
+    }
+
+    /// [`rebuild`](Self::rebuild) from robots `0..n`, `robot(i)` giving robot i's id and
+    /// position, read on all workers. The same index as `rebuild` of the same sequence.
+    pub fn rebuild_from(&mut self, n: usize, robot: impl Fn(usize) -> (RobotId, DVec2) + Sync, cell_m: f64) {
+        self.scratch.resize(n, PLACEHOLDER);
+        self.scratch
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(ROBOTS_A_TASK)
+            .for_each(|(i, e)| {
+                let (id, position) = robot(i);
+                *e = Entry {
+                    position,
+                    id,
+                    cell: (0, 0),
+                };
+            });
+        self.sort_scratch(cell_m);
+    }
+
+    /// Index the robots of `scratch` in cells of `cell_m` metres: a stable counting sort by
+    /// bucket. Everything a robot's own (its cell, its bucket, copying it to its place) is
+    /// done on all workers; counting the buckets and giving each robot its place, a few
+    /// loads and stores a robot, in order on one thread.
+    fn sort_scratch(&mut self, cell_m: f64) {
         assert!(
             cell_m.is_finite() && cell_m > 0.0,
             "robot index cell size must be positive, got {cell_m}"
         );
         self.cell_m = cell_m;
-        self.scratch.clear();
-        let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
-        self.scratch.extend(robots.into_iter().map(|(id, position)| {
-            let cell = cell_at(position, cell_m);
-            (lo, hi) = spanning(lo, hi, cell);
-            (0, Entry { position, id, cell })
-        }));
         let n = self.scratch.len();
+        let (mut lo, mut hi) = file_in_cells(&mut self.scratch, cell_m);
         let area_of = |lo: (i32, i32), hi: (i32, i32)| {
             if n == 0 {
                 u64::MAX
@@ -186,11 +258,7 @@ impl RobotIndex {
         while self.dense_allowed && halvings < 3 && n as u64 > 4 * area {
             halvings += 1;
             self.cell_m *= 0.5;
-            (lo, hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
-            for (_, e) in &mut self.scratch {
-                e.cell = cell_at(e.position, self.cell_m);
-                (lo, hi) = spanning(lo, hi, e.cell);
-            }
+            (lo, hi) = file_in_cells(&mut self.scratch, self.cell_m);
             area = area_of(lo, hi);
         }
         self.cells_per_m = 1.0 / self.cell_m;
@@ -209,40 +277,69 @@ impl RobotIndex {
             };
             buckets
         };
+        let mut bucket_of = std::mem::take(&mut self.bucket_of);
+        let this = &*self;
+        bucket_of.resize(n, 0);
+        bucket_of
+            .par_iter_mut()
+            .zip(&self.scratch)
+            .with_min_len(ROBOTS_A_TASK)
+            .for_each(|(b, e)| *b = this.bucket(e.cell) as u32);
+        let t = Instant::now();
+        self.place_in_buckets(&bucket_of, buckets);
+        self.in_order = t.elapsed();
+        self.bucket_of = bucket_of;
+        self.copy_to_places();
+    }
+
+    /// In order, on one thread: count each bucket's robots and give every robot its place,
+    /// so that `starts[b]..starts[b + 1]` is bucket b's run, each run in input order (stable,
+    /// so query order is deterministic). `order[k]` is the robot at place k.
+    fn place_in_buckets(&mut self, bucket_of: &[u32], buckets: usize) {
         self.starts.clear();
         self.starts.resize(buckets + 1, 0);
-        for i in 0..n {
-            let b = self.bucket(self.scratch[i].1.cell);
-            self.scratch[i].0 = b as u32;
-            self.starts[b] += 1;
+        for &b in bucket_of {
+            self.starts[b as usize] += 1;
         }
         // Running sums, so that `starts[b]` is where bucket `b` ends; placing the robots
-        // from the last one back then leaves it where `b` starts, with each bucket in input
-        // order (stable, so query order is deterministic). The sum is kept in a local and
-        // no copy of the starts is made.
+        // from the last one back then leaves it where `b` starts. The sum is kept in a local
+        // and no copy of the starts is made.
         let mut end = 0;
         for start in &mut self.starts {
             end += *start;
             *start = end;
         }
-        let placeholder = Entry {
-            position: DVec2::ZERO,
-            id: RobotId::new(0),
-            cell: (0, 0),
-        };
-        self.entries.clear();
-        self.entries.resize(n, placeholder);
-        self.xs.clear();
-        self.xs.resize(n, 0.0);
-        self.ys.clear();
-        self.ys.resize(n, 0.0);
-        for &(b, e) in self.scratch.iter().rev() {
+        self.order.resize(bucket_of.len(), 0);
+        for (i, &b) in bucket_of.iter().enumerate().rev() {
             let at = &mut self.starts[b as usize];
             *at -= 1;
-            let at = *at as usize;
-            self.entries[at] = e;
-            (self.xs[at], self.ys[at]) = (e.position.x, e.position.y);
+            self.order[*at as usize] = i as u32;
         }
+    }
+
+    /// On all workers: the entries and their x and y columns in `order`.
+    fn copy_to_places(&mut self) {
+        let n = self.order.len();
+        self.entries.resize(n, PLACEHOLDER);
+        self.xs.resize(n, 0.0);
+        self.ys.resize(n, 0.0);
+        let scratch = &self.scratch;
+        self.entries
+            .par_iter_mut()
+            .zip(&mut self.xs)
+            .zip(&mut self.ys)
+            .zip(&self.order)
+            .with_min_len(ROBOTS_A_TASK)
+            .for_each(|(((entry, x), y), &i)| {
+                let e = scratch[i as usize];
+                (*entry, *x, *y) = (e, e.position.x, e.position.y);
+            });
+    }
+
+    /// How long the last rebuild spent on one thread (counting the buckets and placing the
+    /// robots); the rest of it runs on all workers.
+    pub fn in_order_time(&self) -> Duration {
+        self.in_order
     }
 
     /// Number of robots indexed.
@@ -451,7 +548,8 @@ impl RobotIndex {
             + self.starts.capacity() * 4
             + self.entries.capacity() * std::mem::size_of::<Entry>()
             + (self.xs.capacity() + self.ys.capacity()) * 8
-            + self.scratch.capacity() * std::mem::size_of::<(u32, Entry)>()
+            + self.scratch.capacity() * std::mem::size_of::<Entry>()
+            + (self.bucket_of.capacity() + self.order.capacity()) * 4
     }
 }
 
@@ -465,6 +563,44 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..ProptestConfig::default() })]
+
+        /// A rebuild is a stable sort by bucket, whether the robots come as a sequence or
+        /// from a function read on all workers (3 threads, tasks of 256 robots): every robot
+        /// once, the buckets' runs where `starts` says, each run in the order given, the x
+        /// and y columns beside; checked against a stable sort of the input by bucket.
+        #[test]
+        fn rebuilds_sort_the_robots_stably_by_bucket(
+            points in proptest::collection::vec((-40.0f64..40.0, -40.0f64..40.0), 0..1500),
+            crowd in 0usize..1000,
+            dense in any::<bool>(),
+            cell_m in 0.5f64..6.0,
+        ) {
+            let robots: Vec<(RobotId, DVec2)> = points
+                .iter()
+                .map(|&(x, y)| DVec2::new(x, y))
+                .chain((0..crowd).map(|k| DVec2::new(0.05 * (k % 30) as f64, 0.05 * (k / 30) as f64)))
+                .enumerate()
+                .map(|(k, p)| (RobotId::new(k as u32), p))
+                .collect();
+            let fresh = || if dense { RobotIndex::dense_when_compact() } else { RobotIndex::new() };
+            let (mut by_sequence, mut by_function) = (fresh(), fresh());
+            by_sequence.rebuild(robots.iter().copied(), cell_m);
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+            pool.install(|| by_function.rebuild_from(robots.len(), |i| robots[i], cell_m));
+            for index in [&by_sequence, &by_function] {
+                let bucket_of = |p: DVec2| index.bucket(super::cell_at(p, index.cell_m));
+                let mut want: Vec<usize> = (0..robots.len()).collect();
+                want.sort_by_key(|&i| bucket_of(robots[i].1));
+                let got: Vec<usize> = index.entries().iter().map(|e| e.id.get() as usize).collect();
+                prop_assert_eq!(&got, &want);
+                for (k, e) in index.entries().iter().enumerate() {
+                    let b = bucket_of(e.position);
+                    prop_assert!(index.starts[b] as usize <= k && k < index.starts[b + 1] as usize);
+                    prop_assert_eq!((index.xs[k], index.ys[k]), (e.position.x, e.position.y));
+                    prop_assert_eq!(e.cell, super::cell_at(e.position, index.cell_m));
+                }
+            }
+        }
 
         /// The runs of entries a query reads are the index's own entries where they say they
         /// start, and, with each run's cell test, hold every robot in the disc once, in

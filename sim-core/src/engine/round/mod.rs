@@ -104,6 +104,7 @@ impl Simulation {
         let t = Instant::now();
         self.rebuild_robot_indexes();
         self.phase_times.indexes += t.elapsed();
+        self.phase_times.indexes_in_order += self.robot_indexes_in_order_time();
         // 4: observe (the caller hands the report to the observers).
         let t = Instant::now();
         let tallies = self.gather_metric_terms();
