@@ -892,7 +892,7 @@ impl Logger {
 
 /// The robots' columns as the logging thread last logged them. Rerun shows every component
 /// at its latest value, so a column is logged again only when one of its values changed: in
-/// most rounds that leaves positions, energy and actions.
+/// most rounds that leaves positions and energy.
 #[derive(Default)]
 struct RobotColumns {
     classes: Vec<u16>,
@@ -901,6 +901,7 @@ struct RobotColumns {
     loads: Vec<u32>,
     goals: Vec<Option<DVec2>>,
     outcomes: Vec<Outcome>,
+    actions: Vec<&'static str>,
     /// Labels ("id" or "id +load"), rebuilt with the loads.
     labels: Vec<String>,
 }
@@ -978,12 +979,14 @@ fn log_robots(
             Arc::new(StringArray::from_iter_values(robots.iter().map(|r| outcome(r.outcome)))),
         );
     }
-    let detail = detail
-        .with_component_from_data("energy", dense(&mut robots.iter().map(|r| r.energy)))
-        .with_component_from_data(
+    if RobotColumns::update(&mut last.actions, robots.iter().map(|r| r.action)) {
+        detail = detail.with_component_from_data(
             "action",
             Arc::new(StringArray::from_iter_values(robots.iter().map(|r| r.action))),
-        )
+        );
+    }
+    let detail = detail
+        .with_component_from_data("energy", dense(&mut robots.iter().map(|r| r.energy)))
         .with_component_from_data("x", dense(&mut robots.iter().map(|r| r.position.x)))
         .with_component_from_data("y", dense(&mut robots.iter().map(|r| r.position.y)));
     let positions: Vec<[f32; 2]> = robots.iter().map(|r| to_2d(r.position)).collect();
