@@ -5,7 +5,9 @@
 //! grid it picks the frontier cell nearest by path length (Dijkstra over known cells its
 //! body fits in, 8-connected without cutting corners), walks that path (straightened where
 //! the known map allows), and picks again on arrival, when the target stops being a
-//! frontier, or when a move fails. [`explore`] plays one explorer (or a team) with the
+//! frontier, or when a move fails (then searching from the open cells in a straight move's
+//! reach, so that a wall that refused a step is not asked again). [`explore`] plays one
+//! explorer (or a team) with the
 //! comparison robot ([`explorer_robot`]): 3.5 m view, 0.25 m a round, no energy use.
 
 use std::cmp::Reverse;
@@ -75,8 +77,9 @@ impl GreedyReference {
     }
 
     /// Dijkstra from the robot's cell over open cells to the nearest frontier cell; sets the
-    /// target and the path. `false` if none is reachable.
-    fn plan(&mut self, ctx: &Ctx, grid: &Grid) -> bool {
+    /// target and the path. `false` if none is reachable. `failed`: the robot's last move
+    /// went nowhere.
+    fn plan(&mut self, ctx: &Ctx, grid: &Grid, failed: bool) -> bool {
         self.target = None;
         self.path.clear();
         let Some(start) = grid.cell_of(ctx.position()) else {
@@ -88,8 +91,25 @@ impl GreedyReference {
         let mut dist = vec![f64::INFINITY; n];
         let mut prev = vec![u32::MAX; n];
         let mut heap = BinaryHeap::new();
-        dist[index(start)] = 0.0;
-        heap.push(Reverse((Ordered(0.0), start)));
+        // After a move that went nowhere, or standing where the disc does not fit at its
+        // cell's centre (pressed against a wall, a corner cut on the way), the search starts
+        // from the open cells in a straight move's reach instead: a path from the robot's
+        // cell could begin with the very step that failed, again every round.
+        let seeds = if failed || self.cell(ctx, grid, start.0, start.1) != Cell::Open {
+            self.open_cells_in_reach(ctx, grid, start)
+        } else {
+            Vec::new()
+        };
+        // The cell the path leaves from, not walked to (`None`: it starts at a seed, which is).
+        let leave_from = seeds.is_empty().then_some(start);
+        if seeds.is_empty() {
+            dist[index(start)] = 0.0;
+            heap.push(Reverse((Ordered(0.0), start)));
+        }
+        for (c, d) in seeds {
+            dist[index(c)] = d;
+            heap.push(Reverse((Ordered(d), c)));
+        }
         let cell_m = grid.cell_m();
         while let Some(Reverse((Ordered(d), c))) = heap.pop() {
             if d > dist[index(c)] {
@@ -97,7 +117,7 @@ impl GreedyReference {
             }
             if c != start && self.is_frontier(ctx, grid, c) {
                 self.target = Some(c);
-                self.path = walk_back(grid, &prev, c, start);
+                self.path = walk_back(grid, &prev, c, leave_from);
                 return true;
             }
             for (next, step) in self.open_neighbours(ctx, grid, c) {
@@ -110,6 +130,23 @@ impl GreedyReference {
             }
         }
         false
+    }
+
+    /// The open cells within [`REACH_CELLS`] cells of `start` that the robot can move to in
+    /// a straight line, with their distances from it.
+    fn open_cells_in_reach(&mut self, ctx: &Ctx, grid: &Grid, start: (u32, u32)) -> Vec<((u32, u32), f64)> {
+        let p = ctx.position();
+        let (w, h) = (grid.width_cells(), grid.height_cells());
+        let mut out = Vec::new();
+        for y in start.1.saturating_sub(REACH_CELLS)..=(start.1 + REACH_CELLS).min(h - 1) {
+            for x in start.0.saturating_sub(REACH_CELLS)..=(start.0 + REACH_CELLS).min(w - 1) {
+                let centre = grid.cell_center(x, y);
+                if self.cell(ctx, grid, x, y) == Cell::Open && ctx.can_move(p, centre) == Some(true) {
+                    out.push(((x, y), p.distance(centre)));
+                }
+            }
+        }
+        out
     }
 
     /// The open 8-neighbours of `(x, y)` with their step lengths in cells; a diagonal step
@@ -170,7 +207,7 @@ impl Strategy for GreedyReference {
         // search again from here.
         let failed = self.moved_from.is_some_and(|p| p.distance(ctx.position()) < 1e-9);
         let stale = self.target.is_none_or(|t| !self.is_frontier(ctx, &grid, t));
-        if (self.path.is_empty() || stale || failed) && !self.plan(ctx, &grid) {
+        if (self.path.is_empty() || stale || failed) && !self.plan(ctx, &grid, failed) {
             return Action::Idle;
         }
         ctx.set_goal(self.target.map(|(x, y)| grid.cell_center(x, y)));
@@ -209,19 +246,27 @@ fn neighbours4(grid: &Grid, x: u32, y: u32) -> [Option<(u32, u32)>; 4] {
     ]
 }
 
-/// The cell centres from `start` (excluded) to `target`, following `prev`.
-fn walk_back(grid: &Grid, prev: &[u32], target: (u32, u32), start: (u32, u32)) -> Vec<DVec2> {
+/// The cell centres to `target`, following `prev` back to `start` (excluded) or, without
+/// one, to the cell the search started from (included).
+fn walk_back(grid: &Grid, prev: &[u32], target: (u32, u32), start: Option<(u32, u32)>) -> Vec<DVec2> {
     let w = grid.width_cells();
     let mut path = Vec::new();
     let mut c = target;
-    while c != start {
+    while Some(c) != start {
         path.push(grid.cell_center(c.0, c.1));
         let k = prev[(c.1 * w + c.0) as usize];
+        if k == u32::MAX {
+            break;
+        }
         c = (k % w, k / w);
     }
     path.reverse();
     path
 }
+
+/// How far (in cells) round a cell whose centre the robot does not fit at the reference
+/// looks for open cells to start its search from.
+const REACH_CELLS: u32 = 2;
 
 /// The robot of the comparison: an explorer body with a 3.5 m view and 0.25 m a round that
 /// uses no energy (exploration only, no trips home).

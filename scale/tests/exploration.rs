@@ -80,3 +80,37 @@ fn the_reference_explores_every_indoor_map() {
         assert!(run.at_90.is_some(), "{name}: {run:?}");
     }
 }
+
+#[path = "../../tests/src/skip.rs"]
+mod skip;
+
+/// On the ROS depot map (opt-in: `SMARTTEAMS_DATA`), the reference started at (13.025,
+/// 13.125) once stopped for good at 87.5 % explored: pressed against a wall at (26.34,
+/// 4.07), every path it planned from its cell began with the step the wall refused. After
+/// a move that went nowhere it now searches from the open cells in a straight move's reach,
+/// and explores the depot to 90 % from there.
+#[test]
+fn the_reference_leaves_a_wall_that_refused_its_step() {
+    let Some(data) = std::env::var_os("SMARTTEAMS_DATA") else {
+        skip::skip(
+            "data",
+            "the_reference_leaves_a_wall_that_refused_its_step",
+            "SMARTTEAMS_DATA is not set",
+        );
+        return;
+    };
+    let workspace = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let maps = scale::exploration::comparison_maps(&workspace, Some(std::path::Path::new(&data))).unwrap();
+    let (_, depot) = maps
+        .iter()
+        .find(|(name, _)| name.starts_with("depot"))
+        .expect("the depot map");
+    let run = explore(
+        &starting_at(depot, DVec2::new(13.025, 13.125)),
+        GREEDY_REFERENCE,
+        1,
+        3_000,
+    )
+    .unwrap();
+    assert!(run.at_90.is_some(), "{run:?}");
+}
