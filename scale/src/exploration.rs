@@ -19,7 +19,7 @@ use anyhow::{Context, Result};
 use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
-use sim_core::spatial::{Grid, ObstacleMap};
+use sim_core::spatial::{Grid, KnownMap, ObstacleMap};
 use sim_core::world::{Action, HomeBase, MapData, RobotType};
 
 /// The registry name of [`GreedyReference`].
@@ -51,6 +51,11 @@ pub struct GreedyReference {
     path: Vec<DVec2>,
     /// Where it asked to move from last round (`None`: it did not ask).
     moved_from: Option<DVec2>,
+    /// Where it stood, and how many cells it knew, when its last search found no frontier:
+    /// until one of them changes, the same search finds none again (its inputs are the
+    /// same), so it is not run. The exploration table is the same with and without it;
+    /// `the_reference_stays_put_once_no_frontier_is_in_reach` plays such a run.
+    exhausted: Option<(DVec2, u64)>,
 }
 
 impl GreedyReference {
@@ -207,8 +212,15 @@ impl Strategy for GreedyReference {
         // search again from here.
         let failed = self.moved_from.is_some_and(|p| p.distance(ctx.position()) < 1e-9);
         let stale = self.target.is_none_or(|t| !self.is_frontier(ctx, &grid, t));
-        if (self.path.is_empty() || stale || failed) && !self.plan(ctx, &grid, failed) {
-            return Action::Idle;
+        if self.path.is_empty() || stale || failed {
+            let now = (ctx.position(), ctx.known().map_or(0, KnownMap::known_cells));
+            if self.exhausted == Some(now) && !failed {
+                return Action::Idle;
+            }
+            if !self.plan(ctx, &grid, failed) {
+                self.exhausted = Some(now);
+                return Action::Idle;
+            }
         }
         ctx.set_goal(self.target.map(|(x, y)| grid.cell_center(x, y)));
         let action = self.follow(ctx).unwrap_or(Action::Idle);

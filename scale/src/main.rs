@@ -182,8 +182,7 @@ enum Scenario {
         only: Option<String>,
         /// Also start both explorers from this many points along the reference's run from
         /// home, and print each map's ratios from every start and their means instead of
-        /// the table (teams are not run). Slow on the Stage cave (the reference searches its
-        /// fine grid nearly every round from some starts).
+        /// the table (teams are not run).
         #[arg(long, default_value_t = 0)]
         starts: usize,
     },

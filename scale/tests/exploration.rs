@@ -114,3 +114,33 @@ fn the_reference_leaves_a_wall_that_refused_its_step() {
     .unwrap();
     assert!(run.at_90.is_some(), "{run:?}");
 }
+
+/// A corridor cut by a wall with a 0.2 m gap, narrower than the robot's 0.25 m body: the
+/// reference explores its side and stops for good where its grid has no way on, idling
+/// from then on (its search, given the same place and the same known cells, finds nothing
+/// again, so it is not run again; the robot stays put and learns nothing more).
+#[test]
+fn the_reference_stays_put_once_no_frontier_is_in_reach() {
+    let cell_m = 0.1;
+    let grid = Grid::from_size_m(DVec2::ZERO, cell_m, 12.0, 1.6).unwrap();
+    let obstacles = ObstacleMap::from_fn(grid, |x, y| {
+        let (px, py) = ((f64::from(x) + 0.5) * cell_m, (f64::from(y) + 0.5) * cell_m);
+        let wall = (6.0..6.3).contains(&px) && !(0.7..0.9).contains(&py);
+        wall || !(0.3..=11.7).contains(&px) || !(0.3..=1.3).contains(&py)
+    });
+    let map = Arc::new(MapData {
+        obstacles,
+        home: HomeBase::Disc {
+            center: DVec2::new(1.5, 0.8),
+            radius_m: 0.3,
+        },
+        treasures: Vec::new(),
+    });
+    let early = explore(&map, GREEDY_REFERENCE, 1, 300).unwrap();
+    let late = explore(&map, GREEDY_REFERENCE, 1, 3_000).unwrap();
+    assert!(early.at_90.is_none() && early.explored < 0.75, "{early:?}");
+    assert_eq!(
+        (late.rounds, late.distance_m, late.explored),
+        (3_000, early.distance_m, early.explored)
+    );
+}
