@@ -583,6 +583,7 @@ fn exploration_from_starts(
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
+    println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
     let (mut all90, mut all98) = (Vec::new(), Vec::new());
     for (name, map) in exploration_maps(data, only)? {
         let starts = starts_along_the_reference(&map, k, max_rounds)?;
@@ -591,10 +592,15 @@ fn exploration_from_starts(
         for m in maps {
             let built_in = explore(&m, strategy, 1, max_rounds)?;
             let reference = explore(&m, GREEDY_REFERENCE, 1, max_rounds)?;
+            let cell = |a, b| match (a, b) {
+                (Some(_), None) => format!("{strategy} only"),
+                (None, Some(_)) => "reference only".to_owned(),
+                _ => ratio(a, b),
+            };
             cells.push(format!(
                 "{} / {}",
-                ratio(built_in.at_90, reference.at_90),
-                ratio(built_in.at_98, reference.at_98)
+                cell(built_in.at_90, reference.at_90),
+                cell(built_in.at_98, reference.at_98)
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
