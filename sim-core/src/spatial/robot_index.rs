@@ -561,6 +561,18 @@ mod tests {
     use super::RobotIndex;
     use crate::spatial::RobotId;
 
+    /// Robots at `points`, then `crowd` more on a lattice of `row` a row, `spacing_m` apart,
+    /// from the origin; ids in that order.
+    fn with_crowd(points: &[(f64, f64)], crowd: usize, row: usize, spacing_m: f64) -> Vec<(RobotId, DVec2)> {
+        points
+            .iter()
+            .map(|&(x, y)| DVec2::new(x, y))
+            .chain((0..crowd).map(|k| DVec2::new(spacing_m * (k % row) as f64, spacing_m * (k / row) as f64)))
+            .enumerate()
+            .map(|(k, p)| (RobotId::new(k as u32), p))
+            .collect()
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..ProptestConfig::default() })]
 
@@ -575,13 +587,8 @@ mod tests {
             dense in any::<bool>(),
             cell_m in 0.5f64..6.0,
         ) {
-            let robots: Vec<(RobotId, DVec2)> = points
-                .iter()
-                .map(|&(x, y)| DVec2::new(x, y))
-                .chain((0..crowd).map(|k| DVec2::new(0.05 * (k % 30) as f64, 0.05 * (k / 30) as f64)))
-                .enumerate()
-                .map(|(k, p)| (RobotId::new(k as u32), p))
-                .collect();
+            // A crowd packed into 1.5 m × 1.7 m as well, so that dense indexes halve their cells.
+            let robots = with_crowd(&points, crowd, 30, 0.05);
             let fresh = || if dense { RobotIndex::dense_when_compact() } else { RobotIndex::new() };
             let (mut by_sequence, mut by_function) = (fresh(), fresh());
             by_sequence.rebuild(robots.iter().copied(), cell_m);
@@ -617,13 +624,7 @@ mod tests {
             queries in proptest::collection::vec((-25.0f64..25.0, -25.0f64..25.0, 0.0f64..15.0), 1..10),
         ) {
             // A crowd packed into 2 m × 2 m as well, so that dense indexes halve their cells.
-            let robots: Vec<(RobotId, DVec2)> = points
-                .iter()
-                .map(|&(x, y)| DVec2::new(x, y))
-                .chain((0..crowd).map(|k| DVec2::new(0.1 * (k % 20) as f64, 0.1 * (k / 20) as f64)))
-                .enumerate()
-                .map(|(k, p)| (RobotId::new(k as u32), p))
-                .collect();
+            let robots = with_crowd(&points, crowd, 20, 0.1);
             let mut index = if dense { RobotIndex::dense_when_compact() } else { RobotIndex::new() };
             index.rebuild(robots.iter().copied(), cell_m);
             for (x, y, r) in queries {
