@@ -14,14 +14,14 @@ mod grids;
 mod simulation;
 mod strategy;
 
+use pyo3::prelude::*;
+
 /// The allocator of the native module's own allocations (Python keeps its own): a round
 /// allocates and frees messages, payloads and search buffers on every worker, which
 /// mimalloc's per-thread heaps serve without glibc's trimming and refaulting of pages, as
 /// in the `smartteams` binary. Results do not depend on it.
 #[global_allocator]
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
-use pyo3::prelude::*;
 
 pyo3::create_exception!(
     smartteams,

@@ -3,13 +3,6 @@
 
 mod curves;
 
-/// The allocator: a round allocates and frees messages, payloads and search buffers on every
-/// worker, which mimalloc's per-thread heaps serve without glibc's trimming and refaulting of
-/// pages. Paper scale and 100,000 robots run faster with it (BENCHMARKS.md); results do not
-/// depend on it.
-#[global_allocator]
-static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
-
 use std::time::Instant;
 
 use anyhow::Result;
@@ -17,6 +10,13 @@ use clap::{Parser, Subcommand};
 use scale::fig4::Fig4;
 use scale::{Kernel, RandomWalk, Swarm, measure, measure_with};
 use sim_core::engine::TurnSharing;
+
+/// The allocator: a round allocates and frees messages, payloads and search buffers on every
+/// worker, which mimalloc's per-thread heaps serve without glibc's trimming and refaulting of
+/// pages. Paper scale and 100,000 robots run faster with it (BENCHMARKS.md); results do not
+/// depend on it.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 /// Time Smart Teams at scale: each scenario generates its own map, then prints set-up time,
 /// rounds per second after set-up, and peak memory.
@@ -554,7 +554,6 @@ fn fig4(out: &std::path::Path, quick: bool, plots: bool) -> Result<()> {
     Ok(())
 }
 
-/// The exploration-quality table (see `Scenario::Exploration`).
 /// The comparison set of `exploration`, the maps whose name contains `only`.
 fn exploration_maps(data: Option<&std::path::Path>, only: Option<&str>) -> Result<Vec<scale::exploration::NamedMap>> {
     let workspace = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -635,6 +634,7 @@ fn mean(xs: &[f64]) -> String {
     }
 }
 
+/// The exploration-quality table (see `Scenario::Exploration`).
 fn exploration(
     strategy: &str,
     data: Option<&std::path::Path>,

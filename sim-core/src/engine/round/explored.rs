@@ -129,7 +129,16 @@ impl ExploredUpdate {
                     .push(RobotId::new(u32::try_from(i).expect("robot ids are u32")));
             }
             if flag & MAY_ADD != 0 {
-                fresh[i] = mark_view(&mut self.explored, &mut self.memo, obstacles, &turns[i], self.views[i]);
+                // A robot set aside sensed this round: its view is the one to mark next time.
+                let view = self.buffers.next_views[i].expect("a robot that may add sensed");
+                fresh[i] = mark_view(
+                    &mut self.explored,
+                    &mut self.memo,
+                    obstacles,
+                    &turns[i],
+                    view,
+                    self.views[i],
+                );
             }
         }
     }
@@ -170,13 +179,14 @@ impl ExploredUpdate {
     }
 }
 
-/// Mark one robot's view in `explored` (given the view it marked last time), returning the
-/// free cells it was first to see.
+/// Mark one robot's view `disc` in `explored` (given the view it marked last time), returning
+/// the free cells it was first to see.
 fn mark_view(
     explored: &mut KnownMap,
     memo: &mut BlockMemo,
     obstacles: &ObstacleMap,
     turn: &Turn,
+    disc: Disc,
     seen: Option<Disc>,
 ) -> u64 {
     let mut fresh = 0;
@@ -192,12 +202,8 @@ fn mark_view(
                 memo.put(set.square(), after);
             }
         }
-    } else if let Some(radius) = turn.sensed_m {
+    } else {
         // What lay wholly inside this robot's last view is explored already.
-        let disc = Disc {
-            center: turn.start,
-            radius,
-        };
         explored.mark_reporting(&DiscBeyond { disc, seen }, |sq| count_free(CellSet::whole(sq)));
     }
     fresh
