@@ -85,10 +85,10 @@ fn the_reference_explores_every_indoor_map() {
 mod skip;
 
 /// On the ROS depot map (opt-in: `SMARTTEAMS_DATA`), the reference started at (13.025,
-/// 13.125) once stopped for good at 87.5 % explored: pressed against a wall at (26.34,
-/// 4.07), every path it planned from its cell began with the step the wall refused. After
-/// a move that went nowhere it now searches from the open cells in a straight move's reach,
-/// and explores the depot to 90 % from there.
+/// 13.125) comes to press against a wall at (26.34, 4.07), where a path planned from its own
+/// cell begins with the step the wall refuses. After a move that went nowhere it searches
+/// from the open cells in a straight move's reach, so it leaves the wall and explores the
+/// depot to 90 %; searching from its cell, it would stay there at 87.5 %.
 #[test]
 fn the_reference_leaves_a_wall_that_refused_its_step() {
     let Some(data) = std::env::var_os("SMARTTEAMS_DATA") else {
