@@ -16,7 +16,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use sim_core::agent::{Ctx, Needs, Strategy, StrategyRegistry};
+use sim_core::agent::{Ctx, Needs, Params, Strategy, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, KnownMap, ObstacleMap};
@@ -315,7 +315,19 @@ pub struct Exploration {
 /// [`GREEDY_REFERENCE`]) from the map's home until 98 % of the free area is explored or
 /// `max_rounds` have passed.
 pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) -> Result<Exploration> {
-    let mut sim = simulation(map, strategy, robots, max_rounds)?;
+    explore_with(map, strategy, &Params::default(), robots, max_rounds)
+}
+
+/// [`explore`] with the strategy's `params` (as a config's `<param>` elements give them;
+/// one the strategy does not take is an error naming it).
+pub fn explore_with(
+    map: &Arc<MapData>,
+    strategy: &str,
+    params: &Params,
+    robots: u32,
+    max_rounds: u64,
+) -> Result<Exploration> {
+    let mut sim = simulation(map, strategy, params, robots, max_rounds)?;
     while sim.round() < max_rounds {
         let m = sim.step().metrics;
         if m.explored_98_round > 0 {
@@ -335,7 +347,7 @@ pub fn explore(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64)
 }
 
 /// The simulation of [`explore`]: `robots` robots running `strategy` from `map`'s home.
-fn simulation(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) -> Result<Simulation> {
+fn simulation(map: &Arc<MapData>, strategy: &str, params: &Params, robots: u32, max_rounds: u64) -> Result<Simulation> {
     let mut registry = StrategyRegistry::with_builtins();
     registry.register(GREEDY_REFERENCE, "greedy nearest-frontier reference explorer", |_| {
         Ok(Box::new(GreedyReference::default()))
@@ -345,7 +357,7 @@ fn simulation(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) 
         .with_seed(1)
         .with_rounds(max_rounds)
         .with_types(vec![explorer_robot()])
-        .with_group(Group::new(strategy, 0, robots))
+        .with_group(Group::new(strategy, 0, robots).with_params(params.clone()))
         .build(&registry)?;
     Ok(Simulation::new(scenario)?)
 }
@@ -355,7 +367,7 @@ fn simulation(map: &Arc<MapData>, strategy: &str, robots: u32, max_rounds: u64) 
 /// explore). None if the run does not reach 90 % within `max_rounds`, or reaches it in its
 /// first round.
 pub fn starts_along_the_reference(map: &Arc<MapData>, k: usize, max_rounds: u64) -> Result<Vec<DVec2>> {
-    let mut sim = simulation(map, GREEDY_REFERENCE, 1, max_rounds)?;
+    let mut sim = simulation(map, GREEDY_REFERENCE, &Params::default(), 1, max_rounds)?;
     let mut path = Vec::new();
     while sim.round() < max_rounds && sim.step().metrics.explored_90_round == 0 {
         path.push(sim.robots()[0].position);

@@ -178,6 +178,10 @@ enum Scenario {
         /// The built-in explorer compared with the reference.
         #[arg(long, default_value = "frontier")]
         strategy: String,
+        /// A parameter of `--strategy`, as a config's `<param name=… value=…>` gives it
+        /// (repeat for more; e.g. `--param replan_within_view=0.25`). Teams run with none.
+        #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
+        params: Vec<(String, String)>,
         /// The shared map folder (ROS maps and the Stage cave); default: `SMARTTEAMS_DATA`.
         #[arg(long)]
         data: Option<std::path::PathBuf>,
@@ -243,15 +247,20 @@ fn run(cli: &Cli) -> Result<()> {
         } => nav_graph(map, queries, robot_radius_m, compare_cells, seed),
         Scenario::Exploration {
             ref strategy,
+            ref params,
             ref data,
             ref teams,
             ref only,
             starts,
         } => {
+            let compared = Compared {
+                strategy: strategy.clone(),
+                params: params.iter().cloned().collect(),
+            };
             if starts > 0 {
-                exploration_from_starts(strategy, data.as_deref(), only.as_deref(), starts, cli.rounds)
+                exploration_from_starts(&compared, data.as_deref(), only.as_deref(), starts, cli.rounds)
             } else {
-                exploration(strategy, data.as_deref(), teams, only.as_deref(), cli.rounds)
+                exploration(&compared, data.as_deref(), teams, only.as_deref(), cli.rounds)
             }
         }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
@@ -577,17 +586,43 @@ fn distance_ratio(a: Option<(u64, f64)>, b: Option<(u64, f64)>) -> Option<f64> {
     }
 }
 
+/// `--param NAME=VALUE` as a pair.
+fn parse_param(text: &str) -> std::result::Result<(String, String), String> {
+    match text.split_once('=') {
+        Some((name, value)) if !name.trim().is_empty() => Ok((name.trim().to_owned(), value.trim().to_owned())),
+        _ => Err(format!("expected NAME=VALUE, got '{text}'")),
+    }
+}
+
+/// The explorer `exploration` compares with the reference: a strategy and its parameters.
+struct Compared {
+    strategy: String,
+    params: sim_core::agent::Params,
+}
+
+impl Compared {
+    /// One run of it (see [`scale::exploration::explore_with`]).
+    fn explore(
+        &self,
+        map: &std::sync::Arc<sim_core::world::MapData>,
+        max_rounds: u64,
+    ) -> Result<scale::exploration::Exploration> {
+        scale::exploration::explore_with(map, &self.strategy, &self.params, 1, max_rounds)
+    }
+}
+
 /// `exploration --starts K`: each map from home and from `k` points along the reference's
 /// run, both explorers from each; the ratios of `strategy` to the reference at every start,
 /// each map's means, and the means over every run.
 fn exploration_from_starts(
-    strategy: &str,
+    compared: &Compared,
     data: Option<&std::path::Path>,
     only: Option<&str>,
     k: usize,
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
+    let strategy = &compared.strategy;
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
     println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
     let (mut all90, mut all98) = (Vec::new(), Vec::new());
@@ -596,7 +631,7 @@ fn exploration_from_starts(
         let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
         let (mut cells, mut at90, mut at98) = (Vec::new(), Vec::new(), Vec::new());
         for m in maps {
-            let built_in = explore(&m, strategy, 1, max_rounds)?;
+            let built_in = compared.explore(&m, max_rounds)?;
             let reference = explore(&m, GREEDY_REFERENCE, 1, max_rounds)?;
             let cell = |a, b| match (a, b) {
                 (Some(_), None) => format!("{strategy} only"),
@@ -636,13 +671,14 @@ fn mean(xs: &[f64]) -> String {
 
 /// The exploration-quality table (see `Scenario::Exploration`).
 fn exploration(
-    strategy: &str,
+    compared: &Compared,
     data: Option<&std::path::Path>,
     teams: &[u32],
     only: Option<&str>,
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore};
+    let strategy = &compared.strategy;
     let maps = exploration_maps(data, only)?;
     println!(
         "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
@@ -650,7 +686,7 @@ fn exploration(
     let (mut sum90, mut n90) = (0.0, 0);
     for (name, map) in &maps {
         let reference = explore(map, GREEDY_REFERENCE, 1, max_rounds)?;
-        let built_in = explore(map, strategy, 1, max_rounds)?;
+        let built_in = compared.explore(map, max_rounds)?;
         if let (Some((_, a)), Some((_, b))) = (built_in.at_90, reference.at_90) {
             sum90 += a / b;
             n90 += 1;

@@ -3,9 +3,9 @@
 use std::sync::Arc;
 
 use scale::exploration::{
-    GREEDY_REFERENCE, explore, explorer_robot, indoor_maps, starting_at, starts_along_the_reference,
+    GREEDY_REFERENCE, explore, explore_with, explorer_robot, indoor_maps, starting_at, starts_along_the_reference,
 };
-use sim_core::agent::StrategyRegistry;
+use sim_core::agent::{Params, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{Grid, ObstacleMap};
@@ -142,5 +142,30 @@ fn the_reference_stays_put_once_no_frontier_is_in_reach() {
     assert_eq!(
         (late.rounds, late.distance_m, late.explored),
         (3_000, early.distance_m, early.explored)
+    );
+}
+
+/// `explore_with` hands its parameters to the strategy: `frontier` with its defaults spelt
+/// out walks exactly as with none, with re-planning at a quarter of the view instead of
+/// half it walks another way, and a name it does not take is an error naming it.
+#[test]
+fn parameters_reach_the_compared_explorer() {
+    let (_, rooms) = indoor_maps().unwrap().into_iter().next().expect("an indoor map");
+    let run =
+        |pairs: &[(&str, &str)]| explore_with(&rooms, "frontier", &Params::from_pairs(pairs.iter().copied()), 1, 3_000);
+    let plain = run(&[]).unwrap();
+    let defaults = run(&[
+        ("replan_within_view", "0.5"),
+        ("seen_cost_views", "2"),
+        ("reveal_first", "0.15"),
+    ])
+    .unwrap();
+    assert_eq!(plain, defaults);
+    let sooner = run(&[("replan_within_view", "0.25")]).unwrap();
+    assert_ne!(sooner.at_90, plain.at_90, "{sooner:?}");
+    let unknown = run(&[("replan_within_views", "0.25")]).unwrap_err();
+    assert!(
+        format!("{unknown:#}").contains("unknown parameter 'replan_within_views'"),
+        "{unknown:#}"
     );
 }
