@@ -143,3 +143,32 @@ fn scaling_report_lists_every_thread_count_and_one_digest() {
         "{steps} against {wall}: {text}"
     );
 }
+
+/// A parameter the compared explorer does not take stops `exploration` before its table,
+/// with an error naming it and the names it takes; one without `=` is refused as typed.
+#[test]
+fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
+    let out = bench(&[
+        "exploration",
+        "--teams",
+        "0",
+        "--only",
+        "corridor",
+        "--param",
+        "replan_within_veiw=0.25",
+    ]);
+    assert!(!out.status.success());
+    assert!(out.stdout.is_empty(), "{}", String::from_utf8_lossy(&out.stdout));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("unknown parameter 'replan_within_veiw'") && err.contains("known: replan_within_view"),
+        "{err}"
+    );
+    let out = bench(&["exploration", "--param", "replan_within_view"]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("expected NAME=VALUE, got 'replan_within_view'"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
