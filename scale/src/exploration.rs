@@ -346,12 +346,25 @@ pub fn explore_with(
     })
 }
 
-/// The simulation of [`explore`]: `robots` robots running `strategy` from `map`'s home.
-fn simulation(map: &Arc<MapData>, strategy: &str, params: &Params, robots: u32, max_rounds: u64) -> Result<Simulation> {
+/// The built-in strategies and [`GREEDY_REFERENCE`].
+fn registry() -> StrategyRegistry {
     let mut registry = StrategyRegistry::with_builtins();
     registry.register(GREEDY_REFERENCE, "greedy nearest-frontier reference explorer", |_| {
         Ok(Box::new(GreedyReference::default()))
     });
+    registry
+}
+
+/// Whether [`explore_with`] knows `strategy` and it takes `params`: the error it would give,
+/// without a map or a simulation.
+pub fn check_strategy(strategy: &str, params: &Params) -> Result<()> {
+    registry().create(strategy, params)?;
+    Ok(())
+}
+
+/// The simulation of [`explore`]: `robots` robots running `strategy` from `map`'s home.
+fn simulation(map: &Arc<MapData>, strategy: &str, params: &Params, robots: u32, max_rounds: u64) -> Result<Simulation> {
+    let registry = registry();
     let scenario = ScenarioBuilder::new(Arc::clone(map))
         .with_name("exploration")
         .with_seed(1)

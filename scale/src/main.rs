@@ -257,6 +257,8 @@ fn run(cli: &Cli) -> Result<()> {
                 strategy: strategy.clone(),
                 params: params.iter().cloned().collect(),
             };
+            // A bad name or value stops the run before its table begins.
+            scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
             if starts > 0 {
                 exploration_from_starts(&compared, data.as_deref(), only.as_deref(), starts, cli.rounds)
             } else {
@@ -609,15 +611,6 @@ impl Compared {
     ) -> Result<scale::exploration::Exploration> {
         scale::exploration::explore_with(map, &self.strategy, &self.params, 1, max_rounds)
     }
-
-    /// Whether the strategy takes these parameters: set up on the first map, no round
-    /// played, so a bad name or value stops the run before its table begins.
-    fn check(&self, maps: &[scale::exploration::NamedMap]) -> Result<()> {
-        if let Some((_, map)) = maps.first() {
-            self.explore(map, 0)?;
-        }
-        Ok(())
-    }
 }
 
 /// `exploration --starts K`: each map from home and from `k` points along the reference's
@@ -632,12 +625,10 @@ fn exploration_from_starts(
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
     let strategy = &compared.strategy;
-    let maps = exploration_maps(data, only)?;
-    compared.check(&maps)?;
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
     println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
     let (mut all90, mut all98) = (Vec::new(), Vec::new());
-    for (name, map) in maps {
+    for (name, map) in exploration_maps(data, only)? {
         let starts = starts_along_the_reference(&map, k, max_rounds)?;
         let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
         let (mut cells, mut at90, mut at98) = (Vec::new(), Vec::new(), Vec::new());
@@ -691,7 +682,6 @@ fn exploration(
     use scale::exploration::{GREEDY_REFERENCE, explore};
     let strategy = &compared.strategy;
     let maps = exploration_maps(data, only)?;
-    compared.check(&maps)?;
     println!(
         "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
     );
