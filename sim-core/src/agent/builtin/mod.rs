@@ -7,6 +7,7 @@ mod composed;
 mod explorer;
 mod frontier;
 mod random_walk;
+mod spread;
 mod team;
 mod worker;
 

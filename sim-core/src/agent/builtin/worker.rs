@@ -4,6 +4,7 @@ use glam::DVec2;
 
 use super::SHARE_EVERY;
 use super::explorer::{Explorer, share_knowledge};
+use super::spread::{Spread, SpreadParams};
 use crate::Result;
 use crate::agent::{Ctx, Needs, Params, Strategy};
 use crate::spatial::{RobotId, TreasureId};
@@ -47,7 +48,8 @@ struct HeardClaim {
 /// each task per treasure, instead of crowding round the nearest one and blocking each
 /// other. `an_excavator_leaves_a_treasure_claimed_from_nearer_to_its_claimant` and
 /// `a_transporter_leaves_loose_units_claimed_from_nearer_to_its_claimant` (tests/workers.rs)
-/// check it.
+/// check it. In a large team it takes only treasures in its sector or near it, and waits at
+/// its post when it has none (see [`Spread`]).
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Worker {
     explorer: Explorer,
@@ -60,10 +62,11 @@ struct Worker {
     /// The treasure this worker claimed last, and the round it said so.
     #[serde(default)]
     claimed: Option<(TreasureId, u64)>,
+    spread: Spread,
 }
 
 impl Worker {
-    fn new(p: &Params) -> Result<Self> {
+    fn new(p: &Params, spread: SpreadParams) -> Result<Self> {
         Ok(Self {
             explorer: Explorer::default(),
             share_every: p.u64_in("share_every", 10, SHARE_EVERY)?,
@@ -71,6 +74,7 @@ impl Worker {
             shared_area: 0.0,
             claims: Vec::new(),
             claimed: None,
+            spread: Spread::new(spread),
         })
     }
 
@@ -135,6 +139,7 @@ impl Worker {
             } = *m.payload
                 && t == task
             {
+                self.spread.heard(m.from);
                 self.claims.retain(|c| c.by != m.from);
                 self.claims.push(HeardClaim {
                     treasure,
@@ -156,10 +161,19 @@ impl Worker {
             .any(|c| c.treasure == s.treasure && c.distance_m.total_cmp(&d).then(c.by.cmp(&me)).is_lt())
     }
 
-    /// The remembered treasure nearest to the robot that `want` accepts and no nearer team
-    /// mate claimed.
+    /// The remembered treasure nearest to the robot that `want` accepts, that is this
+    /// worker's to take (see [`Spread::takes`]) and that no nearer team mate claimed.
     fn choose(&self, ctx: &Ctx, want: impl Fn(&Sighting) -> bool) -> Option<Sighting> {
-        Self::nearest(ctx, |s| want(s) && !self.left_to_others(ctx, s))
+        let takes = self.spread.takes(ctx);
+        Self::nearest(ctx, |s| want(s) && takes(s.position) && !self.left_to_others(ctx, s))
+    }
+
+    /// Nothing to take: walk to the post (see [`Spread::post`]) and explore round it there.
+    fn stand_by(&mut self, ctx: &mut Ctx) -> Action {
+        match self.spread.post(ctx) {
+            Some(post) if !Spread::at(ctx, post) => self.go(ctx, post),
+            _ => self.explorer.explore_unclaimed(ctx),
+        }
     }
 
     /// Claim `t` for `task`: said when the choice changes and repeated every
@@ -202,7 +216,7 @@ impl Strategy for Excavator {
             return a;
         }
         let Some(t) = self.core.choose(ctx, |s| s.buried > 0) else {
-            return self.core.explorer.explore_unclaimed(ctx);
+            return self.core.stand_by(ctx);
         };
         self.core.claim(ctx, Task::Excavate, &t);
         if Worker::within_reach(ctx, t.position) {
@@ -247,7 +261,7 @@ impl Strategy for Transporter {
             return self.core.go(ctx, ctx.home().center());
         }
         let Some(t) = pick else {
-            return self.core.explorer.explore_unclaimed(ctx);
+            return self.core.stand_by(ctx);
         };
         self.core.claim(ctx, Task::Transport, &t);
         if Worker::within_reach(ctx, t.position) {
@@ -262,16 +276,34 @@ impl Strategy for Transporter {
     }
 }
 
+/// The parameters both workers take.
+const WORKER_PARAMS: [&str; 4] = ["share_every", "near_m", "sector_overlap", "post_behind_m"];
+
+/// An excavator's defaults for [`SpreadParams`]: `near_m` 40, `sector_overlap` 8,
+/// `post_behind_m` 0 (BENCHMARKS.md, "Workers").
+pub(super) const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 8.0, 0.0);
+
+/// A transporter's defaults for [`SpreadParams`]: `near_m` 60, `sector_overlap` 16,
+/// `post_behind_m` 15: a wider sector than an excavator's and a post behind the edge, as
+/// it comes for units once they are dug.
+pub(super) const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 16.0, 15.0);
+
 impl Excavator {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
-        p.only(&["share_every"])?;
-        Ok(Self { core: Worker::new(p)? })
+        p.only(&WORKER_PARAMS)?;
+        let spread = SpreadParams::from_params(p, EXCAVATOR_SPREAD)?;
+        Ok(Self {
+            core: Worker::new(p, spread)?,
+        })
     }
 }
 
 impl Transporter {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
-        p.only(&["share_every"])?;
-        Ok(Self { core: Worker::new(p)? })
+        p.only(&WORKER_PARAMS)?;
+        let spread = SpreadParams::from_params(p, TRANSPORTER_SPREAD)?;
+        Ok(Self {
+            core: Worker::new(p, spread)?,
+        })
     }
 }
