@@ -169,3 +169,112 @@ fn a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
     // 2 units, and loose units at the treasure: it fetches them first.
     assert_eq!(goal_with(2, 1), Some(treasure));
 }
+
+/// A 241 m × 241 m open square with home at its centre (120.5, 120.5) and the robot 5 m
+/// east of it; robot id 0, whose bearing from home is east (0 rad).
+fn open_square() -> String {
+    (0..241)
+        .map(|y| {
+            (0..241)
+                .map(|x| match (x, y) {
+                    (120, 120) => 'H',
+                    (125, 120) => 'R',
+                    _ => '.',
+                })
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The goal a fresh `strategy` robot of type `kind` picks on the open square, knowing
+/// `known_m` round home (the whole square if `None`) and buried treasures at `treasures`
+/// (offsets from home), having heard claims from team mates 1..=`mates` on a treasure it
+/// does not know.
+fn goal_on_square(
+    strategy: &str,
+    kind: RobotType,
+    known_m: Option<f64>,
+    treasures: &[DVec2],
+    mates: u32,
+) -> Option<DVec2> {
+    let task = if kind.can_excavate() {
+        Task::Excavate
+    } else {
+        Task::Transport
+    };
+    let mut w = TestWorld::from_ascii(&open_square(), 1.0).unwrap().with_type(kind);
+    let home = w.home.center();
+    w = match known_m {
+        Some(r) => w.knowing_disc(home, r),
+        None => w.knowing_all(),
+    };
+    for (i, offset) in treasures.iter().enumerate() {
+        let id = TreasureId::new(u32::try_from(i).unwrap());
+        let sighting = Sighting {
+            treasure: id,
+            position: home + *offset,
+            buried: 3,
+            loose: 0,
+            round: 0,
+        };
+        w.mind.data.treasures.record(id, sighting, 0);
+    }
+    w.mind.perception.inbox = Inbox::from((1..=mates).map(|m| claim(m, 99, task, 1.0)).collect::<Vec<_>>());
+    let mut s = StrategyRegistry::with_builtins()
+        .create(strategy, &Params::default())
+        .unwrap();
+    s.decide(&mut w.ctx());
+    w.mind.output.goal().map(|g| g - home)
+}
+
+/// A worker that has heard from a large team takes only the treasures in its sector (its
+/// bearing from home ± π × `sector_overlap` / (team mates heard + 1): about ±9° for an
+/// excavator that heard 99) or within `near_m` (40 m) of it; alone, it takes the nearest.
+#[test]
+fn workers_take_the_treasures_of_their_sector_once_they_know_their_team() {
+    let dig = |treasures: &[DVec2], mates| goal_on_square("excavator", RobotType::excavator(), None, treasures, mates);
+    // North of home 55 m (55.2 m from the robot, bearing 90°) and east 58 m (53 m away,
+    // bearing 0°): alone, the nearer one.
+    let north = DVec2::new(0.0, 55.0);
+    let east = DVec2::new(58.0, 0.0);
+    assert_eq!(dig(&[north, east], 0), Some(east));
+    // North at 50 m is the nearer one (50.2 m against 53 m): alone it takes it...
+    let north = DVec2::new(0.0, 50.0);
+    assert_eq!(dig(&[north, east], 0), Some(north));
+    // ...with 99 team mates heard it is in another's sector: the east one, in its own.
+    assert_eq!(dig(&[north, east], 99), Some(east));
+    // With 3 team mates the sector is the whole circle (π × 5 / 4 > π).
+    assert_eq!(dig(&[north, east], 3), Some(north));
+    // Within near_m (north 30 m: 30.4 m away) it takes it whatever its bearing.
+    let near = DVec2::new(0.0, 30.0);
+    assert_eq!(dig(&[near, east], 99), Some(near));
+    // Transporters: sector about ±21.6° among 100 (overlap 12), near_m 60; an empty one waits at
+    // buried treasures, chosen the same way as loose units.
+    let haul =
+        |treasures: &[DVec2], mates| goal_on_square("transporter", RobotType::transporter(), None, treasures, mates);
+    let north_far = DVec2::new(0.0, 80.0);
+    let east_far = DVec2::new(100.0, 0.0);
+    assert_eq!(haul(&[north_far, east_far], 0), Some(north_far));
+    assert_eq!(haul(&[north_far, east_far], 99), Some(east_far));
+    // 25° off its bearing, 90 m out (85.5 m away): outside the sector, so the one east is its
+    // choice; 20° off (85.3 m away), inside, and nearer than the east one (95 m).
+    let off = DVec2::from_angle(25f64.to_radians()) * 90.0;
+    assert_eq!(haul(&[off, east_far], 99), Some(east_far));
+    let off = DVec2::from_angle(20f64.to_radians()) * 90.0;
+    let goal = haul(&[off, east_far], 99).unwrap();
+    assert!(goal.distance(off) < 1e-9, "{goal}");
+}
+
+/// With nothing to take, a worker walks out on its bearing to the edge of what it knows:
+/// an excavator to the edge itself, a transporter `post_behind_m` (15 m) behind it, both in
+/// steps of 8 m. Known: a 50 m disc round home, so along the bearing (east) the edge,
+/// probed every 4 m, is at 48 m.
+#[test]
+fn a_worker_with_nothing_to_take_waits_at_its_post_on_its_bearing() {
+    let excavator = goal_on_square("excavator", RobotType::excavator(), Some(50.0), &[], 0);
+    assert_eq!(excavator, Some(DVec2::new(48.0, 0.0)));
+    // 48 − 15 = 33 m, down to a step of 8: 32 m.
+    let transporter = goal_on_square("transporter", RobotType::transporter(), Some(50.0), &[], 0);
+    assert_eq!(transporter, Some(DVec2::new(32.0, 0.0)));
+}

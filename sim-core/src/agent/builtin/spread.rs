@@ -26,6 +26,9 @@ const EDGE_EVERY_ROUNDS: u64 = 10;
 /// only when the post moved that far.
 const POST_STEP_M: f64 = 8.0;
 
+/// Rounds a worker explores before it searches again for a route to a post it found none to.
+const ROUTE_RETRY_ROUNDS: u64 = 5;
+
 /// Within this of its post a worker explores round it instead of walking to it.
 const AT_POST_M: f64 = 4.0;
 
@@ -77,6 +80,8 @@ pub(super) struct Spread {
     mates: [u64; SKETCH_BITS / 64],
     /// How far the known map reaches along the bearing, and the round it was measured.
     edge: Option<(f64, u64)>,
+    /// The last post with no known route to it, and the round that was found.
+    no_route: Option<(DVec2, u64)>,
 }
 
 impl Spread {
@@ -85,12 +90,13 @@ impl Spread {
             params,
             mates: [0; SKETCH_BITS / 64],
             edge: None,
+            no_route: None,
         }
     }
 
     /// Note a team mate heard.
     pub(super) fn heard(&mut self, mate: RobotId) {
-        let bit = (u64::from(mate.get()).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 56) as usize;
+        let bit = (mix(u64::from(mate.get())) >> 56) as usize;
         self.mates[bit / 64] |= 1 << (bit % 64);
     }
 
@@ -135,10 +141,31 @@ impl Spread {
         Some(home + dir * from_home_m)
     }
 
+    /// Note that no known route leads to `post` this round.
+    pub(super) fn no_route_to(&mut self, ctx: &Ctx, post: DVec2) {
+        self.no_route = Some((post, ctx.round));
+    }
+
+    /// Whether a route to `post` is worth searching for: unless none was found to it in the
+    /// last [`ROUTE_RETRY_ROUNDS`].
+    pub(super) fn may_route_to(&self, ctx: &Ctx, post: DVec2) -> bool {
+        self.no_route
+            .is_none_or(|(p, at)| p != post || ctx.round >= at + ROUTE_RETRY_ROUNDS)
+    }
+
     /// Whether the worker stands at its post.
     pub(super) fn at(ctx: &Ctx, post: DVec2) -> bool {
         ctx.position().distance(post) <= AT_POST_M
     }
+}
+
+/// SplitMix64's finaliser: ids of a group are consecutive, and linear counting needs their
+/// bits spread as if at random.
+fn mix(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// How far from `home` along unit `dir` the known map reaches, from last estimate `from_m`:
@@ -163,4 +190,36 @@ fn edge_along(known: &KnownMap, home: DVec2, dir: DVec2, from_m: f64) -> f64 {
         }
     }
     m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Spread, SpreadParams};
+    use crate::spatial::RobotId;
+
+    /// The sketch's estimate against the exact count of distinct ids heard (each heard
+    /// twice), for runs of ids as a group has and for scattered ones.
+    #[test]
+    fn the_sketch_counts_distinct_team_mates_within_a_tenth() {
+        let params = SpreadParams {
+            near_m: 0.0,
+            sector_overlap: 1.0,
+            post_behind_m: 0.0,
+        };
+        for (first, n, stride) in [(800, 10, 1), (800, 100, 1), (0, 300, 1), (17, 100, 7919), (5, 400, 13)] {
+            let mut s = Spread::new(params);
+            for _ in 0..2 {
+                for k in 0..n {
+                    s.heard(RobotId::new(first + k * stride));
+                }
+            }
+            let estimate = s.mates_heard();
+            let n = f64::from(n);
+            assert!(
+                (estimate - n).abs() <= 0.1 * n,
+                "{n} ids heard, estimated {estimate:.1}"
+            );
+        }
+        assert!(Spread::new(params).mates_heard().abs() < 1e-9);
+    }
 }

@@ -169,9 +169,17 @@ impl Worker {
     }
 
     /// Nothing to take: walk to the post (see [`Spread::post`]) and explore round it there.
+    /// With no known route to the post, it explores for a few rounds before it searches
+    /// again.
     fn stand_by(&mut self, ctx: &mut Ctx) -> Action {
         match self.spread.post(ctx) {
-            Some(post) if !Spread::at(ctx, post) => self.go(ctx, post),
+            Some(post) if !Spread::at(ctx, post) && self.spread.may_route_to(ctx, post) => {
+                let action = self.go(ctx, post);
+                if self.heading_to.is_none() {
+                    self.spread.no_route_to(ctx, post);
+                }
+                action
+            }
             _ => self.explorer.explore_unclaimed(ctx),
         }
     }
@@ -281,12 +289,12 @@ const WORKER_PARAMS: [&str; 4] = ["share_every", "near_m", "sector_overlap", "po
 
 /// An excavator's defaults for [`SpreadParams`]: `near_m` 40, `sector_overlap` 8,
 /// `post_behind_m` 0 (BENCHMARKS.md, "Workers").
-pub(super) const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 8.0, 0.0);
+pub(super) const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 5.0, 0.0);
 
 /// A transporter's defaults for [`SpreadParams`]: `near_m` 60, `sector_overlap` 16,
 /// `post_behind_m` 15: a wider sector than an excavator's and a post behind the edge, as
 /// it comes for units once they are dug.
-pub(super) const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 16.0, 15.0);
+pub(super) const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 12.0, 15.0);
 
 impl Excavator {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
