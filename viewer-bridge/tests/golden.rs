@@ -36,9 +36,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "demo.xml",
         rounds: 600,
-        digest: 0x8ab1_89e4_c1cf_a9d0,
-        metrics_crc: 0x5c63_5e09,
-        robots_crc: 0x6049_2671,
+        digest: 0x2735_1e47_246a_8f74,
+        metrics_crc: 0xb17d_bd7e,
+        robots_crc: 0x8871_42c6,
     },
     Golden {
         config: "teams.xml",
@@ -57,16 +57,16 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "bench-1000.xml",
         rounds: 50,
-        digest: 0x0f0c_0972_9ed5_ef10,
-        metrics_crc: 0x7a6c_266f,
-        robots_crc: 0xb8c0_33fe,
+        digest: 0xb598_cb2b_4188_b67e,
+        metrics_crc: 0x62e8_5dc7,
+        robots_crc: 0xc981_e3c2,
     },
     Golden {
         config: "bench-10000.xml",
         rounds: 5,
-        digest: 0xbcee_219c_ebb9_687e,
-        metrics_crc: 0x78e8_6da0,
-        robots_crc: 0x23d1_5bf9,
+        digest: 0xd537_6140_7e6e_7840,
+        metrics_crc: 0x5683_1c51,
+        robots_crc: 0x1bd2_4ff2,
     },
 ];
 
