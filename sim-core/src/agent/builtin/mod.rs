@@ -87,7 +87,9 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "excavator",
-        "goes to the nearest known treasure no nearer excavator claimed, claims it and digs it out; explores when it knows none",
+        "goes to the nearest known treasure in its sector or within near_m (40) that no nearer excavator claimed, \
+         claims it and digs it out; with none, waits at its post on its bearing, post_behind_m (0) behind the edge \
+         of its known map; its sector narrows with the team mates heard (sector_overlap 5)",
         |p| Ok(Box::new(worker::Excavator::from_params(p)?)),
     );
     r.register_composed(
@@ -98,7 +100,9 @@ fn register_builtins(r: &mut StrategyRegistry) {
     );
     r.register(
         "transporter",
-        "fetches dug units (waiting at treasures being dug), one transporter per treasure as excavators do, and delivers them home as soon as no loose units it knows of are left",
+        "fetches dug units (waiting at treasures being dug), one transporter per treasure, chosen as excavators \
+         choose (near_m 60, sector_overlap 12, post_behind_m 15), and delivers them home as soon as no loose units \
+         it knows of are left",
         |p| Ok(Box::new(worker::Transporter::from_params(p)?)),
     );
 }

@@ -159,7 +159,7 @@ impl Spread {
     }
 }
 
-/// SplitMix64's finaliser: ids of a group are consecutive, and linear counting needs their
+/// The finaliser of `SplitMix64`: ids of a group are consecutive, and linear counting needs their
 /// bits spread as if at random.
 fn mix(x: u64) -> u64 {
     let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
