@@ -40,7 +40,7 @@ const SKETCH_BITS: usize = 256;
 pub(super) struct SpreadParams {
     /// Treasures at most this far from the worker are candidates whatever their bearing.
     near_m: f64,
-    /// How many team mates' sectors cover each bearing from home.
+    /// How many sectors of the team mates heard cover each bearing from home.
     sector_overlap: f64,
     /// How far behind the edge of its known map, along its bearing, a worker with nothing to
     /// do waits.
@@ -101,7 +101,7 @@ impl Spread {
     }
 
     /// The number of distinct team mates heard, estimated from the sketch (linear counting:
-    /// within a few per cent up to about 500).
+    /// within a tenth up to 400, `the_sketch_counts_distinct_team_mates_within_a_tenth`).
     pub(super) fn mates_heard(&self) -> f64 {
         let set: u32 = self.mates.iter().map(|w| w.count_ones()).sum();
         let bits = SKETCH_BITS as f64;

@@ -287,14 +287,14 @@ impl Strategy for Transporter {
 /// The parameters both workers take.
 const WORKER_PARAMS: [&str; 4] = ["share_every", "near_m", "sector_overlap", "post_behind_m"];
 
-/// An excavator's defaults for [`SpreadParams`]: `near_m` 40, `sector_overlap` 8,
+/// An excavator's defaults for [`SpreadParams`]: `near_m` 40, `sector_overlap` 5,
 /// `post_behind_m` 0 (BENCHMARKS.md, "Workers").
-pub(super) const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 5.0, 0.0);
+const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 5.0, 0.0);
 
-/// A transporter's defaults for [`SpreadParams`]: `near_m` 60, `sector_overlap` 16,
+/// A transporter's defaults for [`SpreadParams`]: `near_m` 60, `sector_overlap` 12,
 /// `post_behind_m` 15: a wider sector than an excavator's and a post behind the edge, as
 /// it comes for units once they are dug.
-pub(super) const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 12.0, 15.0);
+const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 12.0, 15.0);
 
 impl Excavator {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
