@@ -32,6 +32,27 @@ fn claim(from: u32, treasure: u32, task: Task, distance_m: f32) -> Message {
     }
 }
 
+/// Let the robot of `w` remember treasure `id` at `position`, seen in round 0.
+fn remember(w: &mut TestWorld, id: u32, position: DVec2, buried: u32, loose: u32) {
+    let treasure = TreasureId::new(id);
+    let sighting = Sighting {
+        treasure,
+        position,
+        buried,
+        loose,
+        round: 0,
+    };
+    w.mind.data.treasures.record(treasure, sighting, 0);
+}
+
+/// One decision of a fresh `strategy` robot in `w`.
+fn decide_once(w: &mut TestWorld, strategy: &str) {
+    let mut s = StrategyRegistry::with_builtins()
+        .create(strategy, &Params::default())
+        .unwrap();
+    s.decide(&mut w.ctx());
+}
+
 /// The goal a fresh `strategy` robot of type `kind` picks in its first round, knowing the
 /// whole corridor and both treasures (3 units buried, or lying loose if `loose`), having
 /// heard `heard`; and the claims it broadcast.
@@ -40,23 +61,11 @@ fn first_choice(strategy: &str, kind: RobotType, loose: bool, heard: Vec<Message
         .unwrap()
         .with_type(kind)
         .knowing_all();
-    for (i, position) in [NEAR, FAR].into_iter().enumerate() {
-        let id = TreasureId::new(u32::try_from(i).unwrap());
-        let (buried, loose) = if loose { (0, 3) } else { (3, 0) };
-        let sighting = Sighting {
-            treasure: id,
-            position,
-            buried,
-            loose,
-            round: 0,
-        };
-        w.mind.data.treasures.record(id, sighting, 0);
-    }
+    let (buried, loose) = if loose { (0, 3) } else { (3, 0) };
+    remember(&mut w, 0, NEAR, buried, loose);
+    remember(&mut w, 1, FAR, buried, loose);
     w.mind.perception.inbox = Inbox::from(heard);
-    let mut s = StrategyRegistry::with_builtins()
-        .create(strategy, &Params::default())
-        .unwrap();
-    s.decide(&mut w.ctx());
+    decide_once(&mut w, strategy);
     let claims = w
         .mind
         .output
@@ -144,22 +153,11 @@ fn a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
             .unwrap()
             .with_type(RobotType::transporter())
             .knowing_all();
-        let id = TreasureId::new(0);
-        let sighting = Sighting {
-            treasure: id,
-            position: treasure,
-            buried: 3,
-            loose,
-            round: 0,
-        };
-        w.mind.data.treasures.record(id, sighting, 0);
+        remember(&mut w, 0, treasure, 3, loose);
         if load > 0 {
             w.robot.cargo.push((TreasureId::new(1), load));
         }
-        let mut s = StrategyRegistry::with_builtins()
-            .create("transporter", &Params::default())
-            .unwrap();
-        s.decide(&mut w.ctx());
+        decide_once(&mut w, "transporter");
         w.mind.output.goal()
     };
     // Empty: it goes to wait at the buried treasure.
@@ -209,22 +207,11 @@ fn goal_on_square(
         Some(r) => w.knowing_disc(home, r),
         None => w.knowing_all(),
     };
-    for (i, offset) in treasures.iter().enumerate() {
-        let id = TreasureId::new(u32::try_from(i).unwrap());
-        let sighting = Sighting {
-            treasure: id,
-            position: home + *offset,
-            buried: 3,
-            loose: 0,
-            round: 0,
-        };
-        w.mind.data.treasures.record(id, sighting, 0);
+    for (i, offset) in (0..).zip(treasures) {
+        remember(&mut w, i, home + *offset, 3, 0);
     }
     w.mind.perception.inbox = Inbox::from((1..=mates).map(|m| claim(m, 99, task, 1.0)).collect::<Vec<_>>());
-    let mut s = StrategyRegistry::with_builtins()
-        .create(strategy, &Params::default())
-        .unwrap();
-    s.decide(&mut w.ctx());
+    decide_once(&mut w, strategy);
     w.mind.output.goal().map(|g| g - home)
 }
 

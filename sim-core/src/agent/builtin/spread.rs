@@ -48,14 +48,28 @@ pub(super) struct SpreadParams {
 }
 
 impl SpreadParams {
+    /// An excavator's defaults (BENCHMARKS.md, "Workers").
+    pub(super) const EXCAVATOR: Self = Self {
+        near_m: 40.0,
+        sector_overlap: 5.0,
+        post_behind_m: 0.0,
+    };
+
+    /// A transporter's defaults: a wider sector than an excavator's and a post behind the
+    /// edge, as it comes for units once they are dug.
+    pub(super) const TRANSPORTER: Self = Self {
+        near_m: 60.0,
+        sector_overlap: 12.0,
+        post_behind_m: 15.0,
+    };
+
     /// The parameters `near_m`, `sector_overlap` and `post_behind_m` of `p`, with the task's
-    /// defaults.
-    pub(super) fn from_params(p: &Params, defaults: (f64, f64, f64)) -> Result<Self> {
-        let (near_m, sector_overlap, post_behind_m) = defaults;
+    /// `defaults`.
+    pub(super) fn from_params(p: &Params, defaults: Self) -> Result<Self> {
         Ok(Self {
-            near_m: p.f64_in("near_m", near_m, 0.0..=1.0e6)?,
-            sector_overlap: p.f64_in("sector_overlap", sector_overlap, 0.0..=1.0e6)?,
-            post_behind_m: p.f64_in("post_behind_m", post_behind_m, 0.0..=1.0e6)?,
+            near_m: p.f64_in("near_m", defaults.near_m, 0.0..=1.0e6)?,
+            sector_overlap: p.f64_in("sector_overlap", defaults.sector_overlap, 0.0..=1.0e6)?,
+            post_behind_m: p.f64_in("post_behind_m", defaults.post_behind_m, 0.0..=1.0e6)?,
         })
     }
 }
@@ -72,7 +86,7 @@ impl SpreadParams {
 /// edge of its known map, where new treasures are found. Cost: a walk of at most 64 map
 /// look-ups every 10 rounds for the edge, and a 256-bit sketch of the team mates heard.
 /// `workers_take_the_treasures_of_their_sector_once_they_know_their_team`
-/// (tests/workers.rs) checks the choice; BENCHMARKS.md ("Workers") what it gains.
+/// (tests/workers.rs) checks the choice; BENCHMARKS.md ("Workers") gives its figures.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Spread {
     params: SpreadParams,
@@ -114,14 +128,11 @@ impl Spread {
     }
 
     /// Whether this worker takes a treasure, by where it lies: near it, or in its sector.
-    pub(super) fn takes<'c>(&self, ctx: &'c Ctx) -> impl Fn(DVec2) -> bool + 'c {
+    pub(super) fn takes(&self, ctx: &Ctx) -> impl Fn(DVec2) -> bool + use<> {
         let half_rad = PI * self.params.sector_overlap / (self.mates_heard() + 1.0);
         let (near_m, bearing) = (self.params.near_m, Self::bearing(ctx.me.id));
-        move |at| {
-            half_rad >= PI
-                || ctx.position().distance(at) <= near_m
-                || bearing.angle_to(at - ctx.home().center()).abs() <= half_rad
-        }
+        let (me, home) = (ctx.position(), ctx.home().center());
+        move |at| half_rad >= PI || me.distance(at) <= near_m || bearing.angle_to(at - home).abs() <= half_rad
     }
 
     /// Where this worker waits with nothing to do, if it knows any terrain.

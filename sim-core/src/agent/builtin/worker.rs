@@ -287,19 +287,10 @@ impl Strategy for Transporter {
 /// The parameters both workers take.
 const WORKER_PARAMS: [&str; 4] = ["share_every", "near_m", "sector_overlap", "post_behind_m"];
 
-/// An excavator's defaults for [`SpreadParams`]: `near_m` 40, `sector_overlap` 5,
-/// `post_behind_m` 0 (BENCHMARKS.md, "Workers").
-const EXCAVATOR_SPREAD: (f64, f64, f64) = (40.0, 5.0, 0.0);
-
-/// A transporter's defaults for [`SpreadParams`]: `near_m` 60, `sector_overlap` 12,
-/// `post_behind_m` 15: a wider sector than an excavator's and a post behind the edge, as
-/// it comes for units once they are dug.
-const TRANSPORTER_SPREAD: (f64, f64, f64) = (60.0, 12.0, 15.0);
-
 impl Excavator {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
         p.only(&WORKER_PARAMS)?;
-        let spread = SpreadParams::from_params(p, EXCAVATOR_SPREAD)?;
+        let spread = SpreadParams::from_params(p, SpreadParams::EXCAVATOR)?;
         Ok(Self {
             core: Worker::new(p, spread)?,
         })
@@ -309,7 +300,7 @@ impl Excavator {
 impl Transporter {
     pub(super) fn from_params(p: &Params) -> Result<Self> {
         p.only(&WORKER_PARAMS)?;
-        let spread = SpreadParams::from_params(p, TRANSPORTER_SPREAD)?;
+        let spread = SpreadParams::from_params(p, SpreadParams::TRANSPORTER)?;
         Ok(Self {
             core: Worker::new(p, spread)?,
         })
