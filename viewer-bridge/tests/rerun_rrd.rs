@@ -99,25 +99,38 @@ fn try_summarise(python: &Path, rrd: &Path) -> Result<Value, String> {
     serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())
 }
 
-/// Polls the recording a receiver is saving until it holds the robots of `last_round`,
-/// for at most a minute; returns its summary.
-fn wait_for_round(python: &Path, rrd: &Path, last_round: u64) -> Value {
+/// Polls the recording a receiver is saving until `complete` holds for its summary, for at
+/// most a minute; returns the summary. A receiver writes chunks in its own order, not the
+/// order they were sent, so a test waits for everything it then checks.
+fn wait_until(python: &Path, rrd: &Path, what: &str, complete: impl Fn(&Value) -> bool) -> Value {
     let t0 = Instant::now();
     loop {
         if let Ok(s) = try_summarise(python, rrd)
-            && s["rounds"]["/world/robots"]
-                .as_array()
-                .is_some_and(|r| r.iter().any(|v| v.as_u64() == Some(last_round)))
+            && complete(&s)
         {
             return s;
         }
         assert!(
             t0.elapsed() < Duration::from_mins(1),
-            "{} never held round {last_round}",
+            "{} never held {what}",
             rrd.display()
         );
         std::thread::sleep(Duration::from_millis(200));
     }
+}
+
+/// Whether a summary holds the robots of `round`.
+fn holds_round(s: &Value, round: u64) -> bool {
+    s["rounds"]["/world/robots"]
+        .as_array()
+        .is_some_and(|r| r.iter().any(|v| v.as_u64() == Some(round)))
+}
+
+/// How many rounds of the explored fraction a summary holds.
+fn explored_metric_rounds(s: &Value) -> usize {
+    s["scalars"]["/metrics/exploration/explored_fraction"]
+        .as_object()
+        .map_or(0, serde_json::Map::len)
 }
 
 /// Waits (at most a minute) until `run` has written rounds to its metrics CSV, and asserts
@@ -513,17 +526,13 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     let url = format!("--connect=127.0.0.1:{port}");
     run_demo(dir.path(), 20, &[url.as_str()]);
     // The receiver writes as data arrives: read until the last round is there.
-    let s = wait_for_round(&python, &saved, 20);
+    let s = wait_until(&python, &saved, "round 20 and its metrics", |s| {
+        holds_round(s, 20) && explored_metric_rounds(s) >= 20
+    });
     rx.kill().unwrap();
     rx.wait().unwrap();
     assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
-    assert_eq!(
-        s["scalars"]["/metrics/exploration/explored_fraction"]
-            .as_object()
-            .unwrap()
-            .len(),
-        20
-    );
+    assert_eq!(explored_metric_rounds(&s), 20);
 
     // 2. The receiver is killed mid-run: the run still completes.
     let (mut rx, port) = receiver(&python, &dir.path().join("killed.rrd"));
@@ -712,7 +721,9 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     assert!(args.contains(&format!("--port={port}")), "viewer started with {args}");
     // The spawned viewer outlives the run (as a real one would): read what it saved until
     // the last round is there, then stop it.
-    let s = wait_for_round(&python, &saved, 20);
+    let s = wait_until(&python, &saved, "round 20 and the static map", |s| {
+        holds_round(s, 20) && s["rows"]["/world/obstacles/raster|1"].is_u64()
+    });
     let pid = std::fs::read_to_string(&pid_file).unwrap();
     Command::new("kill").arg(pid.trim()).status().unwrap();
     assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
@@ -836,11 +847,14 @@ fn a_stopped_run_ends_its_live_stream_normally() {
         .and_then(|r| r.split_whitespace().next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{stdout}"));
-    let s = wait_for_round(&python, &saved, round);
+    let s = wait_until(&python, &saved, &format!("round {round} and its metrics"), |s| {
+        holds_round(s, round) && explored_metric_rounds(s) as u64 >= round
+    });
     rx.kill().unwrap();
     rx.wait().unwrap();
-    let metrics = s["scalars"]["/metrics/exploration/explored_fraction"]
-        .as_object()
-        .unwrap();
-    assert_eq!(metrics.len() as u64, round, "the metrics of every round played arrived");
+    assert_eq!(
+        explored_metric_rounds(&s) as u64,
+        round,
+        "the metrics of every round played arrived"
+    );
 }
