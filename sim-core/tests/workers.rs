@@ -1,13 +1,13 @@
-//! The `excavator` and `transporter` strategies: how a worker picks its treasure when team
-//! mates claim treasures, in a tiny world ([`TestWorld`]). Distances are worked out by hand
-//! in the comments.
+//! The `excavator` and `transporter` strategies (how a worker picks its treasure when team
+//! mates claim treasures) and a large team's `cooperative` scouts (how they walk out), in a
+//! tiny world ([`TestWorld`]). Distances are worked out by hand in the comments.
 
 use std::sync::Arc;
 
 use sim_core::agent::{Params, StrategyRegistry, TestWorld};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{RobotId, TreasureId};
-use sim_core::world::{Inbox, Message, Payload, Recipient, RobotType, Sighting, Task};
+use sim_core::world::{Action, Inbox, Message, Payload, Recipient, RobotType, Sighting, Task};
 
 /// A 20 m × 3 m corridor; the robot (id 0) at (1.5, 1.5).
 const CORRIDOR: &str = "
@@ -171,12 +171,17 @@ fn a_transporter_with_a_part_load_and_nothing_loose_goes_home() {
 /// A 241 m × 241 m open square with home at its centre (120.5, 120.5) and the robot 5 m
 /// east of it; robot id 0, whose bearing from home is east (0 rad).
 fn open_square() -> String {
+    square_with_robot_at(125)
+}
+
+/// The open square of [`open_square`] with the robot at column `x` of home's row.
+fn square_with_robot_at(robot_x: usize) -> String {
     (0..241)
         .map(|y| {
             (0..241)
                 .map(|x| match (x, y) {
                     (120, 120) => 'H',
-                    (125, 120) => 'R',
+                    (x, 120) if x == robot_x => 'R',
                     _ => '.',
                 })
                 .collect::<String>()
@@ -264,4 +269,53 @@ fn a_worker_with_nothing_to_take_waits_at_its_post_on_its_bearing() {
     // 48 − 15 = 33 m, down to a step of 8: 32 m.
     let transporter = goal_on_square("transporter", RobotType::transporter(), Some(50.0), &[], 0);
     assert_eq!(transporter, Some(DVec2::new(32.0, 0.0)));
+}
+
+/// A `cooperative` scout's first move on the open square with the robot 5 m west of home,
+/// knowing a 50 m disc round home, having heard where `mates` team mates (ids 1..=`mates`)
+/// stand, with `params`: its goal (from home) and the point it moves to (from home).
+fn scout_first_move(mates: u32, params: &Params) -> (Option<DVec2>, Option<DVec2>) {
+    let mut w = TestWorld::from_ascii(&square_with_robot_at(115), 1.0)
+        .unwrap()
+        .with_type(RobotType::explorer());
+    let home = w.home.center();
+    w = w.knowing_disc(home, 50.0);
+    let heard = (1..=mates).map(|m| Message {
+        from: RobotId::new(m),
+        sent_round: 1,
+        to: Recipient::Broadcast,
+        payload: Arc::new(Payload::Position {
+            position: home,
+            goal: None,
+        }),
+    });
+    w.mind.perception.inbox = Inbox::from(heard.collect::<Vec<_>>());
+    let mut s = StrategyRegistry::with_builtins().create("cooperative", params).unwrap();
+    let action = s.decide(&mut w.ctx());
+    let to = match action {
+        Action::MoveTo { to } => Some(to - home),
+        _ => None,
+    };
+    (w.mind.output.goal().map(|g| g - home), to)
+}
+
+/// A scout that has heard `spoke_mates` (24) team mates or more walks out along its bearing
+/// (robot 0's is east) to just beyond the edge of what it knows, straight where nothing it
+/// knows blocks the way; with fewer, or without `spoke_mates`, it explores the nearest
+/// frontier. Known: a 50 m disc round home, the robot 5 m west of home. East, the edge,
+/// probed every 4 m, is at 48 m; the target lies 2 m beyond it in steps of 4 m: 52 m. The
+/// first step is 1 m (the explorer's speed) east. The nearest frontier lies west, 45 m from
+/// the robot (the nearest point east is 55 m).
+#[test]
+fn scouts_of_a_large_team_walk_out_along_their_bearings() {
+    let spokes = Params::default().with("spoke_mates", "24");
+    let (goal, to) = scout_first_move(30, &spokes);
+    assert_eq!(goal, Some(DVec2::new(52.0, 0.0)));
+    let to = to.expect("a move");
+    assert!(to.distance(DVec2::new(-4.0, 0.0)) < 1e-9, "moved to {to}");
+    for (mates, params) in [(3, &spokes), (0, &spokes), (30, &Params::default())] {
+        let (goal, _) = scout_first_move(mates, params);
+        let goal = goal.expect("a frontier");
+        assert!(goal.x < -40.0, "{mates} mates heard: goal {goal}");
+    }
 }

@@ -57,16 +57,16 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "bench-1000.xml",
         rounds: 50,
-        digest: 0xb598_cb2b_4188_b67e,
-        metrics_crc: 0x62e8_5dc7,
-        robots_crc: 0xc981_e3c2,
+        digest: 0x7f70_d54d_158c_6161,
+        metrics_crc: 0x931b_05f8,
+        robots_crc: 0x2897_c9c4,
     },
     Golden {
         config: "bench-10000.xml",
         rounds: 5,
-        digest: 0xd537_6140_7e6e_7840,
-        metrics_crc: 0x5683_1c51,
-        robots_crc: 0x1bd2_4ff2,
+        digest: 0xa9f9_2299_6c55_f6c1,
+        metrics_crc: 0xaac0_9c0f,
+        robots_crc: 0x401a_08ab,
     },
 ];
 

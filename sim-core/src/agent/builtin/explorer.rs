@@ -23,6 +23,10 @@ pub(super) struct Sharing {
     /// maps more slowly (BENCHMARKS.md, "Defaults of `cooperative`").
     #[serde(default)]
     pub(super) max_detour_m: Option<f64>,
+    /// Team mates heard from which a robot walks out along its bearing (`None`: never; see
+    /// `Spoke`).
+    #[serde(default)]
+    pub(super) spoke_mates: Option<f64>,
 }
 
 /// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
@@ -44,11 +48,16 @@ impl Sharing {
             Some(_) => Some(p.f64_in("max_detour_m", 0.0, 0.0..=MAX_DISTANCE_M)?),
             None => None,
         };
+        let spoke_mates = match p.text("spoke_mates") {
+            Some(_) => Some(p.f64_in("spoke_mates", 0.0, 0.0..=1.0e9)?),
+            None => None,
+        };
         Ok(Self {
             every_rounds,
             avoid_radius_m,
             max_claims,
             max_detour_m,
+            spoke_mates,
         })
     }
 }

@@ -3,6 +3,7 @@
 use glam::{DVec2, Vec2};
 
 use super::explorer::{Explorer, Sharing, share_knowledge};
+use super::spread::Spoke;
 use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy};
 use crate::world::{Action, Payload};
 
@@ -213,6 +214,9 @@ pub(super) struct Frontier {
     claims: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
+    /// In a large team, the walk out along the robot's bearing.
+    #[serde(default)]
+    spoke: Spoke,
 }
 
 impl Frontier {
@@ -234,6 +238,7 @@ impl Frontier {
             claims: Claims::default(),
             announced: None,
             shared_area: 0.0,
+            spoke: Spoke::from_mates(sharing.and_then(|s| s.spoke_mates).unwrap_or(f64::INFINITY)),
         }
     }
 }
@@ -269,11 +274,15 @@ impl Strategy for Frontier {
             // ones each round would keep the allocator busy.
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
+                let spoke = &mut self.spoke;
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
-                    Payload::Position { goal, .. } => Some((
-                        m.from.get(),
-                        goal.filter(|g| g.distance(p) <= near).map(|g| stored_goal(g, home)),
-                    )),
+                    Payload::Position { goal, .. } => {
+                        spoke.heard(m.from);
+                        Some((
+                            m.from.get(),
+                            goal.filter(|g| g.distance(p) <= near).map(|g| stored_goal(g, home)),
+                        ))
+                    }
                     _ => None,
                 }));
                 if !updates.is_empty() {
@@ -296,15 +305,19 @@ impl Strategy for Frontier {
             keep_newest(&mut self.claims, share.max_claims, round);
         }
         if let Some(a) = self.core.reflexes(ctx) {
+            self.spoke.interrupt();
             return a;
         }
         let claims = &self.claims;
-        let action = self.core.explore(
-            ctx,
-            || claims.iter().map(|c| goal_of(c.1, home)).collect(),
-            radius,
-            max_detour_m,
-        );
+        let action = match self.spoke.step(ctx, self.core.frontier.navigator()) {
+            Some(a) => a,
+            None => self.core.explore(
+                ctx,
+                || claims.iter().map(|c| goal_of(c.1, home)).collect(),
+                radius,
+                max_detour_m,
+            ),
+        };
         // Announce a goal only when it changes: claims stay cheap in crowds.
         if self.sharing.is_some() && ctx.goal() != self.announced {
             self.announced = ctx.goal();

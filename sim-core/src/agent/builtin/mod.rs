@@ -66,7 +66,9 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
          (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
-         unbounded by default); replan_within_view as for frontier (0.25)",
+         unbounded by default); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
+         team mates (never by default), it walks out along its bearing from home to just beyond the edge \
+         of its known map, exploring frontiers where that is blocked",
         |p| {
             p.only(&[
                 "share_every",
@@ -74,6 +76,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
                 "max_claims",
                 "max_detour_m",
                 "replan_within_view",
+                "spoke_mates",
             ])?;
             let share = explorer::Sharing::from_params(p)?;
             let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;

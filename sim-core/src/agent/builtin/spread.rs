@@ -1,13 +1,15 @@
-//! How workers of one task share out a large area: each has a bearing from home, takes the
-//! treasures in its sector or near it, and waits at a post on its bearing when it has none.
+//! How a large team shares out the area: each robot has a bearing from home. Workers take
+//! the treasures in their sector or near them and wait at a post on their bearing when they
+//! have none; scouts walk out along theirs.
 
 use std::f64::consts::PI;
 
 use glam::DVec2;
 
 use crate::Result;
-use crate::agent::{Ctx, Params};
+use crate::agent::{Ctx, Navigator, Params};
 use crate::spatial::{KnownMap, RobotId};
+use crate::world::Action;
 
 /// The golden angle: robot `i`'s bearing is `i` times it, so the bearings of any run of
 /// consecutive ids are spread evenly round home.
@@ -61,6 +63,13 @@ impl SpreadParams {
         near_m: 60.0,
         sector_overlap: 12.0,
         post_behind_m: 15.0,
+    };
+
+    /// A scout's ([`Spoke`]): only the bearing and the edge count.
+    const SCOUT: Self = Self {
+        near_m: 0.0,
+        sector_overlap: 1.0,
+        post_behind_m: 0.0,
     };
 
     /// The parameters `near_m`, `sector_overlap` and `post_behind_m` of `p`, with the task's
@@ -167,6 +176,134 @@ impl Spread {
     /// Whether the worker stands at its post.
     pub(super) fn at(ctx: &Ctx, post: DVec2) -> bool {
         ctx.position().distance(post) <= AT_POST_M
+    }
+}
+
+/// How far beyond the edge of its known map a scout's spoke target lies.
+const SPOKE_AHEAD_M: f64 = 2.0;
+
+/// A spoke target moves in steps of this much, so that a detour is planned at most once
+/// per step.
+const SPOKE_STEP_M: f64 = 4.0;
+
+/// Nodes a search for a detour to the spoke target may settle: a short search, as most
+/// that fail would otherwise settle the robot's whole known map.
+const SPOKE_SEARCH_NODES: usize = 50;
+
+/// Rounds a scout explores frontiers after its spoke was blocked.
+const SPOKE_PAUSE_ROUNDS: u64 = 40;
+
+/// How a scout of a large team walks out from home: along its bearing (its id times the
+/// golden angle), to just beyond the edge of its known map, so that a crowd leaving home
+/// fans out instead of jamming, and each scout pushes its own part of the explored front.
+///
+/// The target lies [`SPOKE_AHEAD_M`] beyond the edge, in steps of [`SPOKE_STEP_M`]. The
+/// scout walks straight to it when no cell it knows to be blocked lies near the way, or
+/// else along a detour through known terrain (a search of at most [`SPOKE_SEARCH_NODES`]
+/// nodes). When a step is blocked, no detour is found, or the bearing leaves the map, the
+/// strategy explores frontiers instead, for [`SPOKE_PAUSE_ROUNDS`]. A scout that has heard
+/// fewer than `from_mates` team mates explores frontiers only (`cooperative`'s
+/// `spoke_mates`; never by default). Cost: a few map look-ups a round for the edge, a
+/// straight-leg test a step, and the short searches; and as scouts reach new terrain sooner,
+/// their maps grow and merge sooner.
+/// `scouts_of_a_large_team_walk_out_along_their_bearings` (tests/workers.rs) checks the
+/// walk; BENCHMARKS.md ("Workers") gives its figures.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub(super) struct Spoke {
+    /// Team mates heard from which the scout walks its spoke (infinite: never).
+    from_mates: f64,
+    spread: Spread,
+    /// The target being walked to, and whether straight (or along the navigator's route).
+    heading_to: Option<(DVec2, bool)>,
+    /// Frontiers are explored until this round.
+    paused_until: u64,
+}
+
+impl Default for Spoke {
+    /// A scout that never walks a spoke.
+    fn default() -> Self {
+        Self::from_mates(f64::INFINITY)
+    }
+}
+
+impl Spoke {
+    /// A scout that walks its spoke once it has heard `from_mates` team mates.
+    pub(super) fn from_mates(from_mates: f64) -> Self {
+        Self {
+            from_mates,
+            spread: Spread::new(SpreadParams::SCOUT),
+            heading_to: None,
+            paused_until: 0,
+        }
+    }
+
+    /// Note a team mate heard.
+    pub(super) fn heard(&mut self, mate: RobotId) {
+        self.spread.heard(mate);
+    }
+
+    /// Forget the target (another tactic moved the robot).
+    pub(super) fn interrupt(&mut self) {
+        self.heading_to = None;
+    }
+
+    /// This round's step along the spoke, with `nav` following detours; `None`: explore
+    /// frontiers.
+    pub(super) fn step(&mut self, ctx: &mut Ctx, nav: &mut Navigator) -> Option<Action> {
+        if ctx.round < self.paused_until || self.spread.mates_heard() < self.from_mates {
+            return None;
+        }
+        let Some(to) = self.target(ctx) else {
+            return self.pause(ctx);
+        };
+        let p = ctx.position();
+        let straight = match self.heading_to {
+            Some((t, straight)) if t == to && (straight || !nav.is_idle()) => straight,
+            _ => {
+                nav.clear();
+                let straight = ctx.terrain().is_some_and(|t| t.hopeful(p, to));
+                if !straight {
+                    let route = ctx.timed_planning(|| {
+                        ctx.terrain()
+                            .and_then(|t| ctx.nav().route_optimistic(t, p, to, SPOKE_SEARCH_NODES))
+                    });
+                    let Some(route) = route else {
+                        return self.pause(ctx);
+                    };
+                    nav.follow(route);
+                }
+                self.heading_to = Some((to, straight));
+                straight
+            }
+        };
+        ctx.set_goal(Some(to));
+        if !straight {
+            return nav.step(ctx);
+        }
+        let step = p + (to - p).clamp_length_max(ctx.kind.speed_m_per_round);
+        if ctx.can_move(p, step) == Some(false) {
+            return self.pause(ctx);
+        }
+        Some(Action::MoveTo { to: step })
+    }
+
+    fn pause(&mut self, ctx: &Ctx) -> Option<Action> {
+        self.heading_to = None;
+        self.paused_until = ctx.round + SPOKE_PAUSE_ROUNDS;
+        None
+    }
+
+    /// The spoke target: [`SPOKE_AHEAD_M`] beyond the edge of the known map along the
+    /// bearing (measured every round, from the last measure), in steps of
+    /// [`SPOKE_STEP_M`]; `None` off the map.
+    fn target(&mut self, ctx: &Ctx) -> Option<DVec2> {
+        let known = ctx.known()?;
+        let home = ctx.home().center();
+        let dir = Spread::bearing(ctx.me.id);
+        let edge_m = edge_along(known, home, dir, self.spread.edge.map_or(0.0, |(m, _)| m));
+        self.spread.edge = Some((edge_m, ctx.round));
+        let to = home + dir * (((edge_m + SPOKE_AHEAD_M) / SPOKE_STEP_M).ceil() * SPOKE_STEP_M);
+        known.grid().extent().contains_strictly(to).then_some(to)
     }
 }
 

@@ -153,7 +153,7 @@ impl Terrain<'_> {
     /// cell the robot knows to be blocked lies within its radius of the leg (a blocked leaf
     /// that meets the leg counts when the robot knows one of its cells within the leg's
     /// bounding box; what the robot has not seen never enters the answer).
-    fn hopeful(&self, a: DVec2, b: DVec2) -> bool {
+    pub fn hopeful(&self, a: DVec2, b: DVec2) -> bool {
         let swept = crate::spatial::geometry::Capsule {
             a,
             b,
