@@ -256,35 +256,42 @@ impl Spoke {
         let Some(to) = self.target(ctx) else {
             return self.pause(ctx);
         };
-        let p = ctx.position();
         let straight = match self.heading_to {
             Some((t, straight)) if t == to && (straight || !nav.is_idle()) => straight,
-            _ => {
-                nav.clear();
-                let straight = ctx.terrain().is_some_and(|t| t.hopeful(p, to));
-                if !straight {
-                    let route = ctx.timed_planning(|| {
-                        ctx.terrain()
-                            .and_then(|t| ctx.nav().route_optimistic(t, p, to, SPOKE_SEARCH_NODES))
-                    });
-                    let Some(route) = route else {
-                        return self.pause(ctx);
-                    };
-                    nav.follow(route);
+            _ => match Self::set_out(ctx, nav, to) {
+                Some(straight) => {
+                    self.heading_to = Some((to, straight));
+                    straight
                 }
-                self.heading_to = Some((to, straight));
-                straight
-            }
+                None => return self.pause(ctx),
+            },
         };
         ctx.set_goal(Some(to));
         if !straight {
             return nav.step(ctx);
         }
+        let p = ctx.position();
         let step = p + (to - p).clamp_length_max(ctx.kind.speed_m_per_round);
         if ctx.can_move(p, step) == Some(false) {
             return self.pause(ctx);
         }
         Some(Action::MoveTo { to: step })
+    }
+
+    /// Set out for a new target `to`: whether straight (`Some(true)`), along a detour `nav`
+    /// now follows (`Some(false)`), or not at all (`None`: no detour found).
+    fn set_out(ctx: &Ctx, nav: &mut Navigator, to: DVec2) -> Option<bool> {
+        nav.clear();
+        let p = ctx.position();
+        if ctx.terrain().is_some_and(|t| t.hopeful(p, to)) {
+            return Some(true);
+        }
+        let route = ctx.timed_planning(|| {
+            ctx.terrain()
+                .and_then(|t| ctx.nav().route_optimistic(t, p, to, SPOKE_SEARCH_NODES))
+        })?;
+        nav.follow(route);
+        Some(false)
     }
 
     fn pause(&mut self, ctx: &Ctx) -> Option<Action> {
