@@ -83,6 +83,13 @@ impl Params {
                 ))
             })
     }
+    /// A number in `range`, or `None` when absent.
+    pub fn opt_f64_in(&self, name: &str, range: RangeInclusive<f64>) -> Result<Option<f64>> {
+        self.0
+            .contains_key(name)
+            .then(|| self.f64_in(name, 0.0, range))
+            .transpose()
+    }
     /// A whole number in `range`, or `default` when absent.
     pub fn u64_in(&self, name: &str, default: u64, range: RangeInclusive<u64>) -> Result<u64> {
         let Some(v) = self.0.get(name) else {

@@ -44,14 +44,8 @@ impl Sharing {
         let every_rounds = p.u64_in("share_every", 10, SHARE_EVERY)?;
         let avoid_radius_m = p.f64_in("avoid_radius_m", 5.0, 0.0..=MAX_DISTANCE_M)?;
         let max_claims = p.u64_in("max_claims", MAX_CLAIMS, 0..=1_000_000)? as usize;
-        let max_detour_m = match p.text("max_detour_m") {
-            Some(_) => Some(p.f64_in("max_detour_m", 0.0, 0.0..=MAX_DISTANCE_M)?),
-            None => None,
-        };
-        let spoke_mates = match p.text("spoke_mates") {
-            Some(_) => Some(p.f64_in("spoke_mates", 0.0, 0.0..=1.0e9)?),
-            None => None,
-        };
+        let max_detour_m = p.opt_f64_in("max_detour_m", 0.0..=MAX_DISTANCE_M)?;
+        let spoke_mates = p.opt_f64_in("spoke_mates", 0.0..=1.0e9)?;
         Ok(Self {
             every_rounds,
             avoid_radius_m,

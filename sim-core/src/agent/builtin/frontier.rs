@@ -214,9 +214,9 @@ pub(super) struct Frontier {
     claims: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
-    /// In a large team, the walk out along the robot's bearing.
+    /// With `spoke_mates`, the walk out along the robot's bearing.
     #[serde(default)]
-    spoke: Spoke,
+    spoke: Option<Spoke>,
 }
 
 impl Frontier {
@@ -238,7 +238,7 @@ impl Frontier {
             claims: Claims::default(),
             announced: None,
             shared_area: 0.0,
-            spoke: Spoke::from_mates(sharing.and_then(|s| s.spoke_mates).unwrap_or(f64::INFINITY)),
+            spoke: sharing.and_then(|s| s.spoke_mates).map(Spoke::from_mates),
         }
     }
 }
@@ -274,10 +274,12 @@ impl Strategy for Frontier {
             // ones each round would keep the allocator busy.
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
-                let spoke = &mut self.spoke;
+                let mut spoke = self.spoke.as_mut();
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
                     Payload::Position { goal, .. } => {
-                        spoke.heard(m.from);
+                        if let Some(spoke) = spoke.as_deref_mut() {
+                            spoke.heard(m.from);
+                        }
                         Some((
                             m.from.get(),
                             goal.filter(|g| g.distance(p) <= near).map(|g| stored_goal(g, home)),
@@ -305,11 +307,14 @@ impl Strategy for Frontier {
             keep_newest(&mut self.claims, share.max_claims, round);
         }
         if let Some(a) = self.core.reflexes(ctx) {
-            self.spoke.interrupt();
+            if let Some(spoke) = &mut self.spoke {
+                spoke.interrupt();
+            }
             return a;
         }
         let claims = &self.claims;
-        let action = match self.spoke.step(ctx, self.core.frontier.navigator()) {
+        let spoke = self.spoke.as_mut();
+        let action = match spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator())) {
             Some(a) => a,
             None => self.core.explore(
                 ctx,

@@ -65,13 +65,6 @@ impl SpreadParams {
         post_behind_m: 15.0,
     };
 
-    /// A scout's ([`Spoke`]): only the bearing and the edge count.
-    const SCOUT: Self = Self {
-        near_m: 0.0,
-        sector_overlap: 1.0,
-        post_behind_m: 0.0,
-    };
-
     /// The parameters `near_m`, `sector_overlap` and `post_behind_m` of `p`, with the task's
     /// `defaults`.
     pub(super) fn from_params(p: &Params, defaults: Self) -> Result<Self> {
@@ -99,8 +92,7 @@ impl SpreadParams {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Spread {
     params: SpreadParams,
-    /// Linear-counting sketch of the team mates heard: a bit per hash of their ids.
-    mates: [u64; SKETCH_BITS / 64],
+    mates: MatesSketch,
     /// How far the known map reaches along the bearing, and the round it was measured.
     edge: Option<(f64, u64)>,
     /// The last post with no known route to it, and the round that was found.
@@ -111,7 +103,7 @@ impl Spread {
     pub(super) fn new(params: SpreadParams) -> Self {
         Self {
             params,
-            mates: [0; SKETCH_BITS / 64],
+            mates: MatesSketch::default(),
             edge: None,
             no_route: None,
         }
@@ -119,17 +111,7 @@ impl Spread {
 
     /// Note a team mate heard.
     pub(super) fn heard(&mut self, mate: RobotId) {
-        let bit = (mix(u64::from(mate.get())) >> 56) as usize;
-        self.mates[bit / 64] |= 1 << (bit % 64);
-    }
-
-    /// The number of distinct team mates heard, estimated from the sketch (linear counting:
-    /// within a tenth up to 400, `the_sketch_counts_distinct_team_mates_within_a_tenth`).
-    pub(super) fn mates_heard(&self) -> f64 {
-        let set: u32 = self.mates.iter().map(|w| w.count_ones()).sum();
-        let bits = SKETCH_BITS as f64;
-        let clear = (SKETCH_BITS as u32 - set).max(1);
-        -bits * (f64::from(clear) / bits).ln()
+        self.mates.heard(mate);
     }
 
     fn bearing(id: RobotId) -> DVec2 {
@@ -138,7 +120,7 @@ impl Spread {
 
     /// Whether this worker takes a treasure, by where it lies: near it, or in its sector.
     pub(super) fn takes(&self, ctx: &Ctx) -> impl Fn(DVec2) -> bool + use<> {
-        let half_rad = PI * self.params.sector_overlap / (self.mates_heard() + 1.0);
+        let half_rad = PI * self.params.sector_overlap / (self.mates.count() + 1.0);
         let (near_m, bearing) = (self.params.near_m, Self::bearing(ctx.me.id));
         let (me, home) = (ctx.position(), ctx.home().center());
         move |at| half_rad >= PI || me.distance(at) <= near_m || bearing.angle_to(at - home).abs() <= half_rad
@@ -202,28 +184,23 @@ const SPOKE_PAUSE_ROUNDS: u64 = 40;
 /// else along a detour through known terrain (a search of at most [`SPOKE_SEARCH_NODES`]
 /// nodes). When a step is blocked, no detour is found, or the bearing leaves the map, the
 /// strategy explores frontiers instead, for [`SPOKE_PAUSE_ROUNDS`]. A scout that has heard
-/// fewer than `from_mates` team mates explores frontiers only (`cooperative`'s
-/// `spoke_mates`; never by default). Cost: a few map look-ups a round for the edge, a
+/// fewer than `from_mates` team mates (`cooperative`'s `spoke_mates`) explores frontiers
+/// only. Cost: a few map look-ups a round for the edge, a
 /// straight-leg test a step, and the short searches; and as scouts reach new terrain sooner,
 /// their maps grow and merge sooner.
 /// `scouts_of_a_large_team_walk_out_along_their_bearings` (tests/workers.rs) checks the
 /// walk; BENCHMARKS.md ("Workers") gives its figures.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Spoke {
-    /// Team mates heard from which the scout walks its spoke (infinite: never).
+    /// Team mates heard from which the scout walks its spoke.
     from_mates: f64,
-    spread: Spread,
+    mates: MatesSketch,
+    /// How far the known map reaches along the bearing, as last measured.
+    edge_m: f64,
     /// The target being walked to, and whether straight (or along the navigator's route).
     heading_to: Option<(DVec2, bool)>,
     /// Frontiers are explored until this round.
     paused_until: u64,
-}
-
-impl Default for Spoke {
-    /// A scout that never walks a spoke.
-    fn default() -> Self {
-        Self::from_mates(f64::INFINITY)
-    }
 }
 
 impl Spoke {
@@ -231,7 +208,8 @@ impl Spoke {
     pub(super) fn from_mates(from_mates: f64) -> Self {
         Self {
             from_mates,
-            spread: Spread::new(SpreadParams::SCOUT),
+            mates: MatesSketch::default(),
+            edge_m: 0.0,
             heading_to: None,
             paused_until: 0,
         }
@@ -239,7 +217,7 @@ impl Spoke {
 
     /// Note a team mate heard.
     pub(super) fn heard(&mut self, mate: RobotId) {
-        self.spread.heard(mate);
+        self.mates.heard(mate);
     }
 
     /// Forget the target (another tactic moved the robot).
@@ -250,7 +228,7 @@ impl Spoke {
     /// This round's step along the spoke, with `nav` following detours; `None`: explore
     /// frontiers.
     pub(super) fn step(&mut self, ctx: &mut Ctx, nav: &mut Navigator) -> Option<Action> {
-        if ctx.round < self.paused_until || self.spread.mates_heard() < self.from_mates {
+        if ctx.round < self.paused_until || self.mates.count() < self.from_mates {
             return None;
         }
         let Some(to) = self.target(ctx) else {
@@ -307,10 +285,31 @@ impl Spoke {
         let known = ctx.known()?;
         let home = ctx.home().center();
         let dir = Spread::bearing(ctx.me.id);
-        let edge_m = edge_along(known, home, dir, self.spread.edge.map_or(0.0, |(m, _)| m));
-        self.spread.edge = Some((edge_m, ctx.round));
-        let to = home + dir * (((edge_m + SPOKE_AHEAD_M) / SPOKE_STEP_M).ceil() * SPOKE_STEP_M);
+        self.edge_m = edge_along(known, home, dir, self.edge_m);
+        let to = home + dir * (((self.edge_m + SPOKE_AHEAD_M) / SPOKE_STEP_M).ceil() * SPOKE_STEP_M);
         known.grid().extent().contains_strictly(to).then_some(to)
+    }
+}
+
+/// A linear-counting sketch of the team mates heard: a bit per hash of their ids. 32 bytes
+/// whatever the team's size.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+struct MatesSketch([u64; SKETCH_BITS / 64]);
+
+impl MatesSketch {
+    /// Note a team mate heard.
+    fn heard(&mut self, mate: RobotId) {
+        let bit = (mix(u64::from(mate.get())) >> 56) as usize;
+        self.0[bit / 64] |= 1 << (bit % 64);
+    }
+
+    /// The number of distinct team mates heard (within a tenth up to 400,
+    /// `the_sketch_counts_distinct_team_mates_within_a_tenth`).
+    fn count(&self) -> f64 {
+        let set: u32 = self.0.iter().map(|w| w.count_ones()).sum();
+        let bits = SKETCH_BITS as f64;
+        let clear = (SKETCH_BITS as u32 - set).max(1);
+        -bits * (f64::from(clear) / bits).ln()
     }
 }
 
@@ -349,32 +348,27 @@ fn edge_along(known: &KnownMap, home: DVec2, dir: DVec2, from_m: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{Spread, SpreadParams};
+    use super::MatesSketch;
     use crate::spatial::RobotId;
 
     /// The sketch's estimate against the exact count of distinct ids heard (each heard
     /// twice), for runs of ids as a group has and for scattered ones.
     #[test]
     fn the_sketch_counts_distinct_team_mates_within_a_tenth() {
-        let params = SpreadParams {
-            near_m: 0.0,
-            sector_overlap: 1.0,
-            post_behind_m: 0.0,
-        };
         for (first, n, stride) in [(800, 10, 1), (800, 100, 1), (0, 300, 1), (17, 100, 7919), (5, 400, 13)] {
-            let mut s = Spread::new(params);
+            let mut s = MatesSketch::default();
             for _ in 0..2 {
                 for k in 0..n {
                     s.heard(RobotId::new(first + k * stride));
                 }
             }
-            let estimate = s.mates_heard();
+            let estimate = s.count();
             let n = f64::from(n);
             assert!(
                 (estimate - n).abs() <= 0.1 * n,
                 "{n} ids heard, estimated {estimate:.1}"
             );
         }
-        assert!(Spread::new(params).mates_heard().abs() < 1e-9);
+        assert!(MatesSketch::default().count().abs() < 1e-9);
     }
 }
