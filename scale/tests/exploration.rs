@@ -146,8 +146,9 @@ fn the_reference_stays_put_once_no_frontier_is_in_reach() {
 }
 
 /// `explore_with` hands its parameters to the strategy: `frontier` with its defaults spelt
-/// out walks exactly as with none, with re-planning at a quarter of the view instead of
-/// half it walks another way, and a name it does not take is an error naming it.
+/// out walks exactly as with none, searching again only once the whole view round a seen
+/// target is known (instead of 65 % of it) it walks another way, and a name it does not
+/// take is an error naming it.
 #[test]
 fn parameters_reach_the_compared_explorer() {
     let (_, rooms) = indoor_maps().unwrap().into_iter().next().expect("an indoor map");
@@ -158,11 +159,12 @@ fn parameters_reach_the_compared_explorer() {
         ("replan_within_view", "0.5"),
         ("seen_cost_views", "2"),
         ("reveal_first", "0.15"),
+        ("replan_when_known", "0.65"),
     ])
     .unwrap();
     assert_eq!(plain, defaults);
-    let sooner = run(&[("replan_within_view", "0.25")]).unwrap();
-    assert_ne!(sooner.at_90, plain.at_90, "{sooner:?}");
+    let later = run(&[("replan_when_known", "1")]).unwrap();
+    assert_ne!(later.at_90, plain.at_90, "{later:?}");
     let unknown = run(&[("replan_within_views", "0.25")]).unwrap_err();
     assert!(
         format!("{unknown:#}").contains("unknown parameter 'replan_within_views'"),

@@ -4,7 +4,8 @@
 use std::sync::Arc;
 
 use sim_core::agent::{
-    BoundaryFollowing, CollisionAvoidance, EnergyManagement, Navigator, Tactic, Team, TestWorld, blocked,
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, Navigator, Tactic, Team,
+    TestWorld, blocked,
 };
 use sim_core::glam::DVec2;
 use sim_core::spatial::{PieceMemo, RobotId};
@@ -352,8 +353,9 @@ fn frontiers_that_reveal_little_are_left_for_last() {
     let target = |w: &mut TestWorld, reveal_first: f64| {
         let ctx = w.ctx();
         let seen_cost_m = 2.0 * ctx.kind.view_radius_m;
-        let route = Navigator::nearest_frontier_route(&ctx, &mut PieceMemo::default(), seen_cost_m, reveal_first)
-            .expect("a frontier");
+        let route =
+            Navigator::nearest_frontier_route(&ctx, &mut PieceMemo::default(), seen_cost_m, reveal_first, (&[], 0.0))
+                .expect("a frontier");
         *route.waypoints.last().unwrap()
     };
     // Known up to x = 34. The pocket: a walk of about 3 m, and its 6 m view holds one
@@ -373,6 +375,77 @@ fn frontiers_that_reveal_little_are_left_for_last() {
         target(&mut w, 0.15).distance(pocket) < 1.0,
         "the pocket, once nothing else is left"
     );
+}
+
+/// The target the seeker walks to after one more round at `w`'s position, the round then
+/// advanced (the robot stays where it is).
+fn next_target(seeker: &mut FrontierSeeking, w: &mut TestWorld) -> DVec2 {
+    seeker.suggest(&mut w.ctx()).expect("a step");
+    w.apply(Action::Idle);
+    seeker.navigator().destination().expect("a target")
+}
+
+/// A lone explorer (6 m view) at (5.5, 5.5) in the 40 × 11 room, knowing x < 20, walks to
+/// the edge at x = 20, 14.5 m away. Once it knows x < 24 (a mate's map, say), that target is
+/// known but 15 m off, far beyond half the view: `replan_within_view` alone keeps it. The
+/// disc of 6 m round it is known up to 3.5 m east of it; unknown is the segment beyond, a
+/// share (acos(0.583) − 0.583 × √(1 − 0.583²)) / π = 0.15 of the disc: 0.85 is known, so
+/// with `replan_when_known` 0.65 it searches again and goes on to the new edge at x = 24;
+/// with 0.95 it keeps the old target.
+#[test]
+fn a_target_seen_with_its_view_mostly_known_is_searched_again() {
+    let run = |when_known: Option<f64>| {
+        let mut w = room_with_a_pocket(20).knowing_disc(DVec2::new(8.5, 5.5), 0.75);
+        let mut seeker = FrontierSeeking::default()
+            .with_ranking_by_target(Some(2.0))
+            .with_replan_within_view(0.5)
+            .with_replan_when_known(when_known);
+        let first = next_target(&mut seeker, &mut w);
+        assert!((19.5..21.0).contains(&first.x), "the edge at x = 20 first, got {first}");
+        for x in 20..24 {
+            for y in 0..11 {
+                w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5), 0.75);
+            }
+        }
+        let known = w.ctx().known().unwrap().known_fraction_near(first, 6.0);
+        assert!((0.75..0.95).contains(&known), "{known}");
+        (first, next_target(&mut seeker, &mut w))
+    };
+    let (first, next) = run(Some(0.65));
+    assert!(next.x >= 23.5, "on to the edge at x = 24, got {next}");
+    let (_, kept) = run(Some(0.95));
+    assert_eq!(kept, first);
+    let (_, kept) = run(None);
+    assert_eq!(kept, first);
+}
+
+/// A corridor one cell wide; the robot at (10.5, 1.5) knows x = 7..17, so the frontiers are
+/// the west end, 3 m away, and the east end, 6.5 m away. Held where it stands (a robot in the
+/// way, a gap its disc does not fit), it keeps the west target for `GIVE_UP_ROUNDS` rounds
+/// after the first it followed a route there (round 2 to 41), gives it up in round 42 and
+/// turns east; later searches skip the west end.
+#[test]
+fn a_target_the_robot_gets_no_nearer_to_is_given_up() {
+    let art = [
+        "#".repeat(30),
+        format!("{}R{}", ".".repeat(10), ".".repeat(19)),
+        "#".repeat(30),
+    ]
+    .join("\n");
+    let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();
+    for x in 7..17 {
+        w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, 1.5), 0.75);
+    }
+    let mut seeker = FrontierSeeking::default().with_ranking_by_target(Some(2.0));
+    for round in 1..=1 + GIVE_UP_ROUNDS {
+        assert_eq!(w.round, round);
+        let target = next_target(&mut seeker, &mut w);
+        assert!(target.x < 7.5, "round {round}: the west end, got {target}");
+    }
+    for round in 2 + GIVE_UP_ROUNDS..2 * GIVE_UP_ROUNDS {
+        let target = next_target(&mut seeker, &mut w);
+        assert!(target.x > 16.5, "round {round}: the east end, got {target}");
+    }
 }
 
 // ---------------------------------------------------------------- Team

@@ -50,9 +50,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "tactics.xml",
         rounds: 600,
-        digest: 0xa0bb_0055_12e8_2321,
-        metrics_crc: 0x8e71_e678,
-        robots_crc: 0x75b4_7542,
+        digest: 0x9528_6b3f_4ccd_31bd,
+        metrics_crc: 0x12e3_5f52,
+        robots_crc: 0x4385_257f,
     },
     Golden {
         config: "bench-1000.xml",

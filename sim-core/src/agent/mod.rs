@@ -18,7 +18,8 @@ pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};
 pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
-    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, Navigator, REPLAN_WITHIN_VIEW,
-    REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath, Tactic, Team, Teaming, blocked,
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, Navigator,
+    REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath, Tactic, Team,
+    Teaming, blocked,
 };
 pub use testing::TestWorld;

@@ -219,19 +219,31 @@ pub(super) struct Frontier {
     spoke: Option<Spoke>,
 }
 
+/// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
+/// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
+/// `with_replan_when_known`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ByTarget {
+    /// View radii charged for a view round the target wholly known.
+    pub(super) seen_cost_views: f64,
+    /// Frontiers with at least this part of their view unknown are taken first.
+    pub(super) reveal_first: f64,
+    /// Search again once the target is known with this part of the view round it.
+    pub(super) replan_when_known: f64,
+}
+
 impl Frontier {
     /// An explorer that shares with `sharing` (`None`: alone) and searches again once its
     /// target is known and nearer than `replan_within_view` of its view radius. With
-    /// `by_target` = (`seen_cost_views`, `reveal_first`) it ranks frontiers by the walk to
-    /// their targets, charging that many view radii for a view round the target already
-    /// known, and takes those with `reveal_first` of their view unknown first; without, by
-    /// the walk to the pieces holding them (see `FrontierSeeking::with_ranking_by_target`).
-    pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64, by_target: Option<(f64, f64)>) -> Self {
+    /// `by_target` it ranks frontiers by the walk to their targets, as [`ByTarget`] says;
+    /// without, by the walk to the pieces holding them.
+    pub(super) fn new(sharing: Option<Sharing>, replan_within_view: f64, by_target: Option<ByTarget>) -> Self {
         let mut core = Explorer::default();
         core.frontier = FrontierSeeking::default()
             .with_replan_within_view(replan_within_view)
-            .with_ranking_by_target(by_target.map(|(seen, _)| seen))
-            .with_reveal_first(by_target.map_or(0.0, |(_, reveal)| reveal));
+            .with_ranking_by_target(by_target.map(|b| b.seen_cost_views))
+            .with_reveal_first(by_target.map_or(0.0, |b| b.reveal_first))
+            .with_replan_when_known(by_target.map(|b| b.replan_when_known));
         Self {
             core,
             sharing,

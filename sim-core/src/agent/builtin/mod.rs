@@ -13,7 +13,7 @@ mod worker;
 
 use std::ops::RangeInclusive;
 
-use crate::agent::{REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry};
+use crate::agent::{REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry};
 
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
@@ -53,13 +53,22 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "frontier exploration: walks to the nearest boundary between known free space and the unknown \
          (by route, plus seen_cost_views view radii (2) for a view round it already known; those with \
          reveal_first (0.15) of their view unknown first), searching again once its target is seen nearer \
-         than replan_within_view of its view radius (0.5)",
+         than replan_within_view of its view radius (0.5), or seen with replan_when_known (0.65) of the view \
+         round it known; a target it gets no nearer to for 40 rounds is given up",
         |p| {
-            p.only(&["replan_within_view", "seen_cost_views", "reveal_first"])?;
+            p.only(&[
+                "replan_within_view",
+                "seen_cost_views",
+                "reveal_first",
+                "replan_when_known",
+            ])?;
             let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            let seen = p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?;
-            let reveal = p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?;
-            Ok(Box::new(frontier::Frontier::new(None, replan, Some((seen, reveal)))))
+            let by_target = frontier::ByTarget {
+                seen_cost_views: p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?,
+                reveal_first: p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?,
+                replan_when_known: p.f64_in("replan_when_known", REPLAN_WHEN_KNOWN, 0.0..=1.0)?,
+            };
+            Ok(Box::new(frontier::Frontier::new(None, replan, Some(by_target))))
         },
     );
     r.register(

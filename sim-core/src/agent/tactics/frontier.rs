@@ -27,6 +27,38 @@ pub const SEEN_COST_VIEWS: f64 = 2.0;
 /// left for last (BENCHMARKS.md, "Exploration quality").
 pub const REVEAL_FIRST: f64 = 0.15;
 
+/// `replan_when_known` of the `frontier` strategy, by default: once the target is seen and
+/// at least 65 % of the view round it is known, walking on would reveal little (a room seen
+/// whole from its door), so the robot searches again (BENCHMARKS.md, "Exploration quality").
+pub const REPLAN_WHEN_KNOWN: f64 = 0.65;
+
+/// Rounds a seeker ranking by target may follow routes to one target without getting
+/// nearer to it along them before it gives the target up: its disc does not fit through a
+/// gap the route takes, or a robot stands in the way and does not move.
+pub const GIVE_UP_ROUNDS: u64 = 40;
+
+/// A pause in seeking longer than this many rounds (another tactic acting, a trip home to
+/// recharge) starts the count of [`GIVE_UP_ROUNDS`] afresh; escapes when stuck are shorter.
+const PAUSE_ROUNDS: u64 = 10;
+
+/// How near a seeker has come to its target along the routes it followed.
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
+struct Progress {
+    target: DVec2,
+    /// The shortest walk left to the target seen so far.
+    best_m: f64,
+    /// The round that walk was last cut by half a step or more.
+    since: u64,
+    /// The round the seeker last looked.
+    seen: u64,
+}
+
+/// Targets given up that a seeker remembers, at most (the oldest is forgotten first).
+const MAX_GIVEN_UP: usize = 16;
+
+/// Targets within this many view radii of one given up are skipped.
+const SAME_TARGET_VIEWS: f64 = 0.25;
+
 fn default_replan_within_view() -> f64 {
     REPLAN_WITHIN_VIEW
 }
@@ -51,10 +83,24 @@ pub struct FrontierSeeking {
     /// [`Navigator::nearest_frontier_route`]).
     #[serde(default)]
     reveal_first: f64,
+    /// Search again once the target is known and at least this part of the view round it
+    /// is known (`None`, the default: only as `replan_within_view` says).
+    #[serde(default)]
+    replan_when_known: Option<f64>,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
     failed_at: Option<u64>,
+    /// The last target searched again for `replan_when_known`: a search that finds the
+    /// same target again keeps it, rather than searching every round.
+    #[serde(default)]
+    rechecked: Option<DVec2>,
+    /// Ranking by target: how near the robot has come to its target.
+    #[serde(default)]
+    progress: Option<Progress>,
+    /// Ranking by target: targets given up (see [`GIVE_UP_ROUNDS`]), oldest first.
+    #[serde(default)]
+    given_up: Vec<DVec2>,
     /// What the searches learnt of this robot's map (worked out again after a restore).
     #[serde(skip)]
     memo: PieceMemo,
@@ -66,9 +112,13 @@ impl Default for FrontierSeeking {
             replan_within_view: REPLAN_WITHIN_VIEW,
             by_target: None,
             reveal_first: 0.0,
+            replan_when_known: None,
             nav: Navigator::default(),
             target: None,
             failed_at: None,
+            rechecked: None,
+            progress: None,
+            given_up: Vec::new(),
             memo: PieceMemo::default(),
         }
     }
@@ -85,7 +135,10 @@ impl FrontierSeeking {
     /// Rank frontiers by the walk to their targets when no claim is to be avoided, charging
     /// `seen_cost_views` view radii for a view round the target wholly known (in
     /// proportion; see [`Navigator::nearest_frontier_route`]); `None`: by the walk to the
-    /// pieces holding them. By target, a search settles a few more pieces.
+    /// pieces holding them. By target, a search settles a few more pieces, and a target the
+    /// robot gets no nearer to along its routes for [`GIVE_UP_ROUNDS`] is given up: later
+    /// searches skip targets near it, so a route the robot cannot follow does not hold it
+    /// for ever.
     #[must_use]
     pub fn with_ranking_by_target(mut self, seen_cost_views: Option<f64>) -> Self {
         self.by_target = seen_cost_views;
@@ -97,6 +150,15 @@ impl FrontierSeeking {
     #[must_use]
     pub fn with_reveal_first(mut self, fraction: f64) -> Self {
         self.reveal_first = fraction;
+        self
+    }
+
+    /// Search again once the target is known and at least `fraction` of the view round it
+    /// is known, wherever the robot stands (once a target; `None`: only as
+    /// `replan_within_view` says).
+    #[must_use]
+    pub fn with_replan_when_known(mut self, fraction: Option<f64>) -> Self {
+        self.replan_when_known = fraction;
         self
     }
 
@@ -121,21 +183,22 @@ impl FrontierSeeking {
         // Keep walking to a frontier target even once it is seen: the way on reveals more in
         // the same direction, and a new search only every few metres keeps planning cheap.
         // Re-plan on arrival, when the route is gone, or when the target was revealed from
-        // close by.
-        let p = ctx.position();
-        let revealed_near = self.target.is_none_or(|t| {
-            ctx.known().is_some_and(|k| k.is_known(t))
-                && t.distance(p) < self.replan_within_view * ctx.kind.view_radius_m
-        });
-        let need_plan = self.nav.is_idle() || revealed_near;
+        // close by or with most of the view round it (`target_revealed`).
+        if self.by_target.is_some() {
+            self.give_up_if_stalled(ctx);
+        }
+        let need_plan = self.nav.is_idle() || self.target_revealed(ctx);
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let (memo, by_target, reveal_first) = (&mut self.memo, self.by_target, self.reveal_first);
+            let given_up = &self.given_up;
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
                 if let Some(views) = by_target
                     && avoid.is_empty()
                 {
-                    return Navigator::nearest_frontier_route(ctx, memo, views * ctx.kind.view_radius_m, reveal_first);
+                    let view_m = ctx.kind.view_radius_m;
+                    let skip = (given_up.as_slice(), SAME_TARGET_VIEWS * view_m);
+                    return Navigator::nearest_frontier_route(ctx, memo, views * view_m, reveal_first, skip);
                 }
                 Navigator::frontier_route_memo(ctx, memo, &avoid, avoid_radius_m, max_detour_m)
                     .or_else(|| Navigator::frontier_route_memo(ctx, memo, &[], 0.0, f64::INFINITY))
@@ -152,6 +215,68 @@ impl FrontierSeeking {
         }
         ctx.set_goal(self.target);
         self.nav.step(ctx)
+    }
+
+    /// Whether to search again for the current target's sake: there is none, or it is
+    /// known and nearer than `replan_within_view` of the view radius, or (once a target)
+    /// it is known with at least `replan_when_known` of the view round it.
+    fn target_revealed(&mut self, ctx: &Ctx) -> bool {
+        let Some(t) = self.target else {
+            return true;
+        };
+        let Some(known) = ctx.known().filter(|k| k.is_known(t)) else {
+            return false;
+        };
+        let view_m = ctx.kind.view_radius_m;
+        if t.distance(ctx.position()) < self.replan_within_view * view_m {
+            return true;
+        }
+        let fresh = self.rechecked != Some(t);
+        let seen_round = self
+            .replan_when_known
+            .is_some_and(|fraction| fresh && known.known_fraction_near(t, view_m) >= fraction);
+        if seen_round {
+            self.rechecked = Some(t);
+        }
+        seen_round
+    }
+
+    /// Give the target up when the walk left along the routes to it has not shrunk by half
+    /// a step in [`GIVE_UP_ROUNDS`] (pauses of more than [`PAUSE_ROUNDS`] start the count
+    /// afresh): remember it, drop the route, and search again.
+    fn give_up_if_stalled(&mut self, ctx: &Ctx) {
+        let Some(target) = self.target.filter(|_| !self.nav.is_idle()) else {
+            return;
+        };
+        let (round, left_m) = (ctx.round, self.nav.remaining_m(ctx.position()));
+        let fresh = Progress {
+            target,
+            best_m: left_m,
+            since: round,
+            seen: round,
+        };
+        let progress = match self.progress {
+            Some(p) if p.target == target && round <= p.seen + PAUSE_ROUNDS => p,
+            _ => fresh,
+        };
+        let progress = if left_m < progress.best_m - 0.5 * ctx.kind.speed_m_per_round {
+            fresh
+        } else {
+            Progress {
+                seen: round,
+                ..progress
+            }
+        };
+        self.progress = Some(progress);
+        if round >= progress.since + GIVE_UP_ROUNDS {
+            if self.given_up.len() == MAX_GIVEN_UP {
+                self.given_up.remove(0);
+            }
+            self.given_up.push(target);
+            self.progress = None;
+            self.target = None;
+            self.nav.clear();
+        }
     }
 }
 

@@ -30,7 +30,9 @@ mod team;
 pub use boundary::BoundaryFollowing;
 pub use collision::CollisionAvoidance;
 pub use energy::EnergyManagement;
-pub use frontier::{FrontierSeeking, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS};
+pub use frontier::{
+    FrontierSeeking, GIVE_UP_ROUNDS, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS,
+};
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};

@@ -49,6 +49,14 @@ impl Navigator {
         &self.waypoints[self.next.min(self.waypoints.len())..]
     }
 
+    /// The walk left along the route from `p`: to the next waypoint, then leg by leg to the
+    /// last (0 when idle). O(waypoints left).
+    pub fn remaining_m(&self, p: DVec2) -> f64 {
+        let ahead = self.remaining();
+        let first = ahead.first().map_or(0.0, |w| w.distance(p));
+        first + ahead.windows(2).map(|w| w[0].distance(w[1])).sum::<f64>()
+    }
+
     /// Plan a shortest route to `to` within known terrain and follow it.
     pub fn go_to(&mut self, ctx: &Ctx, to: DVec2) -> bool {
         let route = ctx.timed_planning(|| {
@@ -153,20 +161,24 @@ impl Navigator {
     /// only). Frontiers whose view round the target is at least `reveal_first` unknown are
     /// taken before the rest, which are searched for only when there is none of those (0:
     /// all alike): corners that reveal little are left for last rather than walked into.
+    /// Targets within `skip.1` of a point of `skip.0` (targets given up) are passed over.
     pub fn nearest_frontier_route(
         ctx: &Ctx,
         memo: &mut PieceMemo,
         seen_cost_m: f64,
         reveal_first: f64,
+        (skip, skip_radius_m): (&[DVec2], f64),
     ) -> Option<Route> {
         let by_target = |max_known| Ranking::ByTarget { seen_cost_m, max_known };
+        let search = |memo: &mut PieceMemo, max_known| {
+            Self::frontier_search(ctx, memo, skip, skip_radius_m, f64::INFINITY, by_target(max_known))
+        };
         if reveal_first > 0.0
-            && let Some(route) =
-                Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, by_target(1.0 - reveal_first))
+            && let Some(route) = search(memo, 1.0 - reveal_first)
         {
             return Some(route);
         }
-        Self::frontier_search(ctx, memo, &[], 0.0, f64::INFINITY, by_target(1.0))
+        search(memo, 1.0)
     }
 
     /// A frontier search (see [`frontier_route_memo`](Self::frontier_route_memo)) ranking
