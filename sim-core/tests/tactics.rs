@@ -420,12 +420,8 @@ fn a_target_seen_with_its_view_mostly_known_is_searched_again() {
 }
 
 /// A corridor one cell wide; the robot at (10.5, 1.5) knows x = 7..17, so the frontiers are
-/// the west end, 3 m away, and the east end, 6.5 m away. Held where it stands (a robot in the
-/// way, a gap its disc does not fit), it keeps the west target for `GIVE_UP_ROUNDS` rounds
-/// after the first it followed a route there (round 2 to 41), gives it up in round 42 and
-/// turns east; later searches skip the west end.
-#[test]
-fn a_target_the_robot_gets_no_nearer_to_is_given_up() {
+/// the west end, 3 m away, and the east end, 6.5 m away; a seeker ranking by target.
+fn corridor_with_two_ends() -> (TestWorld, FrontierSeeking) {
     let art = [
         "#".repeat(30),
         format!("{}R{}", ".".repeat(10), ".".repeat(19)),
@@ -436,7 +432,16 @@ fn a_target_the_robot_gets_no_nearer_to_is_given_up() {
     for x in 7..17 {
         w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, 1.5), 0.75);
     }
-    let mut seeker = FrontierSeeking::default().with_ranking_by_target(Some(2.0));
+    (w, FrontierSeeking::default().with_ranking_by_target(Some(2.0)))
+}
+
+/// In [`corridor_with_two_ends`], held where it stands (a robot in the way, a gap its disc
+/// does not fit), the robot keeps the west target for `GIVE_UP_ROUNDS` rounds after the
+/// first it followed a route there (round 2 to 41), gives it up in round 42 and turns east;
+/// later searches skip the west end.
+#[test]
+fn a_target_the_robot_gets_no_nearer_to_is_given_up() {
+    let (mut w, mut seeker) = corridor_with_two_ends();
     for round in 1..=1 + GIVE_UP_ROUNDS {
         assert_eq!(w.round, round);
         let target = next_target(&mut seeker, &mut w);
@@ -446,6 +451,28 @@ fn a_target_the_robot_gets_no_nearer_to_is_given_up() {
         let target = next_target(&mut seeker, &mut w);
         assert!(target.x > 16.5, "round {round}: the east end, got {target}");
     }
+}
+
+/// As above, but the seeker is not asked for rounds 31–50 (another tactic acts: a trip home
+/// to recharge, say). A pause of more than 10 rounds starts the count afresh: asked again in
+/// round 51, it keeps the west target until round 51 + `GIVE_UP_ROUNDS` − 1 and turns east
+/// then, where without the fresh count it would have given up at once.
+#[test]
+fn a_pause_in_seeking_starts_the_count_afresh() {
+    let (mut w, mut seeker) = corridor_with_two_ends();
+    for _ in 1..=30 {
+        assert!(next_target(&mut seeker, &mut w).x < 7.5);
+    }
+    for _ in 31..=50 {
+        w.apply(Action::Idle);
+    }
+    for round in 51..51 + GIVE_UP_ROUNDS {
+        assert_eq!(w.round, round);
+        let target = next_target(&mut seeker, &mut w);
+        assert!(target.x < 7.5, "round {round}: the west end, got {target}");
+    }
+    let target = next_target(&mut seeker, &mut w);
+    assert!(target.x > 16.5, "the east end, got {target}");
 }
 
 // ---------------------------------------------------------------- Team
