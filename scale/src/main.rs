@@ -193,7 +193,7 @@ enum Scenario {
         only: Option<String>,
         /// Also start both explorers from this many points along the reference's run from
         /// home, and print each map's ratios from every start and their means instead of
-        /// the table (teams are not run).
+        /// the table; then the teams' speed-ups and summed distances over every start.
         #[arg(long, default_value_t = 0)]
         starts: usize,
     },
@@ -260,7 +260,7 @@ fn run(cli: &Cli) -> Result<()> {
             // A bad name or value stops the run before its table begins.
             scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
             if starts > 0 {
-                exploration_from_starts(&compared, data.as_deref(), only.as_deref(), starts, cli.rounds)
+                exploration_from_starts(&compared, data.as_deref(), teams, only.as_deref(), starts, cli.rounds)
             } else {
                 exploration(&compared, data.as_deref(), teams, only.as_deref(), cli.rounds)
             }
@@ -615,10 +615,12 @@ impl Compared {
 
 /// `exploration --starts K`: each map from home and from `k` points along the reference's
 /// run, both explorers from each; the ratios of `strategy` to the reference at every start,
-/// each map's means, and the means over every run.
+/// each map's means, and the means over every run; then, for each team size of `teams`, its
+/// runs from every start against one `cooperative` robot's from the same start.
 fn exploration_from_starts(
     compared: &Compared,
     data: Option<&std::path::Path>,
+    teams: &[u32],
     only: Option<&str>,
     k: usize,
     max_rounds: u64,
@@ -628,6 +630,7 @@ fn exploration_from_starts(
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
     println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
     let (mut all90, mut all98) = (Vec::new(), Vec::new());
+    let mut team_runs = Vec::new();
     for (name, map) in exploration_maps(data, only)? {
         let starts = starts_along_the_reference(&map, k, max_rounds)?;
         let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
@@ -647,6 +650,7 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
+            team_runs.extend(teams_against_one(&m, teams, max_rounds)?);
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
         all90.extend(at90);
@@ -659,7 +663,70 @@ fn exploration_from_starts(
         mean(&all98),
         all98.len()
     );
+    print_team_runs(&team_runs);
     Ok(())
+}
+
+/// A team's run to 90 % against one `cooperative` robot's from the same start: the team's
+/// size, how many times fewer rounds it took, and its summed distance over the lone
+/// robot's (`None` where either fell short of 90 %).
+struct TeamRun {
+    robots: u32,
+    speedup: Option<f64>,
+    distance_ratio: Option<f64>,
+}
+
+/// Each team size of `teams` (0s skipped) against one `cooperative` robot on `map`.
+fn teams_against_one(
+    map: &std::sync::Arc<sim_core::world::MapData>,
+    teams: &[u32],
+    max_rounds: u64,
+) -> Result<Vec<TeamRun>> {
+    use scale::exploration::explore;
+    let sizes: Vec<u32> = teams.iter().copied().filter(|&n| n > 0).collect();
+    if sizes.is_empty() {
+        return Ok(Vec::new());
+    }
+    let solo = explore(map, "cooperative", 1, max_rounds)?.at_90;
+    sizes
+        .into_iter()
+        .map(|robots| {
+            let team = explore(map, "cooperative", robots, max_rounds)?.at_90;
+            let (speedup, distance_ratio) = match (solo, team) {
+                (Some((r1, d1)), Some((rn, dn))) => (Some(r1 as f64 / rn as f64), Some(dn / d1)),
+                _ => (None, None),
+            };
+            Ok(TeamRun {
+                robots,
+                speedup,
+                distance_ratio,
+            })
+        })
+        .collect()
+}
+
+/// Per team size: the mean speed-up over one robot, the runs faster than one robot (2
+/// robots: at least 1.6× faster), and the runs whose summed distance is within 1.25× one
+/// robot's, out of the runs that reached 90 %.
+fn print_team_runs(runs: &[TeamRun]) {
+    let mut sizes: Vec<u32> = runs.iter().map(|r| r.robots).collect();
+    sizes.sort_unstable();
+    sizes.dedup();
+    for robots in sizes {
+        let of_size: Vec<&TeamRun> = runs.iter().filter(|r| r.robots == robots).collect();
+        let speedups: Vec<f64> = of_size.iter().filter_map(|r| r.speedup).collect();
+        let ratios: Vec<f64> = of_size.iter().filter_map(|r| r.distance_ratio).collect();
+        let bar = if robots == 2 { 1.6 } else { 1.0 };
+        println!(
+            "{robots} cooperative robots, {} runs ({} short of 90 %): mean {}x faster than one, {} runs at least {bar}x faster; summed distance mean {}x one's, {} runs within 1.25x",
+            of_size.len(),
+            of_size.len() - speedups.len(),
+            mean(&speedups),
+            speedups.iter().filter(|&&x| x >= bar).count(),
+            mean(&ratios),
+            ratios.iter().filter(|&&x| x <= 1.25).count()
+        );
+    }
 }
 
 /// The mean of `xs` to two places, or `-`.

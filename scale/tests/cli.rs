@@ -172,3 +172,52 @@ fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// `exploration --starts` also runs the teams from every start: the line for 2 robots on the
+/// loop, from home and one start, gives the mean of the two speed-ups over one robot and the
+/// counts of runs at least 1.6× faster and within 1.25× the distance, as the library's own
+/// runs from the same starts give them.
+#[test]
+fn teams_run_from_every_start_as_the_library_runs_them() {
+    use scale::exploration::{explore, indoor_maps, starting_at, starts_along_the_reference};
+    let rounds = 3_000;
+    let out = bench(&[
+        "--rounds",
+        "3000",
+        "exploration",
+        "--only",
+        "indoor loop",
+        "--teams",
+        "2",
+        "--starts",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("2 cooperative robots"))
+        .unwrap_or_else(|| panic!("no team line in {text}"));
+    let (_, map) = indoor_maps()
+        .unwrap()
+        .into_iter()
+        .find(|(name, _)| name == "indoor loop")
+        .unwrap();
+    let start = starts_along_the_reference(&map, 1, rounds).unwrap()[0];
+    let (mut speedups, mut ratios) = (Vec::new(), Vec::new());
+    for m in [map.clone(), starting_at(&map, start)] {
+        let (r1, d1) = explore(&m, "cooperative", 1, rounds).unwrap().at_90.unwrap();
+        let (r2, d2) = explore(&m, "cooperative", 2, rounds).unwrap().at_90.unwrap();
+        speedups.push(r1 as f64 / r2 as f64);
+        ratios.push(d2 / d1);
+    }
+    let expected = format!(
+        "2 cooperative robots, 2 runs (0 short of 90 %): mean {:.2}x faster than one, {} runs at least 1.6x faster; \
+         summed distance mean {:.2}x one's, {} runs within 1.25x",
+        speedups.iter().sum::<f64>() / 2.0,
+        speedups.iter().filter(|&&x| x >= 1.6).count(),
+        ratios.iter().sum::<f64>() / 2.0,
+        ratios.iter().filter(|&&x| x <= 1.25).count()
+    );
+    assert_eq!(line, expected, "{text}");
+}
