@@ -1,6 +1,8 @@
 //! The built-in tactics, each alone, in tiny ASCII worlds ([`TestWorld`]). Expected values
 //! are worked out by hand in the comments.
 
+mod common;
+
 use std::sync::Arc;
 
 use sim_core::agent::{
@@ -419,20 +421,10 @@ fn a_target_seen_with_its_view_mostly_known_is_searched_again() {
     assert_eq!(kept, first);
 }
 
-/// A corridor one cell wide; the robot at (10.5, 1.5) knows x = 7..17, so the frontiers are
-/// the west end, 3 m away, and the east end, 6.5 m away; a seeker ranking by target.
+/// [`common::corridor_with_two_ends`] and a seeker ranking by target.
 fn corridor_with_two_ends() -> (TestWorld, FrontierSeeking) {
-    let art = [
-        "#".repeat(30),
-        format!("{}R{}", ".".repeat(10), ".".repeat(19)),
-        "#".repeat(30),
-    ]
-    .join("\n");
-    let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();
-    for x in 7..17 {
-        w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, 1.5), 0.75);
-    }
-    (w, FrontierSeeking::default().with_ranking_by_target(Some(2.0)))
+    let seeker = FrontierSeeking::default().with_ranking_by_target(Some(2.0));
+    (common::corridor_with_two_ends(), seeker)
 }
 
 /// In [`corridor_with_two_ends`], held where it stands (a robot in the way, a gap its disc

@@ -1,6 +1,9 @@
 //! The `excavator` and `transporter` strategies (how a worker picks its treasure when team
-//! mates claim treasures) and a large team's `cooperative` scouts (how they walk out), in a
-//! tiny world ([`TestWorld`]). Distances are worked out by hand in the comments.
+//! mates claim treasures) and `cooperative` scouts (how a large team walks out, how a small
+//! one shares out targets), in tiny worlds ([`TestWorld`]). Distances are worked out by hand
+//! in the comments.
+
+mod common;
 
 use std::sync::Arc;
 
@@ -317,5 +320,47 @@ fn scouts_of_a_large_team_walk_out_along_their_bearings() {
         let (goal, _) = scout_first_move(mates, params);
         let goal = goal.expect("a frontier");
         assert!(goal.x < -40.0, "{mates} mates heard: goal {goal}");
+    }
+}
+
+/// The goals of a `cooperative` robot (id 1) in [`common::corridor_with_two_ends`]: its
+/// first, and the one after hearing, in its second round, each of `mates` (id, goal)
+/// announce its goal.
+fn goals_after_a_mates_announcement(mates: &[(u32, DVec2)]) -> (DVec2, DVec2) {
+    let mut w = common::corridor_with_two_ends();
+    w.robot.id = RobotId::new(1);
+    let mut s = StrategyRegistry::with_builtins()
+        .create("cooperative", &Params::default())
+        .unwrap();
+    let first = s.decide(&mut w.ctx());
+    let first_goal = w.mind.output.goal().expect("a frontier");
+    w.apply(first);
+    let heard = mates.iter().map(|&(id, goal)| Message {
+        from: RobotId::new(id),
+        sent_round: 1,
+        to: Recipient::Broadcast,
+        payload: Arc::new(Payload::Position {
+            position: DVec2::new(10.5, 1.5),
+            goal: Some(goal),
+        }),
+    });
+    w.mind.perception.inbox = Inbox::from(heard.collect::<Vec<_>>());
+    s.decide(&mut w.ctx());
+    (first_goal, w.mind.output.goal().expect("a frontier"))
+}
+
+/// Two robots that set out together pick the same nearest frontier: here the west end, 3 m
+/// away (the east end is 6.5 m away). Told that mate 0 (a lower id) set out for it, robot 1
+/// searches again, skipping targets within `avoid_radius_m` (5 m) of the mate's goal, and
+/// takes the east end; a mate with a higher id, or none, leaves its target as it was.
+#[test]
+fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
+    let (first, _) = goals_after_a_mates_announcement(&[]);
+    assert!(first.x < 7.5, "the west end first, got {first}");
+    let (_, yielded) = goals_after_a_mates_announcement(&[(0, first)]);
+    assert!(yielded.x > 16.5, "the east end once mate 0 goes west, got {yielded}");
+    for mates in [vec![], vec![(2, first)]] {
+        let (_, kept) = goals_after_a_mates_announcement(&mates);
+        assert_eq!(kept, first, "mates {mates:?}");
     }
 }

@@ -36,16 +36,16 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "demo.xml",
         rounds: 600,
-        digest: 0x2735_1e47_246a_8f74,
-        metrics_crc: 0xb17d_bd7e,
-        robots_crc: 0x8871_42c6,
+        digest: 0xad15_adf3_d281_439f,
+        metrics_crc: 0x4789_a9d0,
+        robots_crc: 0x30d3_1ab7,
     },
     Golden {
         config: "teams.xml",
         rounds: 800,
-        digest: 0xfb74_7744_dd19_d453,
-        metrics_crc: 0xb978_2c35,
-        robots_crc: 0x5eff_b66d,
+        digest: 0x4314_4962_4b81_b577,
+        metrics_crc: 0x4bd0_541c,
+        robots_crc: 0x4944_408e,
     },
     Golden {
         config: "tactics.xml",

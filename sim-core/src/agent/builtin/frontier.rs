@@ -3,7 +3,7 @@
 use glam::{DVec2, Vec2};
 
 use super::explorer::{Explorer, Sharing, share_knowledge};
-use super::spread::Spoke;
+use super::spread::{MatesSketch, Spoke};
 use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy};
 use crate::world::{Action, Payload};
 
@@ -217,7 +217,20 @@ pub(super) struct Frontier {
     /// With `spoke_mates`, the walk out along the robot's bearing.
     #[serde(default)]
     spoke: Option<Spoke>,
+    /// Team mates heard, counted until they reach [`SMALL_TEAM_MATES`].
+    #[serde(default)]
+    mates: MatesSketch,
+    /// It has heard [`SMALL_TEAM_MATES`] team mates or more: a crowd, where goals are not
+    /// settled between mates (see [`Frontier::yield_to_lower_ids`]).
+    #[serde(default)]
+    crowd: bool,
 }
+
+/// `cooperative` robots that have heard fewer team mates than this settle clashing goals
+/// ([`Frontier::yield_to_lower_ids`]). In crowds each clash would cost a search: on the
+/// kernel scenario planning rose from 2.0 to 2.7–3.0 µs a robot-round, and fewer cells
+/// were explored (20.4 % against 22.1 % in 1,500 rounds).
+const SMALL_TEAM_MATES: f64 = 12.0;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
 /// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
@@ -251,6 +264,27 @@ impl Frontier {
             announced: None,
             shared_area: 0.0,
             spoke: sharing.and_then(|s| s.spoke_mates).map(Spoke::from_mates),
+            mates: MatesSketch::default(),
+            crowd: false,
+        }
+    }
+}
+
+impl Frontier {
+    /// When a team mate with a lower id announced this round a goal within `radius_m` of
+    /// this robot's target, drop the route: the next search avoids the mate's goal. Robots
+    /// that set out together pick the same nearest frontier before they hear each other;
+    /// without this the higher ids follow the lowest until their targets are reached.
+    fn yield_to_lower_ids(&mut self, ctx: &Ctx, radius_m: f64) {
+        let (me, now, home) = (ctx.me.id.get(), heard_in(ctx.round), ctx.home().center());
+        let nav = self.core.frontier.navigator();
+        let clash = nav.destination().is_some_and(|target| {
+            self.claims
+                .iter()
+                .any(|&(id, goal, heard)| id < me && heard == now && goal_of(goal, home).distance(target) <= radius_m)
+        });
+        if clash {
+            nav.clear();
         }
     }
 }
@@ -287,10 +321,14 @@ impl Strategy for Frontier {
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
                 let mut spoke = self.spoke.as_mut();
+                let mut mates = (!self.crowd).then_some(&mut self.mates);
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
                     Payload::Position { goal, .. } => {
                         if let Some(spoke) = spoke.as_deref_mut() {
                             spoke.heard(m.from);
+                        }
+                        if let Some(mates) = mates.as_deref_mut() {
+                            mates.heard(m.from);
                         }
                         Some((
                             m.from.get(),
@@ -317,6 +355,10 @@ impl Strategy for Frontier {
                     .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && goal_of(*g, home).distance(p) <= near);
             }
             keep_newest(&mut self.claims, share.max_claims, round);
+            self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
+            if !self.crowd {
+                self.yield_to_lower_ids(ctx, radius);
+            }
         }
         if let Some(a) = self.core.reflexes(ctx) {
             if let Some(spoke) = &mut self.spoke {

@@ -75,7 +75,8 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "cooperative",
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
          (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
-         unbounded by default); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
+         unbounded by default; in teams of fewer than 12 mates heard, a robot yields a target to a mate \
+         with a lower id that announces a goal near it); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
          team mates (never by default), it walks out along its bearing from home to just beyond the edge \
          of its known map, exploring frontiers where that is blocked",
         |p| {

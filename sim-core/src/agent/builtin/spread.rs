@@ -294,18 +294,18 @@ impl Spoke {
 /// A linear-counting sketch of the team mates heard: a bit per hash of their ids. 32 bytes
 /// whatever the team's size.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-struct MatesSketch([u64; SKETCH_BITS / 64]);
+pub(super) struct MatesSketch([u64; SKETCH_BITS / 64]);
 
 impl MatesSketch {
     /// Note a team mate heard.
-    fn heard(&mut self, mate: RobotId) {
+    pub(super) fn heard(&mut self, mate: RobotId) {
         let bit = (mix(u64::from(mate.get())) >> 56) as usize;
         self.0[bit / 64] |= 1 << (bit % 64);
     }
 
     /// The number of distinct team mates heard (within a tenth up to 400,
     /// `the_sketch_counts_distinct_team_mates_within_a_tenth`).
-    fn count(&self) -> f64 {
+    pub(super) fn count(&self) -> f64 {
         let set: u32 = self.0.iter().map(|w| w.count_ones()).sum();
         let bits = SKETCH_BITS as f64;
         let clear = (SKETCH_BITS as u32 - set).max(1);
