@@ -268,9 +268,7 @@ impl Frontier {
             crowd: false,
         }
     }
-}
 
-impl Frontier {
     /// When a team mate with a lower id announced this round a goal within `radius_m` of
     /// this robot's target, drop the route: the next search avoids the mate's goal. Robots
     /// that set out together pick the same nearest frontier before they hear each other;
