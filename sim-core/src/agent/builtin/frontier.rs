@@ -217,7 +217,8 @@ pub(super) struct Frontier {
     /// With `spoke_mates`, the walk out along the robot's bearing.
     #[serde(default)]
     spoke: Option<Spoke>,
-    /// Team mates heard, counted until they reach [`SMALL_TEAM_MATES`].
+    /// Team mates heard: counted until they reach [`SMALL_TEAM_MATES`], or for good with a
+    /// spoke (which needs their number).
     #[serde(default)]
     mates: MatesSketch,
     /// It has heard [`SMALL_TEAM_MATES`] team mates or more: a crowd, where goals are not
@@ -227,9 +228,7 @@ pub(super) struct Frontier {
 }
 
 /// `cooperative` robots that have heard fewer team mates than this settle clashing goals
-/// ([`Frontier::yield_to_lower_ids`]). In crowds each clash would cost a search: on the
-/// kernel scenario planning rose from 2.0 to 2.7–3.0 µs a robot-round, and fewer cells
-/// were explored (20.4 % against 22.1 % in 1,500 rounds).
+/// ([`Frontier::yield_to_lower_ids`]); in crowds each clash would cost a search.
 const SMALL_TEAM_MATES: f64 = 12.0;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
@@ -318,13 +317,10 @@ impl Strategy for Frontier {
             // ones each round would keep the allocator busy.
             SCRATCH.with_borrow_mut(|(updates, merged)| {
                 updates.clear();
-                let mut spoke = self.spoke.as_mut();
-                let mut mates = (!self.crowd).then_some(&mut self.mates);
+                let counting = !self.crowd || self.spoke.is_some();
+                let mut mates = counting.then_some(&mut self.mates);
                 updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
                     Payload::Position { goal, .. } => {
-                        if let Some(spoke) = spoke.as_deref_mut() {
-                            spoke.heard(m.from);
-                        }
                         if let Some(mates) = mates.as_deref_mut() {
                             mates.heard(m.from);
                         }
@@ -366,7 +362,8 @@ impl Strategy for Frontier {
         }
         let claims = &self.claims;
         let spoke = self.spoke.as_mut();
-        let action = match spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator())) {
+        let mates_heard = self.mates.count();
+        let action = match spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator(), mates_heard)) {
             Some(a) => a,
             None => self.core.explore(
                 ctx,

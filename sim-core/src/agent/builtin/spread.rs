@@ -194,7 +194,6 @@ const SPOKE_PAUSE_ROUNDS: u64 = 40;
 pub(super) struct Spoke {
     /// Team mates heard from which the scout walks its spoke.
     from_mates: f64,
-    mates: MatesSketch,
     /// How far the known map reaches along the bearing, as last measured.
     edge_m: f64,
     /// The target being walked to, and whether straight (or along the navigator's route).
@@ -208,16 +207,10 @@ impl Spoke {
     pub(super) fn from_mates(from_mates: f64) -> Self {
         Self {
             from_mates,
-            mates: MatesSketch::default(),
             edge_m: 0.0,
             heading_to: None,
             paused_until: 0,
         }
-    }
-
-    /// Note a team mate heard.
-    pub(super) fn heard(&mut self, mate: RobotId) {
-        self.mates.heard(mate);
     }
 
     /// Forget the target (another tactic moved the robot).
@@ -225,10 +218,10 @@ impl Spoke {
         self.heading_to = None;
     }
 
-    /// This round's step along the spoke, with `nav` following detours; `None`: explore
-    /// frontiers.
-    pub(super) fn step(&mut self, ctx: &mut Ctx, nav: &mut Navigator) -> Option<Action> {
-        if ctx.round < self.paused_until || self.mates.count() < self.from_mates {
+    /// This round's step along the spoke, with `nav` following detours, for a scout that
+    /// has heard `mates_heard` team mates; `None`: explore frontiers.
+    pub(super) fn step(&mut self, ctx: &mut Ctx, nav: &mut Navigator, mates_heard: f64) -> Option<Action> {
+        if ctx.round < self.paused_until || mates_heard < self.from_mates {
             return None;
         }
         let Some(to) = self.target(ctx) else {
