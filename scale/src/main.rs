@@ -650,7 +650,7 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
-            team_runs.extend(teams_against_one(&m, teams, max_rounds)?);
+            team_runs.extend(TeamRuns::run(&m, teams, max_rounds)?);
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
         all90.extend(at90);
@@ -667,55 +667,50 @@ fn exploration_from_starts(
     Ok(())
 }
 
-/// A team's run to 90 % against one `cooperative` robot's from the same start: the team's
-/// size, how many times fewer rounds it took, and its summed distance over the lone
-/// robot's (`None` where either fell short of 90 %).
-struct TeamRun {
-    robots: u32,
-    speedup: Option<f64>,
-    distance_ratio: Option<f64>,
+/// One `cooperative` robot's run on a map and each team size's (0s skipped).
+struct TeamRuns {
+    solo: scale::exploration::Exploration,
+    teams: Vec<(u32, scale::exploration::Exploration)>,
 }
 
-/// Each team size of `teams` (0s skipped) against one `cooperative` robot on `map`.
-fn teams_against_one(
-    map: &std::sync::Arc<sim_core::world::MapData>,
-    teams: &[u32],
-    max_rounds: u64,
-) -> Result<Vec<TeamRun>> {
-    use scale::exploration::explore;
-    let sizes: Vec<u32> = teams.iter().copied().filter(|&n| n > 0).collect();
-    if sizes.is_empty() {
-        return Ok(Vec::new());
+impl TeamRuns {
+    /// The runs on `map`; `None` when `teams` holds no size.
+    fn run(map: &std::sync::Arc<sim_core::world::MapData>, teams: &[u32], max_rounds: u64) -> Result<Option<Self>> {
+        use scale::exploration::explore;
+        if !teams.iter().any(|&n| n > 0) {
+            return Ok(None);
+        }
+        let solo = explore(map, "cooperative", 1, max_rounds)?;
+        let teams = teams
+            .iter()
+            .filter(|&&n| n > 0)
+            .map(|&n| Ok((n, explore(map, "cooperative", n, max_rounds)?)))
+            .collect::<Result<_>>()?;
+        Ok(Some(Self { solo, teams }))
     }
-    let solo = explore(map, "cooperative", 1, max_rounds)?.at_90;
-    sizes
-        .into_iter()
-        .map(|robots| {
-            let team = explore(map, "cooperative", robots, max_rounds)?.at_90;
-            let (speedup, distance_ratio) = match (solo, team) {
-                (Some((r1, d1)), Some((rn, dn))) => (Some(r1 as f64 / rn as f64), Some(dn / d1)),
-                _ => (None, None),
-            };
-            Ok(TeamRun {
-                robots,
-                speedup,
-                distance_ratio,
-            })
-        })
-        .collect()
+
+    /// How many times fewer rounds `team` took to 90 % than the lone robot, and its summed
+    /// distance there over the lone robot's (`None` where either fell short of 90 %).
+    fn against_one(&self, team: &scale::exploration::Exploration) -> Option<(f64, f64)> {
+        let ((r1, d1), (rn, dn)) = (self.solo.at_90?, team.at_90?);
+        Some((r1 as f64 / rn as f64, dn / d1))
+    }
 }
 
 /// Per team size: the mean speed-up over one robot, the runs faster than one robot (2
 /// robots: at least 1.6× faster), and the runs whose summed distance is within 1.25× one
 /// robot's, out of the runs that reached 90 %.
-fn print_team_runs(runs: &[TeamRun]) {
-    let mut sizes: Vec<u32> = runs.iter().map(|r| r.robots).collect();
+fn print_team_runs(runs: &[TeamRuns]) {
+    let mut sizes: Vec<u32> = runs.iter().flat_map(|r| r.teams.iter().map(|t| t.0)).collect();
     sizes.sort_unstable();
     sizes.dedup();
     for robots in sizes {
-        let of_size: Vec<&TeamRun> = runs.iter().filter(|r| r.robots == robots).collect();
-        let speedups: Vec<f64> = of_size.iter().filter_map(|r| r.speedup).collect();
-        let ratios: Vec<f64> = of_size.iter().filter_map(|r| r.distance_ratio).collect();
+        let of_size: Vec<Option<(f64, f64)>> = runs
+            .iter()
+            .flat_map(|r| r.teams.iter().filter(|t| t.0 == robots).map(|t| r.against_one(&t.1)))
+            .collect();
+        let speedups: Vec<f64> = of_size.iter().flatten().map(|r| r.0).collect();
+        let ratios: Vec<f64> = of_size.iter().flatten().map(|r| r.1).collect();
         let bar = if robots == 2 { 1.6 } else { 1.0 };
         println!(
             "{robots} cooperative robots, {} runs ({} short of 90 %): mean {}x faster than one, {} runs at least {bar}x faster; summed distance mean {}x one's, {} runs within 1.25x",
@@ -787,19 +782,15 @@ fn metres(at: Option<(u64, f64)>) -> String {
 /// 90 %, then each team size of `teams` with its speed-up, summed metres and overlap (empty
 /// when `teams` holds no size).
 fn team_cells(map: &std::sync::Arc<sim_core::world::MapData>, teams: &[u32], max_rounds: u64) -> Result<String> {
-    use scale::exploration::explore;
-    if !teams.iter().any(|&n| n > 0) {
+    let Some(runs) = TeamRuns::run(map, teams, max_rounds)? else {
         return Ok(String::new());
-    }
-    let solo = explore(map, "cooperative", 1, max_rounds)?;
+    };
     let rounds = |at: Option<(u64, f64)>| at.map_or("-".into(), |(r, _)| r.to_string());
-    let mut cells = vec![format!("1: {}, {}", rounds(solo.at_90), metres(solo.at_90))];
-    for &n in teams.iter().filter(|&&n| n > 0) {
-        let team = explore(map, "cooperative", n, max_rounds)?;
-        let speedup = match (solo.at_90, team.at_90) {
-            (Some((a, _)), Some((b, _))) => format!(" ({:.2}x)", a as f64 / b as f64),
-            _ => String::new(),
-        };
+    let mut cells = vec![format!("1: {}, {}", rounds(runs.solo.at_90), metres(runs.solo.at_90))];
+    for (n, team) in &runs.teams {
+        let speedup = runs
+            .against_one(team)
+            .map_or(String::new(), |(x, _)| format!(" ({x:.2}x)"));
         cells.push(format!(
             "{n}: {}{speedup}, {}, {:.0} % overlap",
             rounds(team.at_90),
