@@ -66,6 +66,11 @@ fn demo_run(rounds: u64) -> Command {
 
 /// Run the demo for `rounds` rounds into `dir`, with extra arguments; returns the metrics CSV.
 fn run_demo(dir: &Path, rounds: u64, extra: &[&str]) -> PathBuf {
+    run_demo_with_stderr(dir, rounds, extra).0
+}
+
+/// [`run_demo`], with what the run printed on stderr.
+fn run_demo_with_stderr(dir: &Path, rounds: u64, extra: &[&str]) -> (PathBuf, Vec<u8>) {
     let metrics = dir.join("metrics.csv");
     let out = demo_run(rounds)
         .args(["-q", "--metrics"])
@@ -80,7 +85,7 @@ fn run_demo(dir: &Path, rounds: u64, extra: &[&str]) -> PathBuf {
         "smartteams run failed: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    metrics
+    (metrics, out.stderr)
 }
 
 fn summarise(python: &Path, rrd: &Path) -> Value {
@@ -102,7 +107,9 @@ fn try_summarise(python: &Path, rrd: &Path) -> Result<Value, String> {
 /// Polls the recording a receiver is saving until `complete` holds for its summary, for at
 /// most a minute; returns the summary. A receiver writes chunks in its own order, not the
 /// order they were sent, so a test waits for everything it then checks.
-fn wait_until(python: &Path, rrd: &Path, what: &str, complete: impl Fn(&Value) -> bool) -> Value {
+/// `run_stderr` is what the run that streamed to the receiver printed on stderr: a warning
+/// there (a flush that timed out, a stream left) says why the file never completed.
+fn wait_until(python: &Path, rrd: &Path, what: &str, run_stderr: &[u8], complete: impl Fn(&Value) -> bool) -> Value {
     let t0 = Instant::now();
     loop {
         if let Ok(s) = try_summarise(python, rrd)
@@ -112,8 +119,9 @@ fn wait_until(python: &Path, rrd: &Path, what: &str, complete: impl Fn(&Value) -
         }
         assert!(
             t0.elapsed() < Duration::from_mins(1),
-            "{} never held {what}",
-            rrd.display()
+            "{} never held {what}; the run's stderr: {}",
+            rrd.display(),
+            String::from_utf8_lossy(run_stderr)
         );
         std::thread::sleep(Duration::from_millis(200));
     }
@@ -524,9 +532,9 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     let saved = dir.path().join("received.rrd");
     let (mut rx, port) = receiver(&python, &saved);
     let url = format!("--connect=127.0.0.1:{port}");
-    run_demo(dir.path(), 20, &[url.as_str()]);
+    let (_, stderr) = run_demo_with_stderr(dir.path(), 20, &[url.as_str()]);
     // The receiver writes as data arrives: read until the last round is there.
-    let s = wait_until(&python, &saved, "round 20 and its metrics", |s| {
+    let s = wait_until(&python, &saved, "round 20 and its metrics", &stderr, |s| {
         holds_round(s, 20) && explored_metric_rounds(s) >= 20
     });
     rx.kill().unwrap();
@@ -721,7 +729,7 @@ fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     assert!(args.contains(&format!("--port={port}")), "viewer started with {args}");
     // The spawned viewer outlives the run (as a real one would): read what it saved until
     // the last round is there, then stop it.
-    let s = wait_until(&python, &saved, "round 20 and the static map", |s| {
+    let s = wait_until(&python, &saved, "round 20 and the static map", &out.stderr, |s| {
         holds_round(s, 20) && s["rows"]["/world/obstacles/raster|1"].is_u64()
     });
     let pid = std::fs::read_to_string(&pid_file).unwrap();
@@ -847,9 +855,13 @@ fn a_stopped_run_ends_its_live_stream_normally() {
         .and_then(|r| r.split_whitespace().next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("{stdout}"));
-    let s = wait_until(&python, &saved, &format!("round {round} and its metrics"), |s| {
-        holds_round(s, round) && explored_metric_rounds(s) as u64 >= round
-    });
+    let s = wait_until(
+        &python,
+        &saved,
+        &format!("round {round} and its metrics"),
+        &out.stderr,
+        |s| holds_round(s, round) && explored_metric_rounds(s) as u64 >= round,
+    );
     rx.kill().unwrap();
     rx.wait().unwrap();
     assert_eq!(
