@@ -227,7 +227,7 @@ pub struct OutputArgs {
     #[command(flatten)]
     pub viewer: ViewerArgs,
     /// Log the world (robots, treasures, links, …) every K rounds only; metrics and events
-    /// are logged every round and the final round always.
+    /// are logged every round, and the last round played always (a stopped run's too).
     #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
     pub log_every: u64,
     /// Log each robot's known region (coarse, only robots whose map changed) every K rounds;

@@ -101,8 +101,8 @@ pub enum WhenBehind {
     /// Wait for it while it makes progress, so a live viewer that keeps up, however slowly,
     /// sees every logged round; once it has finished no frame for [`STALL_TIMEOUT`] (a paused
     /// or frozen viewer), leave out the world of the rounds played meanwhile (their metrics
-    /// and events are still queued), so the run never hangs on its viewer. The final round is
-    /// always queued.
+    /// and events are still queued), so the run never hangs on its viewer. The world of the
+    /// last round played is always queued (at the end of the run if it was left out).
     SkipWorld,
 }
 
@@ -154,6 +154,10 @@ pub struct RerunObserver {
     known_dirty: Vec<bool>,
     logged_rounds: u64,
     skipped_rounds: u64,
+    /// The round of the last world handed to the logging thread, and of the last world left
+    /// out: the end of a run logs the world of its last round if it is not there.
+    world_round: Option<u64>,
+    skipped_round: Option<u64>,
     /// Wall time spent in this observer on the simulation's thread during the rounds.
     busy: std::time::Duration,
     /// Wall time the end of the run waited for the logging thread and the stream.
@@ -186,6 +190,8 @@ impl RerunObserver {
             known_dirty: Vec::new(),
             logged_rounds: 0,
             skipped_rounds: 0,
+            world_round: None,
+            skipped_round: None,
             busy: std::time::Duration::ZERO,
             closing: std::time::Duration::ZERO,
             worker_busy: std::time::Duration::ZERO,
@@ -250,15 +256,20 @@ impl RerunObserver {
     /// A copy of what the world shows after this round: rows and copies, so that the
     /// logging thread does the rest (rasters, coarse regions, sorting links) beside the next
     /// round. On a worker of the round's pool (the CLI's runs), two workers make the copies.
-    fn snapshot_world(&mut self, sim: &Simulation, report: Option<&RoundReport>) -> World {
-        let final_round = sim.round() >= sim.total_rounds();
+    ///
+    /// `with_links`: the round's deliveries are drawn (none at the start); `last`: this is
+    /// the last round the run plays, so the explored area and known regions are logged
+    /// whether or not they are due.
+    fn snapshot_world(&mut self, sim: &Simulation, with_links: bool, last: bool) -> World {
+        let final_round = last || sim.round() >= sim.total_rounds();
         let max_links = self.opts.max_links;
         // The robots and types are shared with the other worker; the simulation is not `Sync`.
         let (robots, types) = (sim.robots(), sim.types());
         let ((robots, paths), (treasures, links)) = beside_on_pool(
             || (robot_rows(robots, types), planned_paths(robots)),
             || {
-                let links = report.map(|_| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), max_links));
+                let links =
+                    with_links.then(|| sample_pairs(|stride| sim.links_every(stride), sim.link_count(), max_links));
                 (treasure_rows(sim), links)
             },
         );
@@ -330,6 +341,7 @@ impl RerunObserver {
                 if self.progress.idle() >= STALL_TIMEOUT {
                     frame.world = None;
                     self.skipped_rounds += 1;
+                    self.skipped_round = Some(frame.round);
                     // A stalled logging thread has no use for the cores: the rounds take
                     // them back until a world is logged again.
                     if let Some(loan) = &self.core_loan {
@@ -342,6 +354,7 @@ impl RerunObserver {
         }
         if frame.world.is_some() {
             self.logged_rounds += 1;
+            self.world_round = Some(frame.round);
             if let Some(loan) = &self.core_loan {
                 loan.lend();
             }
@@ -1261,7 +1274,7 @@ impl Observer for RerunObserver {
                 })?,
         );
         self.frames = Some(tx);
-        let world = self.snapshot_world(sim, None);
+        let world = self.snapshot_world(sim, false, false);
         self.send(
             Frame {
                 // A resumed run starts at its checkpoint's round.
@@ -1286,7 +1299,7 @@ impl Observer for RerunObserver {
         let final_round = report.round >= sim.total_rounds();
         let world = self
             .is_logged_round(report.round, sim.total_rounds())
-            .then(|| self.snapshot_world(sim, Some(report)));
+            .then(|| self.snapshot_world(sim, true, false));
         let events = report
             .events
             .iter()
@@ -1310,8 +1323,9 @@ impl Observer for RerunObserver {
         Ok(())
     }
 
-    fn on_finish(&mut self, _sim: &Simulation) -> Result<(), ObserverError> {
+    fn on_finish(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
         let t0 = std::time::Instant::now();
+        self.log_last_round(sim)?;
         // Closing the queue lets the logging thread finish what is queued and stop.
         self.frames = None;
         match self.when_behind {
@@ -1350,6 +1364,29 @@ impl Observer for RerunObserver {
 }
 
 impl RerunObserver {
+    /// Log the world of the run's last round if it is not logged: a run stopped by a signal
+    /// between rounds `--log-every` logs, or whose live viewer was behind at its last round,
+    /// still shows where it stopped (a run that plays all its rounds logs its final round
+    /// anyway).
+    fn log_last_round(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
+        let round = sim.round();
+        if self.frames.is_none() || self.world_round == Some(round) {
+            return Ok(());
+        }
+        if self.skipped_round == Some(round) {
+            self.skipped_rounds -= 1;
+        }
+        let world = self.snapshot_world(sim, true, true);
+        let frame = Frame {
+            round,
+            // The round's metrics and events went with its own frame.
+            metrics: None,
+            events: Vec::new(),
+            world: Some(world),
+        };
+        self.send(frame, true)
+    }
+
     /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`]: Rerun's own flush waits for
     /// ever on a viewer that takes no data (its batcher is stuck sending), so it runs on a
     /// thread of its own, left behind if it does not finish.

@@ -666,6 +666,54 @@ fn a_paused_viewer_does_not_hold_up_the_run() {
     );
 }
 
+/// A run stopped by a signal between the rounds `--log-every` logs still shows where it
+/// stopped: its recording holds the world, and the explored area, of its last round.
+#[cfg(unix)]
+#[test]
+fn a_stopped_run_logs_the_world_of_its_last_round() {
+    let Some(python) = python("a_stopped_run_logs_the_world_of_its_last_round") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let rrd = dir.path().join("stopped.rrd");
+    let every = 1000;
+    let mut run = demo_run(100_000)
+        .args(["--log-every", &every.to_string(), "--rrd"])
+        .arg(&rrd)
+        .arg("--metrics")
+        .arg(dir.path().join("m.csv"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
+    // Past a round or two that `--log-every` logs.
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &run.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let out = run.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let round: u64 = stdout
+        .split("interrupted at round ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let mut logged: Vec<u64> = (0..=round).step_by(every).collect();
+    if !round.is_multiple_of(every as u64) {
+        logged.push(round);
+    }
+    let s = summarise(&python, &rrd);
+    assert_eq!(rounds_of(&s, "world/robots"), logged, "stopped at round {round}");
+    assert_eq!(rounds_of(&s, "world/explored").last(), Some(&round));
+}
+
 /// A port nobody listens on now. Rerun streams to whatever already listens on a spawned
 /// viewer's port, so each `--spawn` test asks for a port of its own.
 fn free_port() -> u16 {
