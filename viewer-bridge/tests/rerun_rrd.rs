@@ -9,6 +9,7 @@
 //! process, so killing or stopping the script would leave the real receiver running.
 
 use std::collections::BTreeMap;
+use std::ffi::OsStr;
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -162,6 +163,42 @@ fn wait_for_rounds(metrics: &Path, run: &mut Child) {
         run.try_wait().unwrap().is_none(),
         "the run ended before its viewer could be stopped: give it more rounds"
     );
+}
+
+/// Start the demo for `rounds` rounds with `args` and its metrics in `metrics`, and return
+/// once it has written a round (see [`wait_for_rounds`]).
+fn start_demo(rounds: u64, metrics: &Path, args: impl IntoIterator<Item = impl AsRef<OsStr>>) -> Child {
+    let mut run = demo_run(rounds)
+        .args(args)
+        .arg("--metrics")
+        .arg(metrics)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for_rounds(metrics, &mut run);
+    run
+}
+
+/// Stop `run` with SIGINT; its output, and the round its summary says it stopped at.
+fn stop_with_sigint(run: Child) -> (std::process::Output, u64) {
+    assert!(
+        Command::new("kill")
+            .args(["-INT", &run.id().to_string()])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let out = run.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let round = stdout
+        .split("interrupted at round ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{stdout}"));
+    (out, round)
 }
 
 fn rounds_of(summary: &Value, entity: &str) -> Vec<u64> {
@@ -621,15 +658,11 @@ fn a_paused_viewer_does_not_hold_up_the_run() {
     let dir = tempfile::tempdir().unwrap();
     let (mut rx, port) = receiver(&python, &dir.path().join("paused.rrd"));
     let rounds = 10_000;
-    let mut run = demo_run(rounds as u64)
-        .arg(format!("--connect=127.0.0.1:{port}"))
-        .arg("--metrics")
-        .arg(dir.path().join("m.csv"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
+    let mut run = start_demo(
+        rounds as u64,
+        &dir.path().join("m.csv"),
+        [format!("--connect=127.0.0.1:{port}")],
+    );
     let stop = |signal: &str| {
         Command::new("kill")
             .args([signal, &rx.id().to_string()])
@@ -677,34 +710,20 @@ fn a_stopped_run_logs_the_world_of_its_last_round() {
     let dir = tempfile::tempdir().unwrap();
     let rrd = dir.path().join("stopped.rrd");
     let every = 1000;
-    let mut run = demo_run(100_000)
-        .args(["--log-every", &every.to_string(), "--rrd"])
-        .arg(&rrd)
-        .arg("--metrics")
-        .arg(dir.path().join("m.csv"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
+    let every_arg = every.to_string();
+    let run = start_demo(
+        100_000,
+        &dir.path().join("m.csv"),
+        [
+            OsStr::new("--log-every"),
+            OsStr::new(&every_arg),
+            OsStr::new("--rrd"),
+            rrd.as_os_str(),
+        ],
+    );
     // Past a round or two that `--log-every` logs.
     std::thread::sleep(Duration::from_millis(1500));
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &run.id().to_string()])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let out = run.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let round: u64 = stdout
-        .split("interrupted at round ")
-        .nth(1)
-        .and_then(|r| r.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{stdout}"));
+    let (_, round) = stop_with_sigint(run);
     let mut logged: Vec<u64> = (0..=round).step_by(every).collect();
     if !round.is_multiple_of(every as u64) {
         logged.push(round);
@@ -878,31 +897,12 @@ fn a_stopped_run_ends_its_live_stream_normally() {
     let dir = tempfile::tempdir().unwrap();
     let saved = dir.path().join("stopped.rrd");
     let (mut rx, port) = receiver(&python, &saved);
-    let mut run = demo_run(100_000)
-        .arg(format!("--connect=127.0.0.1:{port}"))
-        .arg("--metrics")
-        .arg(dir.path().join("m.csv"))
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    wait_for_rounds(&dir.path().join("m.csv"), &mut run);
-    assert!(
-        Command::new("kill")
-            .args(["-INT", &run.id().to_string()])
-            .status()
-            .unwrap()
-            .success()
+    let run = start_demo(
+        100_000,
+        &dir.path().join("m.csv"),
+        [format!("--connect=127.0.0.1:{port}")],
     );
-    let out = run.wait_with_output().unwrap();
-    assert_eq!(out.status.code(), Some(130), "{}", String::from_utf8_lossy(&out.stderr));
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let round: u64 = stdout
-        .split("interrupted at round ")
-        .nth(1)
-        .and_then(|r| r.split_whitespace().next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{stdout}"));
+    let (out, round) = stop_with_sigint(run);
     let s = wait_until(
         &python,
         &saved,
