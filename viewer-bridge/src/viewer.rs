@@ -189,8 +189,9 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
 }
 
 /// The live stream to the viewer at `url`. A viewer on this machine is sent the chunks as
-/// they are: LZ4, which Rerun applies to every gRPC stream, takes over a quarter of the
-/// logging CPU, and loopback has bandwidth to spare (`bench-1000` sends 40 MB instead of 16). Other hosts get Rerun's compressed
+/// they are: LZ4, which Rerun applies to every gRPC stream, takes about a third of the
+/// sending thread's time, and loopback has bandwidth to spare (`bench-1000` sends 40 MB
+/// instead of 16). Other hosts get Rerun's compressed
 /// stream.
 fn connect(builder: rerun::RecordingStreamBuilder, url: &str) -> Result<rerun::RecordingStream> {
     let cannot = || format!("cannot connect to {url}");
