@@ -918,3 +918,81 @@ fn a_stopped_run_ends_its_live_stream_normally() {
         "the metrics of every round played arrived"
     );
 }
+
+/// An address of this machine that is not a loopback address (the one its route out
+/// leaves from; UDP's `connect` sends nothing), or `None` on a machine without a network.
+fn non_loopback_address() -> Option<std::net::IpAddr> {
+    let socket = std::net::UdpSocket::bind("0.0.0.0:0").ok()?;
+    ["192.0.2.1:9", "10.0.0.1:9", "172.16.0.1:9", "192.168.0.1:9"]
+        .iter()
+        .filter(|target| socket.connect(target).is_ok())
+        .filter_map(|_| socket.local_addr().ok())
+        .map(|a| a.ip())
+        .find(|ip| !ip.is_loopback() && !ip.is_unspecified())
+}
+
+/// A TCP relay on a free port of `ip` to `to` on this machine: its address, and the count of
+/// bytes sent through it towards `to`.
+fn relay(ip: std::net::IpAddr, to: u16) -> (std::net::SocketAddr, std::sync::Arc<std::sync::atomic::AtomicU64>) {
+    use std::io::{Read, Write};
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let listener = TcpListener::bind((ip, 0)).unwrap();
+    let at = listener.local_addr().unwrap();
+    let sent = std::sync::Arc::new(AtomicU64::new(0));
+    let counter = sent.clone();
+    std::thread::spawn(move || {
+        for client in listener.incoming().map_while(Result::ok) {
+            let Ok(server) = std::net::TcpStream::connect(("127.0.0.1", to)) else {
+                continue;
+            };
+            let (mut from_client, mut to_server) = (client.try_clone().unwrap(), server.try_clone().unwrap());
+            let counter = counter.clone();
+            std::thread::spawn(move || {
+                let mut buf = vec![0u8; 1 << 16];
+                while let Ok(n @ 1..) = from_client.read(&mut buf) {
+                    counter.fetch_add(n as u64, Ordering::SeqCst);
+                    if to_server.write_all(&buf[..n]).is_err() {
+                        break;
+                    }
+                }
+                let _ = to_server.shutdown(std::net::Shutdown::Write);
+            });
+            let (mut from_server, mut to_client) = (server, client);
+            std::thread::spawn(move || std::io::copy(&mut from_server, &mut to_client));
+        }
+    });
+    (at, sent)
+}
+
+/// A stream to a viewer on another host is LZ4-compressed, as Rerun sends it; one to a
+/// viewer on this machine is sent uncompressed (more than 1.5 times the bytes). Both arrive
+/// whole.
+/// The other host is this machine under its network address, through a relay that counts
+/// the bytes.
+#[test]
+fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
+    let test = "a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not";
+    let Some(python) = python(test) else {
+        return;
+    };
+    let Some(ip) = non_loopback_address() else {
+        eprintln!("{test}: skipped, this machine has no network address but loopback");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut bytes = Vec::new();
+    for (name, relay_ip) in [("remote", ip), ("local", std::net::IpAddr::from([127, 0, 0, 1]))] {
+        let saved = dir.path().join(format!("{name}.rrd"));
+        let (mut rx, port) = receiver(&python, &saved);
+        let (at, sent) = relay(relay_ip, port);
+        let (_, stderr) = run_demo_with_stderr(dir.path(), 20, &[&format!("--connect={at}")]);
+        let s = wait_until(&python, &saved, "round 20", &stderr, |s| holds_round(s, 20));
+        rx.kill().unwrap();
+        rx.wait().unwrap();
+        assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>(), "{name}");
+        bytes.push(sent.load(std::sync::atomic::Ordering::SeqCst));
+    }
+    let (remote, local) = (bytes[0], bytes[1]);
+    // 2.4 times on this run; the same bytes if both were compressed.
+    assert!(2 * local > 3 * remote, "{remote} bytes to {ip}, {local} to 127.0.0.1");
+}
