@@ -93,7 +93,7 @@ impl EnvCore {
     /// Treasures on the map: the most a robot can have in view.
     #[getter]
     fn treasure_count(&self) -> PyResult<usize> {
-        let map = sim_core::world::MapData::load(self.config.map_path()).map_err(to_py)?;
+        let map = self.config.load_map().map_err(to_py)?;
         Ok(map.treasures.len())
     }
 

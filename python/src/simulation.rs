@@ -347,6 +347,7 @@ impl Simulation {
     /// Write the whole run as it stands to the checkpoint file `path`, as `smartteams run
     /// --checkpoint` does; [`resume`](Self::resume) or `smartteams resume` continue it.
     fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
+        crate::strategy::PICKLE_FAILURE.take();
         write_checkpoint(
             &path,
             &self.run.source,
@@ -354,7 +355,7 @@ impl Simulation {
             &self.run.metrics,
             &self.run.sim,
         )
-        .map_err(to_py)
+        .map_err(crate::strategy::with_pickle_failure)
     }
 
     /// Close the recording now (it is closed at the end of the run, or when the simulation

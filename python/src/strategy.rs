@@ -94,7 +94,8 @@ fn register_strategy(name: &str, factory: Bound<'_, PyAny>) -> PyResult<()> {
     Ok(())
 }
 
-/// Every strategy a config can name: `(name, description)`, built-ins first.
+/// Every strategy a config can name, built-in or registered from Python: `(name,
+/// description)`, sorted by name.
 #[pyfunction]
 fn strategies() -> Vec<(String, String)> {
     registry()
@@ -182,6 +183,23 @@ pub(crate) fn traceback(py: Python<'_>, e: &PyErr) -> String {
     formatted.map_or_else(|_| e.to_string(), |lines| lines.concat().trim_end().to_owned())
 }
 
+thread_local! {
+    /// Why a Python strategy's object last failed to pickle on this thread: the kernel's
+    /// error for a strategy that cannot save its state does not know.
+    pub(crate) static PICKLE_FAILURE: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// `e`, an error of saving a run's state, with the reason a Python strategy's object did
+/// not pickle, if one did not.
+pub(crate) fn with_pickle_failure(e: sim_core::Error) -> PyErr {
+    match PICKLE_FAILURE.take() {
+        Some(why) => to_py(format!(
+            "{e}: checkpoints save a Python strategy with pickle, and its object does not pickle ({why})"
+        )),
+        None => to_py(e),
+    }
+}
+
 /// A strategy whose decisions a Python object makes.
 struct PyStrategy {
     obj: Py<PyAny>,
@@ -219,8 +237,11 @@ impl Strategy for PyStrategy {
 
     fn save_state(&self) -> Option<Vec<u8>> {
         Python::attach(|py| {
-            let pickled = py.import("pickle").ok()?.call_method1("dumps", (&self.obj,)).ok()?;
-            pickled.extract::<Vec<u8>>().ok()
+            let pickled = py
+                .import("pickle")
+                .and_then(|p| p.call_method1("dumps", (&self.obj,)))
+                .and_then(|b| b.extract::<Vec<u8>>());
+            pickled.inspect_err(|e| PICKLE_FAILURE.set(Some(e.to_string()))).ok()
         })
     }
 
@@ -285,7 +306,10 @@ fn action_of(returned: &Bound<'_, PyAny>, position: DVec2, speed_m: f64) -> Resu
             if queue_message(&item)? {
                 continue;
             }
-            if action.replace(one_action(&item, position, speed_m)?).is_some() {
+            let Some(one) = one_action(&item, position, speed_m) else {
+                return Err(not_an_action(returned, Some(&item)));
+            };
+            if action.replace(one).is_some() {
                 return Err("decide returned more than one action".to_owned());
             }
         }
@@ -294,45 +318,68 @@ fn action_of(returned: &Bound<'_, PyAny>, position: DVec2, speed_m: f64) -> Resu
     if queue_message(returned)? {
         return Ok(Action::Idle);
     }
-    one_action(returned, position, speed_m)
+    one_action(returned, position, speed_m).ok_or_else(|| not_an_action(returned, None))
 }
 
-/// One action object as the kernel's action.
-fn one_action(a: &Bound<'_, PyAny>, position: DVec2, speed_m: f64) -> Result<Action, String> {
+/// Why `returned` (or its `item`) is no action: what was returned, and what may be.
+fn not_an_action(returned: &Bound<'_, PyAny>, item: Option<&Bound<'_, PyAny>>) -> String {
+    let shown = |a: &Bound<'_, PyAny>| a.repr().map_or_else(|_| "an object".to_owned(), |r| r.to_string());
+    let what = match item {
+        Some(item) => format!(
+            "{}, whose item {} is neither an action nor a message",
+            shown(returned),
+            shown(item)
+        ),
+        None => shown(returned),
+    };
+    let numbers = returned.is_instance_of::<PyTuple>()
+        && returned.len().is_ok_and(|n| n == 2)
+        && returned
+            .try_iter()
+            .is_ok_and(|mut it| it.all(|x| x.is_ok_and(|x| x.extract::<f64>().is_ok())));
+    let hint = if numbers {
+        " (to move by dx, dy, return smartteams.Move(dx, dy))"
+    } else {
+        ""
+    };
+    format!(
+        "decide returned {what}; expected an action (Move, MoveTo, Idle, Excavate, Load, Unload), \
+         a message (Broadcast, Send), None, or a list of them{hint}"
+    )
+}
+
+/// One action object as the kernel's action (`None` if `a` is not one).
+fn one_action(a: &Bound<'_, PyAny>, position: DVec2, speed_m: f64) -> Option<Action> {
     if let Ok(m) = a.cast::<Move>() {
         let m = m.get();
         let d = DVec2::new(m.dx, m.dy);
         let len = d.length();
         let step = if len > speed_m { d * (speed_m / len) } else { d };
-        return Ok(Action::MoveTo { to: position + step });
+        return Some(Action::MoveTo { to: position + step });
     }
     if let Ok(m) = a.cast::<MoveTo>() {
         let m = m.get();
-        return Ok(Action::MoveTo {
+        return Some(Action::MoveTo {
             to: DVec2::new(m.x, m.y),
         });
     }
     if a.cast::<Idle>().is_ok() {
-        return Ok(Action::Idle);
+        return Some(Action::Idle);
     }
     if a.cast::<Unload>().is_ok() {
-        return Ok(Action::Unload);
+        return Some(Action::Unload);
     }
     if let Ok(e) = a.cast::<Excavate>() {
-        return Ok(Action::Excavate {
+        return Some(Action::Excavate {
             treasure: TreasureId::new(e.get().treasure),
         });
     }
     if let Ok(l) = a.cast::<Load>() {
-        return Ok(Action::Load {
+        return Some(Action::Load {
             treasure: TreasureId::new(l.get().treasure),
         });
     }
-    let shown = a.repr().map_or_else(|_| "an object".to_owned(), |r| r.to_string());
-    Err(format!(
-        "decide returned {shown}; expected an action (Move, MoveTo, Idle, Excavate, Load, Unload), \
-         a message (Broadcast, Send), None, or a list of them"
-    ))
+    None
 }
 
 /// Queue `a` if it is a message; whether it was one.

@@ -2,11 +2,13 @@
 fail, checkpointed."""
 
 import math
+import subprocess
+import sys
 
 import pytest
 import smartteams
 
-from conftest import write_config
+from conftest import REPO, write_config
 
 WALKERS = """<simulation name="walkers" seed="{seed}" rounds="{rounds}">
   <map file="MAP"/>
@@ -168,6 +170,52 @@ def test_a_wrong_return_value_disables_the_robot_with_a_clear_reason(tmp_path):
     assert "decide returned 'north'; expected an action" in text
 
 
+class TupleMover:
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        return (1.0, 0.0)
+
+
+def test_a_tuple_of_numbers_is_named_whole_with_the_action_to_return(tmp_path):
+    smartteams.register_strategy("py_tuple_mover", TupleMover)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="2"><map file="MAP"/>'
+        '<group count="1" type="explorer" strategy="py_tuple_mover" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    sim.run()
+    (text,) = [t for _, t in sim.events() if "disabled" in t]
+    assert "decide returned (1.0, 0.0), whose item 1.0 is neither an action nor a message" in text
+    assert "return smartteams.Move(dx, dy)" in text
+
+
+class Unpicklable:
+    def __init__(self, params):
+        self.choose = lambda robot: smartteams.Idle()
+
+    def decide(self, robot):
+        return self.choose(robot)
+
+
+def test_a_checkpoint_of_an_unpicklable_strategy_says_why(tmp_path):
+    smartteams.register_strategy("py_unpicklable", Unpicklable)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="4"><map file="MAP"/>'
+        '<group count="1" type="explorer" strategy="py_unpicklable" start="home"/></simulation>',
+    )
+    sim = smartteams.Simulation(str(config))
+    sim.step(2)
+    with pytest.raises(smartteams.SmartTeamsError) as error:
+        sim.checkpoint(str(tmp_path / "u.ckpt"))
+    message = str(error.value)
+    assert "strategy 'py_unpicklable' cannot save its state" in message
+    assert "does not pickle" in message and "lambda" in message
+
+
 class Keeper:
     kept = []
 
@@ -213,3 +261,20 @@ def test_register_strategy_refuses_builtin_names_and_non_callables():
         smartteams.register_strategy("frontier", Walker)
     with pytest.raises(smartteams.SmartTeamsError, match="not callable"):
         smartteams.register_strategy("py_bad", 3)
+
+
+def test_the_readme_python_example_runs_its_strategy(tmp_path):
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## Python"):]
+    code = section[section.index("```python\n") + len("```python\n"):]
+    code = code[: code.index("```")]
+    # From the repository root, as README says, with the recording kept out of the tree.
+    for folder in ("configs", "maps"):
+        (tmp_path / folder).symlink_to(REPO / folder)
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    explored, walked = map(float, done.stdout.split())
+    # Ten explorers (1 m a round) walk at most 3,000 m in 300 rounds; wanderers most of it.
+    assert 1500 < walked <= 10 * 300 * 1.0 + 1e-6
+    assert 0.05 < explored < 1
+    assert (tmp_path / "wanderers.rrd").stat().st_size > 0

@@ -100,8 +100,8 @@ impl Simulation {
     fn not_checkpointable(&self, r: &Robot) -> Error {
         let g = &self.groups[r.group];
         Error::InvalidParameter(format!(
-            "group '{}': strategy '{}' cannot save its state (it does not implement \
-             Strategy::save_state), so this run cannot be checkpointed",
+            "group '{}': strategy '{}' cannot save its state (its `Strategy::save_state` gave \
+             none), so this run cannot be checkpointed",
             g.name, g.strategy
         ))
     }

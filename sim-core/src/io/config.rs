@@ -169,6 +169,45 @@ struct ScannedElement {
     offset: usize,
 }
 
+/// A malformed attribute of element `name`, whose tag starts at byte `lt` of `text`: the
+/// byte offset of the fault and what is wrong. A tag whose `>` is missing swallows the next
+/// tag as attributes: that is said.
+fn attribute_error(
+    text: &str,
+    name: &str,
+    lt: usize,
+    err: &quick_xml::events::attributes::AttrError,
+) -> (usize, String) {
+    use quick_xml::events::attributes::AttrError;
+    // Positions count from the byte after the tag's `<`.
+    let (AttrError::ExpectedEq(pos)
+    | AttrError::ExpectedValue(pos)
+    | AttrError::UnquotedValue(pos)
+    | AttrError::ExpectedQuote(pos, _)
+    | AttrError::Duplicated(pos, _)) = *err;
+    let mut at = (lt + 1 + pos).min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let full = err.to_string();
+    let what = if let AttrError::Duplicated(..) = err {
+        let key: String = text[at..]
+            .chars()
+            .take_while(|c| !c.is_whitespace() && *c != '=')
+            .collect();
+        format!("attribute `{key}` given twice")
+    } else {
+        full.split_once(": ").map_or(full.clone(), |(_, w)| w.to_owned())
+    };
+    let hint = if text[lt + 1..at].contains('<') {
+        let (line, column) = line_col(text, lt);
+        format!(" (the <{name}> at {line}:{column} lacks its `>` or `/>`)")
+    } else {
+        String::new()
+    };
+    (at, format!("malformed XML in <{name}>: {what}{hint}"))
+}
+
 impl Scan {
     /// Errors are (byte offset, message).
     fn new(text: &str) -> std::result::Result<Self, (usize, String)> {
@@ -186,15 +225,18 @@ impl Scan {
                 Ok(XmlEvent::Eof) => break,
                 Ok(XmlEvent::Start(e) | XmlEvent::Empty(e)) => {
                     let name = e.name().as_ref().to_owned();
+                    // Every element's attributes are checked here, where the fault's place
+                    // is known; serde's pass gives a position without a line.
+                    let lt = before + text[before..].find('<').unwrap_or(0);
+                    let mut attributes = Vec::new();
+                    for a in e.attributes() {
+                        let a = a.map_err(|err| attribute_error(text, &name, lt, &err))?;
+                        let value = a
+                            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                            .map_err(|err| malformed(&err, lt as u64))?;
+                        attributes.push((a.key.as_ref().to_owned(), value.into_owned()));
+                    }
                     if name == "robot-type" {
-                        let mut attributes = Vec::new();
-                        for a in e.attributes() {
-                            let a = a.map_err(|err| malformed(&err, before as u64))?;
-                            let value = a
-                                .normalized_value(quick_xml::XmlVersion::Implicit1_0)
-                                .map_err(|err| malformed(&err, before as u64))?;
-                            attributes.push((a.key.as_ref().to_owned(), value.into_owned()));
-                        }
                         scan.robot_types.push(attributes);
                     }
                     scan.elements.push(ScannedElement { name, offset: before });
@@ -420,11 +462,16 @@ impl SimConfig {
     /// robot types, strategies (each robot's built once), starts and room for every robot.
     /// Each error names its source: the XML element, or the `--map` argument.
     pub fn scenario(&self, registry: &StrategyRegistry) -> Result<Scenario> {
+        self.scenario_with_map(registry, Arc::new(self.load_map()?))
+    }
+
+    /// Load the config's map; an error names where the map was given (the `<map>` element
+    /// or the `--map` argument).
+    pub fn load_map(&self) -> Result<MapData> {
         if !self.map_path.is_file() {
             return Err(self.map_error(format!("map file {} does not exist", self.map_path.display())));
         }
-        let map = MapData::load(&self.map_path).map_err(|e| self.map_error(e.to_string()))?;
-        self.scenario_with_map(registry, Arc::new(map))
+        MapData::load(&self.map_path).map_err(|e| self.map_error(e.to_string()))
     }
 
     /// [`scenario`](Self::scenario) on a map already loaded (a sweep loads each of its maps
@@ -474,5 +521,47 @@ mod tests {
         assert_eq!(line_col(t, 0), (1, 1));
         assert_eq!(line_col(t, 4), (2, 2));
         assert_eq!(line_col(t, 7), (3, 1));
+    }
+
+    /// The error of a config `text` that must not parse.
+    fn parse_error(text: &str) -> String {
+        match SimConfig::parse(text, Path::new("c.xml")) {
+            Ok(_) => panic!("a malformed config parsed"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    /// A malformed attribute is reported where it is, in the element that holds it.
+    #[test]
+    fn malformed_attributes_are_reported_at_their_place() {
+        let head = "<simulation name=\"m\" rounds=\"10\">\n  <map file=\"x.stmap\"/>\n";
+        // Column 25 of line 3 is the `2`.
+        let err = parse_error(&format!(
+            "{head}  <group name=\"g\" count=2 type=\"explorer\"/>\n</simulation>\n"
+        ));
+        assert!(
+            err.starts_with("c.xml:3:25: malformed XML in <group>: attribute value must be enclosed"),
+            "{err}"
+        );
+        // Column 19 of line 3 is the second `name`.
+        let err = parse_error(&format!("{head}  <group name=\"g\" name=\"h\"/>\n</simulation>\n"));
+        assert_eq!(
+            err,
+            "c.xml:3:19: malformed XML in <group>: attribute `name` given twice"
+        );
+    }
+
+    /// A tag left without its `>` takes in the next tag, whose place is reported, with the
+    /// tag that lacks the end.
+    #[test]
+    fn a_tag_without_its_end_is_named() {
+        let text = "<simulation name=\"m\" rounds=\"10\">\n  <map file=\"x.stmap\"/>\n  \
+                    <group name=\"g\" type=\"explorer\"\n</simulation>\n";
+        let err = parse_error(text);
+        assert!(err.starts_with("c.xml:4:"), "{err}");
+        assert!(
+            err.contains("malformed XML in <group>") && err.contains("the <group> at 3:3 lacks its `>` or `/>`"),
+            "{err}"
+        );
     }
 }
