@@ -122,6 +122,7 @@ impl Run {
             self.metrics.push(report.metrics);
             self.events
                 .extend(report.events.iter().map(|e| (report.round, e.to_string())));
+            warn_of_failed_strategies(py, report)?;
             if let Some(r) = &mut self.recording {
                 r.on_round(&self.sim, self.sim.report()).map_err(to_py)?;
             }
@@ -140,6 +141,25 @@ impl Run {
             None => Ok(()),
         }
     }
+}
+
+/// A `RuntimeWarning` for each robot a failing strategy disabled in the round of `report`:
+/// the event log keeps the reason, but a script that does not read it would not know why
+/// its robots stopped. Python's warning filters show each text once by default, or turn
+/// them into errors (`-W error`).
+fn warn_of_failed_strategies(py: Python<'_>, report: &sim_core::world::RoundReport) -> PyResult<()> {
+    for e in &report.events {
+        if let sim_core::world::Event::StrategyFailed { robot, reason } = e {
+            let first_line = reason.lines().next().unwrap_or_default();
+            let text = format!(
+                "round {}: robot {robot} is disabled: {first_line} (sim.events() has the whole reason)",
+                report.round
+            );
+            let text = std::ffi::CString::new(text.replace('\0', " ")).unwrap_or_default();
+            PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(), &text, 1)?;
+        }
+    }
+    Ok(())
 }
 
 impl Drop for Run {
