@@ -225,7 +225,8 @@ impl Simulation {
 
     /// Play up to `n` rounds; returns the current round.
     #[pyo3(signature = (n=1))]
-    fn step(&mut self, py: Python<'_>, n: u64) -> PyResult<u64> {
+    fn step(&mut self, py: Python<'_>, n: i64) -> PyResult<u64> {
+        let n = u64::try_from(n).map_err(|_| to_py(format!("step(n): n is the rounds to play, ≥ 0; got {n}")))?;
         self.run.play(py, n)?;
         Ok(self.run.sim.round())
     }
@@ -318,7 +319,7 @@ impl Simulation {
     fn known_map<'py>(
         &self,
         py: Python<'py>,
-        robot_id: u32,
+        robot_id: i64,
         x0: Option<f64>,
         y0: Option<f64>,
         width_m: Option<f64>,
@@ -407,13 +408,14 @@ impl Simulation {
 }
 
 /// The known map of robot `id`, or an error naming why there is none.
-pub(crate) fn robot_known_map(sim: &sim_core::engine::Simulation, id: u32) -> PyResult<&sim_core::spatial::KnownMap> {
-    if id as usize >= sim.robots().len() {
+pub(crate) fn robot_known_map(sim: &sim_core::engine::Simulation, id: i64) -> PyResult<&sim_core::spatial::KnownMap> {
+    let Some(id) = u32::try_from(id).ok().filter(|&i| (i as usize) < sim.robots().len()) else {
         return Err(to_py(format!(
-            "no robot {id}: the run has {} robots",
-            sim.robots().len()
+            "no robot {id}: the run has {} robots, ids 0 to {}",
+            sim.robots().len(),
+            sim.robots().len().saturating_sub(1)
         )));
-    }
+    };
     sim.known_map(RobotId::new(id)).ok_or_else(|| {
         to_py(format!(
             "robot {id} keeps no known map (its strategy does not need one)"

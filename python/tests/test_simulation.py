@@ -135,6 +135,17 @@ def test_bad_configs_raise_with_file_line_and_column(tmp_path, smartteams_bin):
         smartteams.Simulation(str(REPO / "configs" / "demo.xml"), threads=0)
 
 
+def test_bad_arguments_raise_saying_what_is_allowed(demo_config):
+    sim = smartteams.Simulation(str(demo_config), rounds=3)
+    with pytest.raises(smartteams.SmartTeamsError, match="rounds to play, ≥ 0; got -1"):
+        sim.step(-1)
+    # The demo has 20 robots.
+    for robot in (-1, 20):
+        with pytest.raises(smartteams.SmartTeamsError, match=f"no robot {robot}: the run has 20 robots, ids 0 to 19"):
+            sim.known_map(robot)
+    assert sim.round == 0
+
+
 def test_recording_verifies_with_the_rerun_cli(tmp_path, demo_config):
     rrd = tmp_path / "demo.rrd"
     with smartteams.Simulation(str(demo_config), rounds=25, rrd=str(rrd)) as sim:
