@@ -172,7 +172,7 @@ struct ScannedElement {
 /// A malformed attribute of element `name`, whose tag starts at byte `lt` of `text`: the
 /// byte offset of the fault and what is wrong. A tag whose `>` is missing swallows the next
 /// tag as attributes: that is said.
-fn attribute_error(
+pub(crate) fn attribute_error(
     text: &str,
     name: &str,
     lt: usize,

@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::agent::StrategyRegistry;
 use crate::engine::Simulation;
-use crate::io::config::{SimConfig, line_col};
+use crate::io::config::{SimConfig, attribute_error, line_col};
 use crate::world::{METRICS_COLUMNS, MapData};
 use crate::write_atomically;
 use crate::{Error, Result};
@@ -298,7 +298,10 @@ impl SweepText<'_> {
             let name = e.name().as_ref().to_owned();
             let mut attributes = Vec::new();
             for a in e.attributes() {
-                let a = a.map_err(|err| self.error(at, format!("malformed XML: {err}")))?;
+                let a = a.map_err(|err| {
+                    let (offset, message) = attribute_error(text, &name, at, &err);
+                    self.error(offset, message)
+                })?;
                 let value = a
                     .normalized_value(quick_xml::XmlVersion::Implicit1_0)
                     .map_err(|err| self.error(at, format!("malformed XML: {err}")))?;
@@ -1042,6 +1045,21 @@ mod tests {
             base,
             fingerprint: 0,
         }
+    }
+
+    /// A malformed attribute is reported where it is, in the element that holds it.
+    #[test]
+    fn a_sweep_tag_without_its_end_is_named() {
+        let text = "<sweep config=\"base.xml\" rounds=\"5\"\n  <seed values=\"1,2\"/>\n</sweep>\n";
+        let err = Sweep::parse(text, Path::new("s.xml"))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(err.starts_with("s.xml:2:"), "{err}");
+        assert!(
+            err.contains("malformed XML in <sweep>") && err.contains("the <sweep> at 1:1 lacks its"),
+            "{err}"
+        );
     }
 
     #[test]
