@@ -55,9 +55,7 @@ impl Run {
         threads: Option<usize>,
         rrd: Option<PathBuf>,
     ) -> PyResult<Self> {
-        if threads == Some(0) {
-            return Err(to_py("threads must be at least 1"));
-        }
+        sim_core::engine::check_threads(threads).map_err(|e| to_py(format!("threads {e}")))?;
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.unwrap_or(0))
             .build()

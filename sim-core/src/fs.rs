@@ -17,8 +17,9 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         let at = at.to_path_buf();
         move |cause| Error::Io { path: at, cause }
     };
-    let mut file = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-    file.write_all(bytes).and_then(|()| file.sync_all()).map_err(io(&tmp))?;
+    // Errors name the file asked for: the temporary one is ours, not the user's.
+    let mut file = std::fs::File::create(&tmp).map_err(io(path))?;
+    file.write_all(bytes).and_then(|()| file.sync_all()).map_err(io(path))?;
     drop(file);
     std::fs::rename(&tmp, path).map_err(io(path))
 }

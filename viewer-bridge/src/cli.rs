@@ -251,9 +251,7 @@ impl OutputArgs {
     /// The validated run settings for `config`; `default_rrd` names the recording when no
     /// viewer option is given.
     fn resolve(self, config: SimConfig, default_rrd: PathBuf, checkpoint: Option<CheckpointPlan>) -> Result<RunConfig> {
-        if self.threads == Some(0) {
-            bail!("--threads must be at least 1");
-        }
+        sim_core::engine::check_threads(self.threads).map_err(|e| anyhow::anyhow!("--threads {e}"))?;
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
         let viewer = self.viewer.target(default_rrd)?;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use sim_core::agent::StrategyRegistry;
 use sim_core::engine::{CoreLoan, Simulation, TurnSharing, with_hot_workers_lending};
 use sim_core::io::Observer;
@@ -272,6 +272,8 @@ struct Outputs {
     rerun: Option<RerunObserver>,
     checkpoints: Option<CheckpointWriter>,
     metrics: Option<MetricsCsv<BufWriter<File>>>,
+    /// The robot-stats file, created before the first round and written at the end.
+    robot_stats: Option<File>,
 }
 
 impl Outputs {
@@ -286,10 +288,27 @@ impl Outputs {
             )?),
             None => None,
         };
+        if let Some(c) = &run.checkpoint
+            && let Some(dir) = c.path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir())
+        {
+            bail!(
+                "cannot write the checkpoint {}: the folder {} does not exist",
+                c.path.display(),
+                dir.display()
+            );
+        }
         let checkpoints = run
             .checkpoint
             .as_ref()
             .map(|c| CheckpointWriter::new(c.path.clone(), c.every_rounds, c.source.clone(), rows_before.to_vec()));
+        // Created now, written at the end: a path that cannot be written is found before
+        // the rounds are played, not after.
+        let robot_stats = match &run.robot_stats {
+            Some(p) => {
+                Some(File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?)
+            }
+            None => None,
+        };
         let rerun = match &run.viewer {
             Some(target) => Some(open_recording(sim, target, run.log)?),
             None => None,
@@ -300,6 +319,7 @@ impl Outputs {
             rerun,
             checkpoints,
             metrics,
+            robot_stats,
         })
     }
 
@@ -328,8 +348,7 @@ impl Outputs {
         if let Some(m) = self.metrics.as_mut() {
             sim_core::io::Observer::on_finish(m, sim).ok();
         }
-        if let Some(p) = &run.robot_stats {
-            let file = File::create(p).with_context(|| format!("cannot create robot stats file {}", p.display()))?;
+        if let (Some(p), Some(file)) = (&run.robot_stats, self.robot_stats.take()) {
             write_robot_stats(sim, BufWriter::new(file)).with_context(|| format!("writing {}", p.display()))?;
         }
         Ok(())
@@ -473,18 +492,27 @@ fn play_rounds(
         o.on_start(sim)?;
     }
     let mut stopped = None;
-    while sim.round() < sim.total_rounds() {
+    let mut failed = None;
+    'rounds: while sim.round() < sim.total_rounds() {
         if let Some(signal) = crate::stop::requested() {
             stopped = Some(signal);
             break;
         }
         step(sim);
         for o in observers.iter_mut() {
-            o.on_round(sim, sim.report())?;
+            if let Err(e) = o.on_round(sim, sim.report()) {
+                failed = Some(e);
+                break 'rounds;
+            }
         }
     }
+    // Every observer hears the end, even after one failed, so that the others close what
+    // they wrote (a recording's footer); the first error is the one reported.
     for o in observers.iter_mut() {
-        o.on_finish(sim)?;
+        let finished = o.on_finish(sim);
+        if failed.is_none() {
+            failed = finished.err();
+        }
     }
-    Ok(stopped)
+    failed.map_or(Ok(stopped), Err)
 }

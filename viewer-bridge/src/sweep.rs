@@ -77,9 +77,7 @@ pub fn resolve_shard(arg: Option<&str>, env: impl Fn(&str) -> Option<String>) ->
 /// Run `smartteams sweep`.
 pub fn sweep(args: &SweepArgs, registry: &StrategyRegistry, progress: bool) -> Result<SweepSummary> {
     let shard = resolve_shard(args.shard.as_deref(), |k| std::env::var(k).ok())?;
-    if args.threads == Some(0) {
-        bail!("--threads must be at least 1");
-    }
+    sim_core::engine::check_threads(args.threads).map_err(|e| anyhow::anyhow!("--threads {e}"))?;
     let sweep = Sweep::load(&args.sweep)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))

@@ -196,3 +196,58 @@ fn tactics_listed_and_composed_by_name_in_a_config() {
     let explored: f64 = last.split(',').nth(1).unwrap().parse().unwrap();
     assert!(explored > 0.5, "{last}");
 }
+
+/// One explorer on the demo map for `rounds` rounds.
+fn one_explorer(rounds: u64) -> String {
+    format!(
+        r#"<simulation rounds="{rounds}">
+  <map file="MAP"/>
+  <group name="g" count="1" type="explorer" strategy="random_walk"/>
+</simulation>"#
+    )
+}
+
+#[test]
+fn a_config_without_robots_is_refused_at_its_group() {
+    let (ok, err) = run_config(
+        "none.xml",
+        r#"<simulation rounds="5">
+  <map file="MAP"/>
+  <group name="g" count="0" type="explorer" strategy="random_walk"/>
+</simulation>"#,
+        &[],
+    );
+    assert!(!ok);
+    assert!(
+        err.contains("none.xml:3:3: no robots to simulate: every <group> has count 0"),
+        "{err}"
+    );
+}
+
+/// Output files that cannot be written are refused before the first round, with the file
+/// named: the rounds of a long run would otherwise be played for nothing.
+#[test]
+fn outputs_that_cannot_be_written_are_refused_before_the_first_round() {
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["--robot-stats", "no/such/folder/r.csv"],
+            "cannot create robot stats file no/such/folder/r.csv",
+        ),
+        (
+            &["--checkpoint", "no/such/folder/c.ckpt"],
+            "cannot write the checkpoint no/such/folder/c.ckpt: the folder no/such/folder does not exist",
+        ),
+        (&["--threads", "100000"], "--threads must be from 1 to 1024, got 100000"),
+    ];
+    for (args, expected) in cases {
+        let kept = tempfile::tempdir().unwrap();
+        let metrics = kept.path().join("m.csv");
+        let mut all = vec!["--metrics", metrics.to_str().unwrap()];
+        all.extend_from_slice(args);
+        let (ok, err) = run_config("long.xml", &one_explorer(2000), &all);
+        assert!(!ok && err.contains(expected), "{args:?}: {err}");
+        // No round was played: the metrics CSV, if made, holds no row.
+        let rows = std::fs::read_to_string(&metrics).map_or(0, |t| t.lines().count().saturating_sub(1));
+        assert_eq!(rows, 0, "{args:?}: rounds were played");
+    }
+}

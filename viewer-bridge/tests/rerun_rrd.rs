@@ -996,3 +996,37 @@ fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
     // 2.4 times on this run; the same bytes if both were compressed.
     assert!(2 * local > 3 * remote, "{remote} bytes to {ip}, {local} to 127.0.0.1");
 }
+
+/// A run stopped by an output that fails mid-way (here a checkpoint whose path is a
+/// folder, found at the first checkpoint) still closes its recording: it verifies and holds
+/// the rounds played.
+#[test]
+fn a_run_stopped_by_a_failing_checkpoint_keeps_its_recording() {
+    let Some(python) = python("a_run_stopped_by_a_failing_checkpoint_keeps_its_recording") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let checkpoint = dir.path().join("c.ckpt");
+    std::fs::create_dir(&checkpoint).unwrap();
+    std::fs::write(checkpoint.join("keep"), b"").unwrap();
+    let rrd = dir.path().join("x.rrd");
+    let out = demo_run(20)
+        .arg("-q")
+        .arg("--checkpoint")
+        .arg(&checkpoint)
+        .args(["--checkpoint-every", "5", "--rrd"])
+        .arg(&rrd)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "the checkpoint could not be written: {stderr}");
+    assert!(
+        stderr.contains("run stopped at round 5") && stderr.contains("c.ckpt"),
+        "{stderr}"
+    );
+    rrd_verify(&python, &rrd);
+    assert_eq!(
+        rounds_of(&summarise(&python, &rrd), "world/robots"),
+        (0..=5).collect::<Vec<_>>()
+    );
+}

@@ -14,3 +14,22 @@ pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
 pub use simulation::{
     DEFAULT_DECIDE_LIMIT, PhaseTimes, SIDE_BY_SIDE_MIN_ROBOTS, SIDE_BY_SIDE_MIN_WORKERS, Simulation, TurnSharing,
 };
+
+/// The most worker threads a run may ask for: beyond the cores of any machine runs are
+/// made on, and far below where starting the threads would exhaust the process's memory
+/// maps (100,000 threads abort the process).
+pub const MAX_THREADS: usize = 1024;
+
+/// `threads` (`None`: one per core) if it lies in 1..=[`MAX_THREADS`]; otherwise what is
+/// allowed.
+///
+/// ```
+/// assert!(sim_core::engine::check_threads(Some(8)).is_ok());
+/// assert!(sim_core::engine::check_threads(Some(0)).is_err());
+/// ```
+pub fn check_threads(threads: Option<usize>) -> Result<Option<usize>, String> {
+    match threads {
+        Some(t) if !(1..=MAX_THREADS).contains(&t) => Err(format!("must be from 1 to {MAX_THREADS}, got {t}")),
+        t => Ok(t),
+    }
+}

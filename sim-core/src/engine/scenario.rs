@@ -137,6 +137,11 @@ impl ScenarioBuilder {
         for t in &types {
             t.validate()?;
         }
+        if groups.iter().all(|g| g.count == 0) {
+            return Err(Error::InvalidParameter(
+                "no robots to simulate: the scenario has no group with a count above 0".into(),
+            ));
+        }
         let group_error = |index: usize, message: String| Error::Group {
             index,
             name: groups[index].name.clone(),

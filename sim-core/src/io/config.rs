@@ -477,6 +477,9 @@ impl SimConfig {
     /// [`scenario`](Self::scenario) on a map already loaded (a sweep loads each of its maps
     /// once for all its runs).
     pub fn scenario_with_map(&self, registry: &StrategyRegistry, map: Arc<MapData>) -> Result<Scenario> {
+        if let Some(first) = self.groups.first().filter(|_| self.groups.iter().all(|g| g.count == 0)) {
+            return Err(self.error(first.at, "no robots to simulate: every <group> has count 0"));
+        }
         let mut builder = ScenarioBuilder::new(map)
             .with_name(self.name.clone())
             .with_seed(self.seed)
@@ -529,6 +532,28 @@ mod tests {
             Ok(_) => panic!("a malformed config parsed"),
             Err(e) => e.to_string(),
         }
+    }
+
+    /// A config whose groups are all empty is refused at its first group.
+    #[test]
+    fn a_config_without_robots_is_refused() {
+        let grid = crate::spatial::Grid::new(glam::DVec2::ZERO, 1.0, 16, 16).unwrap();
+        let map = MapData {
+            obstacles: crate::spatial::ObstacleMap::empty(grid),
+            home: crate::world::HomeBase::Disc {
+                center: glam::DVec2::splat(8.0),
+                radius_m: 2.0,
+            },
+            treasures: Vec::new(),
+        };
+        let text = "<simulation>\n  <map file=\"x.stmap\"/>\n  <group count=\"0\" type=\"explorer\" strategy=\"random_walk\"/>\n</simulation>";
+        let config = SimConfig::parse(text, Path::new("c.xml")).unwrap();
+        let err = config
+            .scenario_with_map(&StrategyRegistry::with_builtins(), Arc::new(map))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert_eq!(err, "c.xml:3:3: no robots to simulate: every <group> has count 0");
     }
 
     /// A malformed attribute is reported where it is, in the element that holds it.

@@ -255,7 +255,7 @@ impl RobotIndex {
         // A crowd (more than four robots a cell over the robots' box) gets cells half as
         // wide, up to three times, so that a query reads fewer robots outside its disc.
         let mut halvings = 0;
-        while self.dense_allowed && halvings < 3 && n as u64 > 4 * area {
+        while self.dense_allowed && halvings < 3 && n as u64 > area.saturating_mul(4) {
             halvings += 1;
             self.cell_m *= 0.5;
             (lo, hi) = file_in_cells(&mut self.scratch, self.cell_m);
