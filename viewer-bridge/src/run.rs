@@ -189,6 +189,19 @@ impl std::fmt::Display for Summary {
     }
 }
 
+/// The metrics of the last round played: from the checkpoint a run resumed from when it
+/// played no round after it (a checkpoint of the final round), whose simulation holds no
+/// round's report.
+fn last_metrics(sim: &Simulation, resumed: Option<&Checkpoint>) -> RoundMetrics {
+    match resumed
+        .filter(|c| c.round() == sim.round())
+        .and_then(|c| c.metrics().last())
+    {
+        Some(m) => m.clone(),
+        None => sim.report().metrics,
+    }
+}
+
 /// When the run first had 50, 90 and 98 % of the free area explored: "50 % at round R
 /// (D m walked)", or "not reached".
 fn milestones(m: &RoundMetrics) -> String {
@@ -369,7 +382,7 @@ impl Outputs {
             rounds: sim.round(),
             resumed_at: resumed.map(Checkpoint::round),
             robots: sim.robots().len(),
-            metrics: sim.report().metrics,
+            metrics: last_metrics(sim, resumed),
             digest: sim.positions_digest(),
             elapsed,
             setup,

@@ -153,3 +153,40 @@ fn damaged_and_foreign_checkpoints_are_refused() {
         "{e}"
     );
 }
+
+/// The summary's lines from "explored" on (what the rounds did), without timings.
+fn outcome(summary: &str) -> String {
+    summary
+        .lines()
+        .skip_while(|l| !l.trim_start().starts_with("explored"))
+        .filter(|l| !l.trim_start().starts_with("recording"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// Resuming a checkpoint of the final round plays nothing and reports what the run did, as
+/// the run itself reported it (the milestones and counts of its last round).
+#[test]
+fn resuming_a_finished_run_reports_its_outcome() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = workspace().join("configs/demo.xml");
+    let config = config.display().to_string();
+    let run = ok(&smartteams(
+        dir.path(),
+        &[
+            "run",
+            &config,
+            "--no-viewer",
+            "--rounds",
+            "200",
+            "--checkpoint",
+            "f.ckpt",
+            "--checkpoint-every",
+            "100",
+        ],
+    ));
+    let resumed = ok(&smartteams(dir.path(), &["resume", "f.ckpt", "--no-viewer"]));
+    assert!(resumed.contains("resumed at round 200: 0 played now"), "{resumed}");
+    assert!(outcome(&run).contains("50 % at round"), "{run}");
+    assert_eq!(outcome(&resumed), outcome(&run));
+}
