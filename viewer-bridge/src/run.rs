@@ -197,7 +197,7 @@ fn last_metrics(sim: &Simulation, resumed: Option<&Checkpoint>) -> RoundMetrics 
         .filter(|c| c.round() == sim.round())
         .and_then(|c| c.metrics().last())
     {
-        Some(m) => m.clone(),
+        Some(m) => *m,
         None => sim.report().metrics,
     }
 }
