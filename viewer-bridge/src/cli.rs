@@ -149,7 +149,7 @@ impl ViewerArgs {
 pub struct ViewArgs {
     /// The map file (`.stmap`).
     pub map: PathBuf,
-    /// Where to show it (default: `<map stem>.rrd` in the working directory).
+    /// Where to show it (default: `<map stem>-map.rrd` in the working directory).
     #[command(flatten)]
     pub viewer: ViewerArgs,
 }
@@ -365,7 +365,8 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
                 .map
                 .file_stem()
                 .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
-            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}.rrd")))? else {
+            // `-map`: a run's recording is named after its config, often the map's name too.
+            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}-map.rrd")))? else {
                 bail!("--no-viewer leaves nothing to show");
             };
             crate::run::view_map(&args.map, &target)?;

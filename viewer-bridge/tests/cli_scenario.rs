@@ -251,3 +251,23 @@ fn outputs_that_cannot_be_written_are_refused_before_the_first_round() {
         assert_eq!(rows, 0, "{args:?}: rounds were played");
     }
 }
+
+/// `view MAP` without a viewer option writes `<map>-map.rrd`, leaving a run's recording of
+/// the same name (`demo.rrd` of `configs/demo.xml` on `maps/demo.stmap`) as it was.
+#[test]
+fn view_writes_its_own_recording_beside_a_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("demo.rrd"), b"a run's recording").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .arg("view")
+        .arg(workspace().join("maps/demo.stmap"))
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(
+        std::fs::read(dir.path().join("demo.rrd")).unwrap(),
+        b"a run's recording"
+    );
+    assert!(std::fs::metadata(dir.path().join("demo-map.rrd")).unwrap().len() > 0);
+}
