@@ -91,6 +91,22 @@ fn validate_exits_1_listing_every_problem() {
     assert!(!text.contains("treasure 2"), "{text}");
 }
 
+/// A damaged map file fails validation like a map with problems: exit status 1, the
+/// reason named.
+#[test]
+fn validate_refuses_a_damaged_file_with_status_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("cut.stmap");
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/demo.stmap");
+    let whole = std::fs::read(demo).unwrap();
+    std::fs::write(&map, &whole[..whole.len() / 2]).unwrap();
+    let out = editor().arg("validate").arg(&map).output().unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("cut.stmap"), "{text}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a valid map"));
+}
+
 #[test]
 fn bad_input_is_an_error_naming_the_file_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();

@@ -46,7 +46,7 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
-    /// Check a map: exit status 1 with every problem listed.
+    /// Check a map: exit status 1 with every problem listed (a damaged file included).
     Validate {
         /// The map file.
         map: PathBuf,
@@ -356,9 +356,17 @@ fn place_on_map(path: &Path, place: &PlaceArgs, output: &Path) -> Result<ExitCod
     Ok(ExitCode::SUCCESS)
 }
 
-/// `validate`: print "ok" or every problem of the map; exit status 1 when there are problems.
+/// `validate`: print "ok" or every problem of the map; exit status 1 when there are problems,
+/// a damaged or unreadable file included.
 fn validate_map(path: &Path) -> Result<ExitCode> {
-    let map = load(path)?;
+    let map = match load(path) {
+        Ok(map) => map,
+        Err(e) => {
+            println!("{e:#}");
+            eprintln!("{}: not a valid map", path.display());
+            return Ok(ExitCode::from(1));
+        }
+    };
     let problems = editor::validate::validate(&map);
     if problems.is_empty() {
         println!("{}: ok", path.display());
