@@ -167,6 +167,8 @@ struct Scan {
 struct ScannedElement {
     name: String,
     offset: usize,
+    /// Its attributes' names.
+    attributes: Vec<String>,
 }
 
 /// A malformed attribute of element `name`, whose tag starts at byte `lt` of `text`: the
@@ -236,16 +238,79 @@ impl Scan {
                             .map_err(|err| malformed(&err, lt as u64))?;
                         attributes.push((a.key.as_ref().to_owned(), value.into_owned()));
                     }
+                    let keys = attributes.iter().map(|(k, _)| k.clone()).collect();
                     if name == "robot-type" {
                         scan.robot_types.push(attributes);
                     }
-                    scan.elements.push(ScannedElement { name, offset: before });
+                    scan.elements.push(ScannedElement {
+                        name,
+                        offset: before,
+                        attributes: keys,
+                    });
                 }
                 Ok(_) => {}
                 Err(e) => return Err(malformed(&e, reader.error_position())),
             }
         }
         Ok(scan)
+    }
+
+    /// Serde's error `message` about the config's structure, with its place: an unknown
+    /// attribute at the first element that has it, an unknown element where it is, anything
+    /// else at the root. Serde names attributes `@name` and gives no line.
+    fn structure_error(&self, text: &str, message: &str) -> ((usize, usize), String) {
+        // The names serde quotes: the field, then those expected.
+        let quoted: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
+        let listed = |attributes: bool| {
+            quoted
+                .iter()
+                .skip(1)
+                .filter(|n| n.starts_with('@') == attributes)
+                .map(|n| {
+                    if attributes {
+                        n.trim_start_matches('@').to_owned()
+                    } else {
+                        format!("<{n}>")
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let at = |e: &ScannedElement| line_col(text, e.offset + text[e.offset..].find('<').unwrap_or(0));
+        let root = self.position(text, "simulation", 0);
+        match (message.split('`').next(), quoted.first()) {
+            (Some("unknown field "), Some(field)) => match field.strip_prefix('@') {
+                Some(attribute) => {
+                    if let Some(e) = self
+                        .elements
+                        .iter()
+                        .find(|e| e.attributes.iter().any(|a| a == attribute))
+                    {
+                        let known = listed(true);
+                        return (
+                            at(e),
+                            format!("<{}> has no attribute `{attribute}` (its attributes: {known})", e.name),
+                        );
+                    }
+                }
+                None => {
+                    if let Some(e) = self.elements.iter().find(|e| e.name == *field) {
+                        return (
+                            at(e),
+                            format!("unknown element <{field}> (expected here: {})", listed(false)),
+                        );
+                    }
+                }
+            },
+            (Some("missing field "), Some(field)) => {
+                return match field.strip_prefix('@') {
+                    Some(attribute) => (root, format!("an element lacks its required attribute `{attribute}`")),
+                    None => (root, format!("<simulation> lacks a <{field}> element")),
+                };
+            }
+            _ => {}
+        }
+        (root, format!("in <simulation>: {message}"))
     }
 
     /// Line and column of the `nth` element called `name` ((1, 1) if there is none).
@@ -295,11 +360,14 @@ impl SimConfig {
             return Err(at_offset(0, "the root element must be <simulation>".into()));
         }
         // Pass 2: structure, by serde.
-        let xml: XmlSimulation = quick_xml::de::from_str(text).map_err(|e| Error::Config {
-            path: path.to_path_buf(),
-            line: 0,
-            column: 0,
-            message: format!("in <simulation>: {e}"),
+        let xml: XmlSimulation = quick_xml::de::from_str(text).map_err(|e| {
+            let ((line, column), message) = scan.structure_error(text, &e.to_string());
+            Error::Config {
+                path: path.to_path_buf(),
+                line,
+                column,
+                message,
+            }
         })?;
         let base_dir = path.parent().unwrap_or(Path::new(""));
         let resolve = |p: &str| {
@@ -574,6 +642,25 @@ mod tests {
             err,
             "c.xml:3:19: malformed XML in <group>: attribute `name` given twice"
         );
+    }
+
+    /// Unknown attributes and elements, and a missing <map>, are placed and named.
+    #[test]
+    fn structure_errors_name_their_element_and_place() {
+        let head = "<simulation rounds=\"5\">\n  <map file=\"x.stmap\"/>\n";
+        let group = "<group count=\"1\" type=\"explorer\" strategy=\"random_walk\"";
+        let err = parse_error(&format!("{head}  {group} colour=\"red\"/>\n</simulation>\n"));
+        assert_eq!(
+            err,
+            "c.xml:3:3: <group> has no attribute `colour` (its attributes: name, count, type, strategy, start)"
+        );
+        let err = parse_error(&format!("{head}  {group}/>\n  <foo/>\n</simulation>\n"));
+        assert!(
+            err.starts_with("c.xml:4:3: unknown element <foo> (expected here: <map>,"),
+            "{err}"
+        );
+        let err = parse_error(&format!("<simulation rounds=\"5\">\n  {group}/>\n</simulation>\n"));
+        assert_eq!(err, "c.xml:1:1: <simulation> lacks a <map> element");
     }
 
     /// A tag left without its `>` takes in the next tag, whose place is reported, with the
