@@ -160,16 +160,24 @@ class Confused:
         return "north"
 
 
-def test_a_wrong_return_value_disables_the_robot_with_a_clear_reason(tmp_path):
-    smartteams.register_strategy("py_confused", Confused)
+def why_disabled(tmp_path, name, strategy):
+    """Run one robot of `strategy` (registered as `name`) for 2 rounds: the event that
+    disabled it."""
+    smartteams.register_strategy(name, strategy)
     config = write_config(
         tmp_path,
         '<simulation seed="1" rounds="2"><map file="MAP"/>'
-        '<group count="1" type="explorer" strategy="py_confused" start="home"/></simulation>',
+        f'<group count="1" type="explorer" strategy="{name}" start="home"/></simulation>',
     )
     sim = smartteams.Simulation(str(config))
-    sim.run()
+    with pytest.warns(RuntimeWarning, match="robot 0 is disabled"):
+        sim.run()
     (text,) = [t for _, t in sim.events() if "disabled" in t]
+    return text
+
+
+def test_a_wrong_return_value_disables_the_robot_with_a_clear_reason(tmp_path):
+    text = why_disabled(tmp_path, "py_confused", Confused)
     assert "decide returned 'north'; expected an action" in text
 
 
@@ -182,15 +190,7 @@ class TupleMover:
 
 
 def test_a_tuple_of_numbers_is_named_whole_with_the_action_to_return(tmp_path):
-    smartteams.register_strategy("py_tuple_mover", TupleMover)
-    config = write_config(
-        tmp_path,
-        '<simulation seed="1" rounds="2"><map file="MAP"/>'
-        '<group count="1" type="explorer" strategy="py_tuple_mover" start="home"/></simulation>',
-    )
-    sim = smartteams.Simulation(str(config))
-    sim.run()
-    (text,) = [t for _, t in sim.events() if "disabled" in t]
+    text = why_disabled(tmp_path, "py_tuple_mover", TupleMover)
     assert "decide returned (1.0, 0.0), whose item 1.0 is neither an action nor a message" in text
     assert "return smartteams.Move(dx, dy)" in text
 
