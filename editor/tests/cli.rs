@@ -209,6 +209,17 @@ fn ros_import_at_5cm_does_not_panic() {
     let png = dir.path().join("out.png");
     run_ok(editor().arg("preview").arg(&map_path).arg("-o").arg(&png));
     assert_eq!(image::image_dimensions(&png).unwrap(), (21, 13));
+    // A preview is a PNG: another name is refused rather than written as a PNG under it.
+    let jpg = dir.path().join("out.jpg");
+    let out = editor()
+        .arg("preview")
+        .arg(&map_path)
+        .arg("-o")
+        .arg(&jpg)
+        .output()
+        .unwrap();
+    assert!(!out.status.success() && !jpg.exists());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("a preview is written as PNG"));
 
     // The home base the CLI chose is a disc that is free of obstacles and inside the map.
     let map = MapData::load(&map_path).unwrap();

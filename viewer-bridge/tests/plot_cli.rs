@@ -95,7 +95,11 @@ fn plot_refuses_bad_input_naming_the_file_and_line() {
         SWEEP.replace("1,1,8,2,0.6,2,9,3000", "1,1,8,2,lots,2,9,3000"),
     )
     .unwrap();
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &["sweep.csv", "-o", "no/such/f.png"],
+            "cannot write the figure no/such/f.png: the folder no/such does not exist",
+        ),
         (
             &["old.csv", "-o", "f.png"],
             "old.csv:1: no 'treasures_delivered' column",

@@ -413,6 +413,9 @@ fn print_path(path: &Path, from: DVec2, to: DVec2, robot_radius_m: f64, json: bo
 
 /// `preview`: draw the map (or its obstacles only) as a PNG at `output`.
 fn draw_preview(path: &Path, output: &Path, px: Option<u32>, obstacles_only: bool) -> Result<ExitCode> {
+    if !output.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
+        anyhow::bail!("{}: a preview is written as PNG: name it .png", output.display());
+    }
     let map = load(path)?;
     let img = editor::preview::render(
         &map,
