@@ -84,6 +84,9 @@ pub struct Summary {
     pub slow_decisions: (u64, Option<(RobotId, u64, Duration)>),
     /// The signal that stopped the run before its last round, if one did.
     pub interrupted: Option<Signal>,
+    /// The files written beside the recording: (what, path) for the metrics CSV, the robot
+    /// statistics and the checkpoint.
+    pub files: Vec<(&'static str, PathBuf)>,
 }
 
 /// What the recording of a run holds and cost.
@@ -166,6 +169,14 @@ impl std::fmt::Display for Summary {
                 "\n  slow decisions    {n} over the limit; slowest: robot {robot}, round {round}, {:.3} s",
                 took.as_secs_f64()
             )?;
+        }
+        if !self.files.is_empty() {
+            let files: Vec<String> = self
+                .files
+                .iter()
+                .map(|(what, path)| format!("{what} {}", path.display()))
+                .collect();
+            write!(f, "\n  written           {}", files.join(", "))?;
         }
         if let Some(r) = &self.recording {
             write!(
@@ -396,6 +407,19 @@ impl Outputs {
             }),
             slow_decisions: (self.faults.slow, self.faults.slowest),
             interrupted: None,
+            files: [
+                ("metrics", run.metrics.clone()),
+                ("robot stats", run.robot_stats.clone()),
+                (
+                    "checkpoint",
+                    (self.checkpoints.as_ref().is_some_and(|c| c.written() > 0))
+                        .then(|| run.checkpoint.as_ref().map(|c| c.path.clone()))
+                        .flatten(),
+                ),
+            ]
+            .into_iter()
+            .filter_map(|(what, path)| Some((what, path?)))
+            .collect(),
         }
     }
 }

@@ -271,3 +271,37 @@ fn view_writes_its_own_recording_beside_a_runs() {
     );
     assert!(std::fs::metadata(dir.path().join("demo-map.rrd")).unwrap().len() > 0);
 }
+
+/// The summary names the files the run wrote; a checkpoint only once one was written.
+#[test]
+fn the_summary_names_the_files_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("one.xml");
+    let map = workspace().join("maps/demo.stmap");
+    std::fs::write(&config, one_explorer(20).replace("MAP", &map.display().to_string())).unwrap();
+    let summary = |every: &str| {
+        let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+            .arg("run")
+            .arg(&config)
+            .args(["--no-viewer", "--metrics", "m.csv", "--robot-stats", "r.csv"])
+            .args(["--checkpoint", "c.ckpt", "--checkpoint-every", every])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let written = |summary: &str| summary.lines().find(|l| l.starts_with("  written ")).map(str::to_owned);
+    let none = summary("100");
+    assert_eq!(
+        written(&none).as_deref(),
+        Some("  written           metrics m.csv, robot stats r.csv"),
+        "{none}"
+    );
+    let some = summary("10");
+    assert_eq!(
+        written(&some).as_deref(),
+        Some("  written           metrics m.csv, robot stats r.csv, checkpoint c.ckpt"),
+        "{some}"
+    );
+}
