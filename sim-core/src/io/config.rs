@@ -404,6 +404,17 @@ impl SimConfig {
         }
         for (i, g) in xml.groups.iter().enumerate() {
             let group = config.group(i, g, scan.position(text, "group", i))?;
+            // Sweeps, metrics and events name groups: two of one name could not be told apart.
+            if let Some(first) = config.groups.iter().find(|f| f.name == group.name) {
+                let (line, column) = first.at;
+                return Err(config.error(
+                    group.at,
+                    format!(
+                        "a second group named '{}' (the first is at {line}:{column})",
+                        group.name
+                    ),
+                ));
+            }
             config.groups.push(group);
         }
         if let Some(o) = &xml.outputs {
@@ -642,6 +653,20 @@ mod tests {
             err,
             "c.xml:3:19: malformed XML in <group>: attribute `name` given twice"
         );
+    }
+
+    /// Two groups of one name are refused at the second.
+    #[test]
+    fn group_names_are_unique() {
+        let group =
+            |name: &str| format!("<group name=\"{name}\" count=\"1\" type=\"explorer\" strategy=\"random_walk\"/>");
+        let err = parse_error(&format!(
+            "<simulation>\n  <map file=\"x.stmap\"/>\n  {}\n  {}\n  {}\n</simulation>\n",
+            group("a"),
+            group("b"),
+            group("a")
+        ));
+        assert_eq!(err, "c.xml:5:3: a second group named 'a' (the first is at 3:3)");
     }
 
     /// Unknown attributes and elements, and a missing <map>, are placed and named.
