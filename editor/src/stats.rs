@@ -36,6 +36,10 @@ pub struct MapStats {
     pub treasure_quantity: u64,
     /// Home base centre `[x, y]`.
     pub home_center: [f64; 2],
+    /// The home base's radius, m (`None` for a rectangle).
+    pub home_radius_m: Option<f64>,
+    /// The width and height of the home base's bounding box, m.
+    pub home_size_m: [f64; 2],
     /// Size of the map file in bytes.
     pub file_bytes: u64,
 }
@@ -61,8 +65,24 @@ pub fn stats(map: &MapData, file_bytes: u64) -> MapStats {
         treasures: map.treasures.len(),
         treasure_quantity: map.treasures.iter().map(|t| u64::from(t.quantity)).sum(),
         home_center: map.home.center().to_array(),
+        home_radius_m: match map.home {
+            sim_core::world::HomeBase::Disc { radius_m, .. } => Some(radius_m),
+            sim_core::world::HomeBase::Rect(_) => None,
+        },
+        home_size_m: {
+            let b = map.home.bounds();
+            (b.max - b.min).to_array()
+        },
         file_bytes,
     }
+}
+
+/// A length or area for people: at most 6 decimals, without trailing zeros (sums of cell
+/// sizes such as 19.200000000000003 print as 19.2).
+fn num(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".to_owned() } else { s.to_owned() }
 }
 
 impl fmt::Display for MapStats {
@@ -70,23 +90,51 @@ impl fmt::Display for MapStats {
         writeln!(
             f,
             "size            {} m × {} m ({} × {} cells of {} m)",
-            self.width_m, self.height_m, self.width_cells, self.height_cells, self.cell_m
+            num(self.width_m),
+            num(self.height_m),
+            self.width_cells,
+            self.height_cells,
+            num(self.cell_m)
         )?;
-        writeln!(f, "origin          ({}, {})", self.origin[0], self.origin[1])?;
+        writeln!(f, "origin          ({}, {})", num(self.origin[0]), num(self.origin[1]))?;
         writeln!(f, "leaves          {} ({} blocked)", self.leaves, self.blocked_leaves)?;
         writeln!(
             f,
             "area            {} m² free, {} m² blocked ({:.2} %)",
-            self.free_area_m2,
-            self.blocked_area_m2,
+            num(self.free_area_m2),
+            num(self.blocked_area_m2),
             100.0 * self.blocked_fraction
         )?;
-        writeln!(f, "home            ({}, {})", self.home_center[0], self.home_center[1])?;
+        let (x, y) = (num(self.home_center[0]), num(self.home_center[1]));
+        match self.home_radius_m {
+            Some(r) => writeln!(f, "home            a disc of radius {} m at ({x}, {y})", num(r))?,
+            None => writeln!(
+                f,
+                "home            a rectangle of {} m × {} m centred at ({x}, {y})",
+                num(self.home_size_m[0]),
+                num(self.home_size_m[1])
+            )?,
+        }
         writeln!(
             f,
             "treasures       {} (total quantity {})",
             self.treasures, self.treasure_quantity
         )?;
         write!(f, "file            {} bytes", self.file_bytes)
+    }
+}
+
+#[cfg(test)]
+mod number_tests {
+    use super::num;
+
+    /// Sums of cell sizes print as people write them.
+    #[test]
+    fn lengths_print_without_float_noise() {
+        assert_eq!(num(19.200_000_000_000_003), "19.2");
+        assert_eq!(num(-0.299_999_999_999_998_93), "-0.3");
+        assert_eq!(num(128.0), "128");
+        assert_eq!(num(0.05), "0.05");
+        assert_eq!(num(-0.000_000_1), "0");
     }
 }
