@@ -125,6 +125,19 @@ fn bad_input_is_an_error_naming_the_file_not_a_panic() {
     assert!(err.contains("bad.map") && !err.contains("panicked"), "{err}");
     assert!(!out_map.exists(), "nothing is written on failure");
 
+    // A bitmap whose pixels end early: 100 announced, 3 given.
+    let cut = dir.path().join("cut.pgm");
+    std::fs::write(&cut, b"P5\n10 10\n255\nabc").unwrap();
+    let out = editor()
+        .arg("import")
+        .arg(&cut)
+        .arg("-o")
+        .arg(&out_map)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("cut.pgm: the image is cut short"), "{err}");
+
     let junk = dir.path().join("junk.stmap");
     std::fs::write(&junk, b"STMAP\r\n\x1a\x01\x00").unwrap();
     let out = editor().arg("stats").arg(&junk).output().unwrap();

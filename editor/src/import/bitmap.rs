@@ -22,9 +22,15 @@ pub fn load_image(path: &Path) -> Result<DynamicImage> {
             "not an image in a supported format (PNG, PGM/PPM/PBM, JPEG, BMP)",
         ));
     }
-    reader.decode().map_err(|cause| EditorError::Image {
-        path: path.to_path_buf(),
-        cause,
+    reader.decode().map_err(|cause| match &cause {
+        // The decoder's words for a file that ends before its pixels do.
+        image::ImageError::IoError(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => {
+            EditorError::bad_input(path, "the image is cut short: its pixel data ends early")
+        }
+        _ => EditorError::Image {
+            path: path.to_path_buf(),
+            cause,
+        },
     })
 }
 
