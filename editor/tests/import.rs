@@ -129,7 +129,10 @@ fn corrupt_images_name_the_file() {
     let cut = dir.path().join("truncated.png");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let err = import(&cut, &ImportOptions::default()).unwrap_err();
-    assert!(err.to_string().contains("truncated.png: the image is cut short"), "{err}");
+    assert!(
+        err.to_string().contains("truncated.png: the image is cut short"),
+        "{err}"
+    );
 
     let junk = dir.path().join("junk.png");
     std::fs::write(&junk, b"this is not an image").unwrap();
