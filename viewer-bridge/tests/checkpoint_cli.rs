@@ -154,12 +154,12 @@ fn damaged_and_foreign_checkpoints_are_refused() {
     );
 }
 
-/// The summary's lines from "explored" on (what the rounds did), without timings.
+/// The summary's lines from "explored" on (what the rounds did), without timings and files.
 fn outcome(summary: &str) -> String {
     summary
         .lines()
         .skip_while(|l| !l.trim_start().starts_with("explored"))
-        .filter(|l| !l.trim_start().starts_with("recording"))
+        .filter(|l| !l.trim_start().starts_with("recording") && !l.trim_start().starts_with("written"))
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -171,21 +171,15 @@ fn resuming_a_finished_run_reports_its_outcome() {
     let dir = tempfile::tempdir().unwrap();
     let config = workspace().join("configs/demo.xml");
     let config = config.display().to_string();
-    let run = ok(&smartteams(
-        dir.path(),
-        &[
-            "run",
-            &config,
-            "--no-viewer",
-            "--rounds",
-            "200",
-            "--checkpoint",
-            "f.ckpt",
-            "--checkpoint-every",
-            "100",
-        ],
-    ));
-    let resumed = ok(&smartteams(dir.path(), &["resume", "f.ckpt", "--no-viewer"]));
+    // The outputs go to the test's folder, not beside the config.
+    let files = ["--no-viewer", "--metrics", "m.csv", "--robot-stats", "r.csv"];
+    let run = [
+        &["run", &config, "--rounds", "200"][..],
+        &["--checkpoint", "f.ckpt", "--checkpoint-every", "100"],
+        &files,
+    ];
+    let run = ok(&smartteams(dir.path(), &run.concat()));
+    let resumed = ok(&smartteams(dir.path(), &[&["resume", "f.ckpt"][..], &files].concat()));
     assert!(resumed.contains("resumed at round 200: 0 played now"), "{resumed}");
     assert!(outcome(&run).contains("50 % at round"), "{run}");
     assert_eq!(outcome(&resumed), outcome(&run));

@@ -1012,6 +1012,10 @@ fn a_run_stopped_by_a_failing_checkpoint_keeps_its_recording() {
     let rrd = dir.path().join("x.rrd");
     let out = demo_run(20)
         .arg("-q")
+        .arg("--metrics")
+        .arg(dir.path().join("m.csv"))
+        .arg("--robot-stats")
+        .arg(dir.path().join("r.csv"))
         .arg("--checkpoint")
         .arg(&checkpoint)
         .args(["--checkpoint-every", "5", "--rrd"])
