@@ -41,7 +41,8 @@ pub struct Needs {
     pub obstacles: bool,
     /// See robots in the view radius.
     pub robots: bool,
-    /// See treasures in the view radius.
+    /// See treasures in the view radius, and remember them. (Treasures in view are listed
+    /// without it too: they count as found whatever the strategy looks at.)
     pub treasures: bool,
     /// Receive messages.
     pub messages: bool,

@@ -88,7 +88,9 @@ pub(super) struct Snapshot<'a> {
     pub(super) robot_index: &'a RobotIndex,
 }
 
-/// Step 1 for one robot: only what its strategy needs.
+/// Step 1 for one robot: what its strategy needs, and the treasures in view whatever it
+/// needs, so that a treasure counts as found when it comes into some robot's view
+/// (`treasures_found` does not depend on the strategies).
 pub(super) fn perceive(
     agent: &mut Agent,
     turn: &mut Turn,
@@ -113,6 +115,8 @@ pub(super) fn perceive(
     perception.treasures.clear();
     if needs.treasures {
         see_treasures(data, perception, p, view, world, round);
+    } else {
+        treasures_in_view(perception, p, view, world);
     }
     if needs.messages {
         read_messages(agent, turn, round);
@@ -150,17 +154,9 @@ fn see_robots(
     }
 }
 
-/// The treasures in view with something left, by id, and the memory of treasures: those in
-/// view recorded, those remembered in view but gone recorded as emptied.
+/// The treasures in view with something left, by id, into `perception`.
 #[inline]
-fn see_treasures(
-    data: &mut DataModule,
-    perception: &mut Perception,
-    p: DVec2,
-    view: f64,
-    world: &Snapshot,
-    round: u64,
-) {
+fn treasures_in_view(perception: &mut Perception, p: DVec2, view: f64, world: &Snapshot) {
     world.treasure_index.for_each_in_disc(p, view, |t| {
         let s = &world.treasures[t.id.index()];
         if s.buried + s.loose > 0 {
@@ -173,6 +169,20 @@ fn see_treasures(
         }
     });
     perception.treasures.sort_by_key(|t| t.id);
+}
+
+/// The treasures in view with something left, by id, and the memory of treasures: those in
+/// view recorded, those remembered in view but gone recorded as emptied.
+#[inline]
+fn see_treasures(
+    data: &mut DataModule,
+    perception: &mut Perception,
+    p: DVec2,
+    view: f64,
+    world: &Snapshot,
+    round: u64,
+) {
+    treasures_in_view(perception, p, view, world);
     // Remembered treasures that should be in view but are not have been emptied: record
     // that as a fresh sighting, so older hearsay cannot bring them back.
     // The first test scans the slab and usually fails; the walk keeps the list's order.
