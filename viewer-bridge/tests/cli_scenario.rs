@@ -305,3 +305,26 @@ fn the_summary_names_the_files_written() {
         "{some}"
     );
 }
+
+/// Tactics that only follow a goal, with no goal given and none to set one, are refused:
+/// the robots would stand still.
+#[test]
+fn goal_following_tactics_without_a_goal_are_refused() {
+    let config = |params: &str| {
+        format!(
+            r#"<simulation rounds="5">
+  <map file="MAP"/>
+  <group name="g" count="1" type="explorer" strategy="tactics">{params}</group>
+</simulation>"#
+        )
+    };
+    let (ok, err) = run_config("t.xml", &config(r#"<param name="tactics" value="boundary"/>"#), &[]);
+    assert!(!ok, "accepted");
+    assert!(
+        err.contains("t.xml:3:3") && err.contains("tactics boundary go to a goal and none sets one"),
+        "{err}"
+    );
+    let with_goal = r#"<param name="tactics" value="boundary"/><param name="goal" value="70,70"/>"#;
+    let (ok, err) = run_config("t.xml", &config(with_goal), &[]);
+    assert!(ok, "{err}");
+}

@@ -35,6 +35,16 @@ impl Composed {
                 "unknown parameter '{k}' (known: tactics, goal, and TACTIC.PARAM for a tactic listed in 'tactics')"
             )));
         }
+        let goal = p.point("goal")?;
+        // Built-in tactics that only follow a goal: made of them alone, with no goal given,
+        // nothing would ever set one and the robots would stand still.
+        let followers = ["boundary", "shortest_path"];
+        if goal.is_none() && names.iter().all(|n| followers.contains(n)) {
+            return Err(crate::Error::InvalidParameter(format!(
+                "tactics {} go to a goal and none sets one: give goal=\"X,Y\" or add a tactic that sets goals (frontier, team)",
+                names.join(", ")
+            )));
+        }
         let mut needs = Needs::NONE;
         let mut tactics = Vec::with_capacity(names.len());
         for name in names {
@@ -42,11 +52,7 @@ impl Composed {
             needs = needs.union(t.needs());
             tactics.push((name.to_owned(), t));
         }
-        Ok(Self {
-            tactics,
-            goal: p.point("goal")?,
-            needs,
-        })
+        Ok(Self { tactics, goal, needs })
     }
 }
 
