@@ -995,3 +995,15 @@ fn states_that_do_not_fit_are_refused() {
     assert!(e.contains("group 'g0': strategy 'dig' cannot save its state"), "{e}");
     assert!(cheats.write_state(&mut Vec::new()).is_err());
 }
+
+/// A scenario without robots (every group empty) is refused when built, not left to fail
+/// in the first round.
+#[test]
+fn a_scenario_without_robots_is_refused() {
+    let registry = StrategyRegistry::with_builtins();
+    let built = ScenarioBuilder::new(rooms_map(Vec::new()))
+        .with_group(Group::new("random_walk", 0, 0))
+        .build(&registry);
+    let err = built.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("no robots to simulate"), "{err}");
+}
