@@ -27,8 +27,12 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Run a simulation described by an XML config.
+    // Negative numbers are values, so `--rounds -5` is refused as a bad number rather than
+    // as an unknown option.
+    #[command(allow_negative_numbers = true)]
     Run(RunArgs),
     /// Continue a run from its checkpoint (`run --checkpoint`) to the end it would have had.
+    #[command(allow_negative_numbers = true)]
     Resume(ResumeArgs),
     /// Show a map alone in Rerun (obstacles, home, treasures; 2D and 3D).
     View(ViewArgs),
@@ -37,6 +41,7 @@ pub enum Command {
     /// List the tactics a `strategy="tactics"` group can be composed of.
     Tactics,
     /// Run every combination of a sweep file's values headless, on all cores, into one CSV.
+    #[command(allow_negative_numbers = true)]
     Sweep(crate::sweep::SweepArgs),
     /// Join the CSVs of a sweep's shards into the CSV a single-machine sweep writes.
     Merge(crate::sweep::MergeArgs),

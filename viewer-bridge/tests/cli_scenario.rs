@@ -328,3 +328,11 @@ fn goal_following_tactics_without_a_goal_are_refused() {
     let (ok, err) = run_config("t.xml", &config(with_goal), &[]);
     assert!(ok, "{err}");
 }
+
+/// A negative count is refused as a bad value of its option, not as an unknown option.
+#[test]
+fn negative_numbers_are_bad_values_of_their_option() {
+    let (ok, err) = run_config("one.xml", &one_explorer(5), &["--rounds", "-5"]);
+    assert!(!ok);
+    assert!(err.contains("invalid value '-5' for '--rounds"), "{err}");
+}
