@@ -349,7 +349,11 @@ fn path_prints_the_shortest_route_and_exits_1_without_one() {
         ),
         (
             &["--from", "-1,0", "--to", "1,1"],
-            "start (-1, 0) is inside an obstacle, outside the map",
+            "start (-1, 0) is outside the map (0 to ",
+        ),
+        (
+            &["--from", "1.9,0.5", "--to", "0.5,0.5", "--robot-radius-m", "0.25"],
+            "start (1.9, 0.5) is closer to an obstacle than the robot's radius (0.25 m)",
         ),
     ] {
         let out = path(args);

@@ -9,6 +9,7 @@ use editor::import::{ImportOptions, Unknown};
 use editor::place::{PlaceOptions, Spread};
 use editor::preview::PreviewOptions;
 use sim_core::glam::DVec2;
+use sim_core::spatial::NoPath;
 use sim_core::world::MapData;
 
 #[derive(Parser)]
@@ -404,11 +405,36 @@ fn print_path(path: &Path, from: DVec2, to: DVec2, robot_radius_m: f64, json: bo
         Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
         Ok(report) => print!("{report}"),
         Err(no_path) => {
-            eprintln!("{}: no path: {no_path}", path.display());
+            let why = match no_path {
+                NoPath::StartBlocked(p) => {
+                    format!("start ({}, {}) is {}", p.x, p.y, why_blocked(&map, p, robot_radius_m))
+                }
+                NoPath::GoalBlocked(p) => {
+                    format!("goal ({}, {}) is {}", p.x, p.y, why_blocked(&map, p, robot_radius_m))
+                }
+                other => other.to_string(),
+            };
+            eprintln!("{}: no path: {why}", path.display());
             return Ok(ExitCode::from(1));
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Why the end `p` of a path is blocked, of the three reasons the planner does not tell
+/// apart.
+fn why_blocked(map: &MapData, p: DVec2, robot_radius_m: f64) -> String {
+    let e = map.obstacles.grid().extent();
+    if !(e.min.x..=e.max.x).contains(&p.x) || !(e.min.y..=e.max.y).contains(&p.y) {
+        format!(
+            "outside the map ({} to {} m east, {} to {} m north)",
+            e.min.x, e.max.x, e.min.y, e.max.y
+        )
+    } else if !map.obstacles.is_point_free(p) {
+        "inside an obstacle".to_owned()
+    } else {
+        format!("closer to an obstacle than the robot's radius ({robot_radius_m} m)")
+    }
 }
 
 /// `preview`: draw the map (or its obstacles only) as a PNG at `output`.
