@@ -75,14 +75,19 @@ class East:
         return smartteams.Move(10.0, 0.0)
 
 
-def test_a_move_longer_than_the_speed_is_one_speed_long(tmp_path):
-    smartteams.register_strategy("py_east", East)
+def one_robot(tmp_path, name, strategy, rounds=2):
+    """A run of one explorer from home with `strategy`, registered as `name`."""
+    smartteams.register_strategy(name, strategy)
     config = write_config(
         tmp_path,
-        '<simulation seed="1" rounds="2"><map file="MAP"/>'
-        '<group count="1" type="explorer" strategy="py_east" start="home"/></simulation>',
+        f'<simulation seed="1" rounds="{rounds}"><map file="MAP"/>'
+        f'<group count="1" type="explorer" strategy="{name}" start="home"/></simulation>',
     )
-    sim = smartteams.Simulation(str(config))
+    return smartteams.Simulation(str(config))
+
+
+def test_a_move_longer_than_the_speed_is_one_speed_long(tmp_path):
+    sim = one_robot(tmp_path, "py_east", East)
     before = sim.robots()
     sim.run()
     after = sim.robots()
@@ -163,13 +168,7 @@ class Confused:
 def why_disabled(tmp_path, name, strategy):
     """Run one robot of `strategy` (registered as `name`) for 2 rounds: the event that
     disabled it."""
-    smartteams.register_strategy(name, strategy)
-    config = write_config(
-        tmp_path,
-        '<simulation seed="1" rounds="2"><map file="MAP"/>'
-        f'<group count="1" type="explorer" strategy="{name}" start="home"/></simulation>',
-    )
-    sim = smartteams.Simulation(str(config))
+    sim = one_robot(tmp_path, name, strategy)
     with pytest.warns(RuntimeWarning, match="robot 0 is disabled"):
         sim.run()
     (text,) = [t for _, t in sim.events() if "disabled" in t]
@@ -204,13 +203,7 @@ class Unpicklable:
 
 
 def test_a_checkpoint_of_an_unpicklable_strategy_says_why(tmp_path):
-    smartteams.register_strategy("py_unpicklable", Unpicklable)
-    config = write_config(
-        tmp_path,
-        '<simulation seed="1" rounds="4"><map file="MAP"/>'
-        '<group count="1" type="explorer" strategy="py_unpicklable" start="home"/></simulation>',
-    )
-    sim = smartteams.Simulation(str(config))
+    sim = one_robot(tmp_path, "py_unpicklable", Unpicklable, rounds=4)
     sim.step(2)
     with pytest.raises(smartteams.SmartTeamsError) as error:
         sim.checkpoint(str(tmp_path / "u.ckpt"))
@@ -232,13 +225,7 @@ class Keeper:
 
 def test_robot_methods_work_only_inside_decide(tmp_path):
     Keeper.kept.clear()
-    smartteams.register_strategy("py_keeper", Keeper)
-    config = write_config(
-        tmp_path,
-        '<simulation seed="1" rounds="1"><map file="MAP"/>'
-        '<group count="1" type="explorer" strategy="py_keeper" start="home"/></simulation>',
-    )
-    smartteams.Simulation(str(config)).run()
+    one_robot(tmp_path, "py_keeper", Keeper, rounds=1).run()
     (robot,) = Keeper.kept
     assert robot.id == 0 and robot.round == 1
     with pytest.raises(smartteams.SmartTeamsError, match="only while"):

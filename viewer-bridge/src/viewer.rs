@@ -1,6 +1,6 @@
 //! Where a recording goes: an `.rrd` file, a running viewer over gRPC, or a spawned viewer.
 
-use std::net::{TcpStream, ToSocketAddrs};
+use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -159,16 +159,14 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             let Some(auth) = authority(url) else {
                 bail!("not a Rerun proxy URL: {url} (expected rerun+http://HOST:PORT/proxy)");
             };
-            let reachable = auth
-                .to_socket_addrs()
-                .ok()
-                .into_iter()
-                .flatten()
-                .any(|a| TcpStream::connect_timeout(&a, Duration::from_secs(2)).is_ok());
+            let addrs: Vec<SocketAddr> = auth.to_socket_addrs().into_iter().flatten().collect();
+            let reachable = addrs
+                .iter()
+                .any(|a| TcpStream::connect_timeout(a, Duration::from_secs(2)).is_ok());
             if !reachable {
                 bail!("no Rerun viewer listens at {url}: start one (`rerun`) or use --spawn / --rrd");
             }
-            let rec = connect(builder, url)?;
+            let rec = connect(builder, url, all_loopback(&addrs))?;
             check_receiver(&rec, url)?;
             rec
         }
@@ -179,7 +177,7 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             })
             .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?;
             let url = format!("rerun+http://127.0.0.1:{}/proxy", spawned.port);
-            let rec = connect(builder, &url)?;
+            let rec = connect(builder, &url, true)?;
             // Something else may be listening on the port (a viewer there is used instead).
             check_receiver(&rec, &url)?;
             rec
@@ -188,15 +186,13 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
     Ok(rec)
 }
 
-/// The live stream to the viewer at `url`. A viewer on this machine is sent the chunks as
-/// they are: LZ4, which Rerun applies to every gRPC stream, takes about a third of the
-/// sending thread's time, and loopback has bandwidth to spare (`bench-1000` sends 40 MB
-/// instead of 16). Other hosts get Rerun's compressed
-/// stream.
-fn connect(builder: rerun::RecordingStreamBuilder, url: &str) -> Result<rerun::RecordingStream> {
+/// The live stream to the viewer at `url`; `local`: the viewer is on this machine, and is
+/// sent the chunks as they are (Rerun LZ4-compresses every gRPC stream, which costs CPU on
+/// both ends; loopback has bandwidth to spare). Other hosts get Rerun's compressed stream.
+fn connect(builder: rerun::RecordingStreamBuilder, url: &str, local: bool) -> Result<rerun::RecordingStream> {
     let cannot = || format!("cannot connect to {url}");
     let builder = builder.batcher_config(live_batching());
-    if !is_loopback(url) {
+    if !local {
         return builder.connect_grpc_opts(url).with_context(cannot);
     }
     let rerun::external::re_uri::RedapUri::Proxy(uri) = url.parse().with_context(cannot)? else {
@@ -207,14 +203,9 @@ fn connect(builder: rerun::RecordingStreamBuilder, url: &str) -> Result<rerun::R
     Ok(rec)
 }
 
-/// Whether the host of proxy `url` is this machine: every address it resolves to is a
-/// loopback address (a name that does not resolve is not).
-fn is_loopback(url: &str) -> bool {
-    let addrs: Vec<_> = authority(url)
-        .and_then(|a| a.to_socket_addrs().ok())
-        .into_iter()
-        .flatten()
-        .collect();
+/// Whether a host that resolved to `addrs` is this machine: each is a loopback address
+/// (a name that resolved to none is not).
+fn all_loopback(addrs: &[SocketAddr]) -> bool {
     !addrs.is_empty() && addrs.iter().all(|a| a.ip().is_loopback())
 }
 
@@ -289,11 +280,13 @@ mod tests {
 
     #[test]
     fn only_addresses_of_this_machine_are_loopback() {
+        let resolved = |host: &str| -> Vec<SocketAddr> { host.to_socket_addrs().unwrap().collect() };
         for local in ["127.0.0.1:9876", "127.0.0.2:1", "localhost:9876", "[::1]:9000"] {
-            assert!(is_loopback(&connect_url(local).unwrap()), "{local}");
+            assert!(all_loopback(&resolved(local)), "{local}");
         }
         for remote in ["10.0.0.2:9000", "192.168.1.20:9876", "[2001:db8::1]:9876"] {
-            assert!(!is_loopback(&connect_url(remote).unwrap()), "{remote}");
+            assert!(!all_loopback(&resolved(remote)), "{remote}");
         }
+        assert!(!all_loopback(&[]), "a name that resolved to nothing");
     }
 }

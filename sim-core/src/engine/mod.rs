@@ -17,19 +17,19 @@ pub use simulation::{
 
 /// The most worker threads a run may ask for: beyond the cores of any machine runs are
 /// made on, and far below where starting the threads would exhaust the process's memory
-/// maps (100,000 threads abort the process).
+/// maps.
 pub const MAX_THREADS: usize = 1024;
 
-/// `threads` (`None`: one per core) if it lies in 1..=[`MAX_THREADS`]; otherwise what is
-/// allowed.
+/// Check a worker count (`None`: one per core): `Err` says what is allowed unless it lies
+/// in 1..=[`MAX_THREADS`].
 ///
 /// ```
 /// assert!(sim_core::engine::check_threads(Some(8)).is_ok());
 /// assert!(sim_core::engine::check_threads(Some(0)).is_err());
 /// ```
-pub fn check_threads(threads: Option<usize>) -> Result<Option<usize>, String> {
+pub fn check_threads(threads: Option<usize>) -> Result<(), String> {
     match threads {
         Some(t) if !(1..=MAX_THREADS).contains(&t) => Err(format!("must be from 1 to {MAX_THREADS}, got {t}")),
-        t => Ok(t),
+        _ => Ok(()),
     }
 }
