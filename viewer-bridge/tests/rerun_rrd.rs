@@ -931,26 +931,28 @@ fn non_loopback_address() -> Option<std::net::IpAddr> {
         .find(|ip| !ip.is_loopback() && !ip.is_unspecified())
 }
 
-/// A TCP relay on a free port of `ip` to `to` on this machine: its address, and the count of
-/// bytes sent through it towards `to`.
-fn relay(ip: std::net::IpAddr, to: u16) -> (std::net::SocketAddr, std::sync::Arc<std::sync::atomic::AtomicU64>) {
+/// The bytes a relay has sent on, shared with its threads.
+type Relayed = std::sync::Arc<std::sync::Mutex<Vec<u8>>>;
+
+/// A TCP relay on a free port of `ip` to `to` on this machine: its address, and the bytes
+/// sent through it towards `to`.
+fn relay(ip: std::net::IpAddr, to: u16) -> (std::net::SocketAddr, Relayed) {
     use std::io::{Read, Write};
-    use std::sync::atomic::{AtomicU64, Ordering};
     let listener = TcpListener::bind((ip, 0)).unwrap();
     let at = listener.local_addr().unwrap();
-    let sent = std::sync::Arc::new(AtomicU64::new(0));
-    let counter = sent.clone();
+    let sent = Relayed::default();
+    let kept = sent.clone();
     std::thread::spawn(move || {
         for client in listener.incoming().map_while(Result::ok) {
             let Ok(server) = std::net::TcpStream::connect(("127.0.0.1", to)) else {
                 continue;
             };
             let (mut from_client, mut to_server) = (client.try_clone().unwrap(), server.try_clone().unwrap());
-            let counter = counter.clone();
+            let kept = kept.clone();
             std::thread::spawn(move || {
                 let mut buf = vec![0u8; 1 << 16];
                 while let Ok(n @ 1..) = from_client.read(&mut buf) {
-                    counter.fetch_add(n as u64, Ordering::SeqCst);
+                    kept.lock().unwrap().extend_from_slice(&buf[..n]);
                     if to_server.write_all(&buf[..n]).is_err() {
                         break;
                     }
@@ -965,10 +967,12 @@ fn relay(ip: std::net::IpAddr, to: u16) -> (std::net::SocketAddr, std::sync::Arc
 }
 
 /// A stream to a viewer on another host is LZ4-compressed, as Rerun sends it; one to a
-/// viewer on this machine is sent uncompressed (more than 1.5 times the bytes). Both arrive
-/// whole.
-/// The other host is this machine under its network address, through a relay that counts
-/// the bytes.
+/// viewer on this machine is sent uncompressed. Both arrive whole. The other host is this
+/// machine under its network address, through a relay that keeps the bytes. How much LZ4
+/// still shrinks them tells the two apart: the uncompressed stream to under 0.6 times the
+/// part the compressed one shrinks to (its gRPC framing and chunk headers stay plain, so it
+/// still shrinks). The streams' sizes alone would not: how many chunks, each with its
+/// schema, a stream is cut into depends on how fast the run goes.
 #[test]
 fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
     let test = "a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not";
@@ -980,7 +984,7 @@ fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    let mut bytes = Vec::new();
+    let mut shrunk = Vec::new();
     for (name, relay_ip) in [("remote", ip), ("local", std::net::IpAddr::from([127, 0, 0, 1]))] {
         let saved = dir.path().join(format!("{name}.rrd"));
         let (mut rx, port) = receiver(&python, &saved);
@@ -990,11 +994,18 @@ fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
         rx.kill().unwrap();
         rx.wait().unwrap();
         assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>(), "{name}");
-        bytes.push(sent.load(std::sync::atomic::Ordering::SeqCst));
+        let bytes = sent.lock().unwrap();
+        shrunk.push((bytes.len(), lz4_flex::compress(&bytes).len()));
     }
-    let (remote, local) = (bytes[0], bytes[1]);
-    // Were both compressed, the two would send the same bytes.
-    assert!(2 * local > 3 * remote, "{remote} bytes to {ip}, {local} to 127.0.0.1");
+    let ratio = |(sent, compressed): (usize, usize)| compressed as f64 / sent as f64;
+    let (remote, local) = (ratio(shrunk[0]), ratio(shrunk[1]));
+    // Were both streams compressed, or both not, LZ4 would shrink them alike.
+    assert!(
+        local < 0.6 * remote,
+        "LZ4 shrinks the stream to {ip} to {remote:.2} of its {} bytes, to 127.0.0.1 to {local:.2} of {}",
+        shrunk[0].0,
+        shrunk[1].0
+    );
 }
 
 /// A run stopped by an output that fails mid-way (here a checkpoint whose path is a
