@@ -179,9 +179,13 @@ enum Scenario {
         #[arg(long, default_value = "frontier")]
         strategy: String,
         /// A parameter of `--strategy`, as a config's `<param name=… value=…>` gives it
-        /// (repeat for more; e.g. `--param replan_within_view=0.25`). Teams run with none.
+        /// (repeat for more; e.g. `--param replan_within_view=0.25`).
         #[arg(long = "param", value_name = "NAME=VALUE", value_parser = parse_param)]
         params: Vec<(String, String)>,
+        /// A parameter of the teams' `cooperative` robots, and of the one robot they are
+        /// timed against (repeat for more; e.g. `--team-param wait_rounds=0`).
+        #[arg(long = "team-param", value_name = "NAME=VALUE", value_parser = parse_param)]
+        team_params: Vec<(String, String)>,
         /// The shared map folder (ROS maps and the Stage cave); default: `SMARTTEAMS_DATA`.
         #[arg(long)]
         data: Option<std::path::PathBuf>,
@@ -248,6 +252,7 @@ fn run(cli: &Cli) -> Result<()> {
         Scenario::Exploration {
             ref strategy,
             ref params,
+            ref team_params,
             ref data,
             ref teams,
             ref only,
@@ -257,12 +262,17 @@ fn run(cli: &Cli) -> Result<()> {
                 strategy: strategy.clone(),
                 params: params.iter().cloned().collect(),
             };
+            let teams = Teams {
+                sizes: teams.clone(),
+                params: team_params.iter().cloned().collect(),
+            };
             // A bad name or value stops the run before its table begins.
             scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
+            scale::exploration::check_strategy("cooperative", &teams.params)?;
             if starts > 0 {
-                exploration_from_starts(&compared, data.as_deref(), teams, only.as_deref(), starts, cli.rounds)
+                exploration_from_starts(&compared, data.as_deref(), &teams, only.as_deref(), starts, cli.rounds)
             } else {
-                exploration(&compared, data.as_deref(), teams, only.as_deref(), cli.rounds)
+                exploration(&compared, data.as_deref(), &teams, only.as_deref(), cli.rounds)
             }
         }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
@@ -620,7 +630,7 @@ impl Compared {
 fn exploration_from_starts(
     compared: &Compared,
     data: Option<&std::path::Path>,
-    teams: &[u32],
+    teams: &Teams,
     only: Option<&str>,
     k: usize,
     max_rounds: u64,
@@ -667,6 +677,13 @@ fn exploration_from_starts(
     Ok(())
 }
 
+/// The teams of `exploration`: their sizes (0s skipped) and their `cooperative` robots'
+/// parameters.
+struct Teams {
+    sizes: Vec<u32>,
+    params: sim_core::agent::Params,
+}
+
 /// One `cooperative` robot's run on a map and each team size's (0s skipped).
 struct TeamRuns {
     solo: scale::exploration::Exploration,
@@ -675,16 +692,18 @@ struct TeamRuns {
 
 impl TeamRuns {
     /// The runs on `map`; `None` when `teams` holds no size.
-    fn run(map: &std::sync::Arc<sim_core::world::MapData>, teams: &[u32], max_rounds: u64) -> Result<Option<Self>> {
-        use scale::exploration::explore;
-        if !teams.iter().any(|&n| n > 0) {
+    fn run(map: &std::sync::Arc<sim_core::world::MapData>, teams: &Teams, max_rounds: u64) -> Result<Option<Self>> {
+        use scale::exploration::explore_with;
+        if !teams.sizes.iter().any(|&n| n > 0) {
             return Ok(None);
         }
-        let solo = explore(map, "cooperative", 1, max_rounds)?;
+        let explore = |n| explore_with(map, "cooperative", &teams.params, n, max_rounds);
+        let solo = explore(1)?;
         let teams = teams
+            .sizes
             .iter()
             .filter(|&&n| n > 0)
-            .map(|&n| Ok((n, explore(map, "cooperative", n, max_rounds)?)))
+            .map(|&n| Ok((n, explore(n)?)))
             .collect::<Result<_>>()?;
         Ok(Some(Self { solo, teams }))
     }
@@ -737,7 +756,7 @@ fn mean(xs: &[f64]) -> String {
 fn exploration(
     compared: &Compared,
     data: Option<&std::path::Path>,
-    teams: &[u32],
+    teams: &Teams,
     only: Option<&str>,
     max_rounds: u64,
 ) -> Result<()> {
@@ -781,7 +800,7 @@ fn metres(at: Option<(u64, f64)>) -> String {
 /// The teams' cell of the exploration table: one `cooperative` robot's rounds and metres to
 /// 90 %, then each team size of `teams` with its speed-up, summed metres and overlap (empty
 /// when `teams` holds no size).
-fn team_cells(map: &std::sync::Arc<sim_core::world::MapData>, teams: &[u32], max_rounds: u64) -> Result<String> {
+fn team_cells(map: &std::sync::Arc<sim_core::world::MapData>, teams: &Teams, max_rounds: u64) -> Result<String> {
     let Some(runs) = TeamRuns::run(map, teams, max_rounds)? else {
         return Ok(String::new());
     };

@@ -327,26 +327,41 @@ fn scouts_of_a_large_team_walk_out_along_their_bearings() {
 /// first, and the one after hearing, in its second round, each of `mates` (id, goal)
 /// announce its goal.
 fn goals_after_a_mates_announcement(mates: &[(u32, DVec2)]) -> (DVec2, DVec2) {
+    let announced: Vec<_> = mates.iter().map(|&(id, goal)| (id, Some(goal))).collect();
+    let (first, after) = goals_after_announcements(&[&announced], &Params::default());
+    (first, after[0].0.expect("a frontier"))
+}
+
+/// [`goals_after_a_mates_announcement`] with `params`, for as many rounds after the first
+/// as `heard` has lists: in each, the robot hears its list's (id, goal) announcements.
+/// Each of those rounds' goal and action.
+fn goals_after_announcements(
+    heard: &[&[(u32, Option<DVec2>)]],
+    params: &Params,
+) -> (DVec2, Vec<(Option<DVec2>, Action)>) {
     let mut w = common::corridor_with_two_ends();
     w.robot.id = RobotId::new(1);
-    let mut s = StrategyRegistry::with_builtins()
-        .create("cooperative", &Params::default())
-        .unwrap();
+    let mut s = StrategyRegistry::with_builtins().create("cooperative", params).unwrap();
     let first = s.decide(&mut w.ctx());
     let first_goal = w.mind.output.goal().expect("a frontier");
     w.apply(first);
-    let heard = mates.iter().map(|&(id, goal)| Message {
-        from: RobotId::new(id),
-        sent_round: 1,
-        to: Recipient::Broadcast,
-        payload: Arc::new(Payload::Position {
-            position: DVec2::new(10.5, 1.5),
-            goal: Some(goal),
-        }),
-    });
-    w.mind.perception.inbox = Inbox::from(heard.collect::<Vec<_>>());
-    s.decide(&mut w.ctx());
-    (first_goal, w.mind.output.goal().expect("a frontier"))
+    let mut after = Vec::new();
+    for announced in heard {
+        let messages = announced.iter().map(|&(id, goal)| Message {
+            from: RobotId::new(id),
+            sent_round: w.round - 1,
+            to: Recipient::Broadcast,
+            payload: Arc::new(Payload::Position {
+                position: DVec2::new(10.5, 1.5),
+                goal,
+            }),
+        });
+        w.mind.perception.inbox = Inbox::from(messages.collect::<Vec<_>>());
+        let action = s.decide(&mut w.ctx());
+        after.push((w.mind.output.goal(), action));
+        w.apply(action);
+    }
+    (first_goal, after)
 }
 
 /// Two robots that set out together pick the same nearest frontier: here the west end, 3 m
@@ -362,5 +377,53 @@ fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
     for mates in [vec![], vec![(2, first)]] {
         let (_, kept) = goals_after_a_mates_announcement(&mates);
         assert_eq!(kept, first, "mates {mates:?}");
+    }
+}
+
+/// Robot 1 first heads for the west end; in its second round it hears mate 0 set out for
+/// it and mate 2 for a goal east, so it searches again and finds the east end, 7.5 m of
+/// corridor away (it stepped 1 m west). With mate 2's goal 6.5 m from that target (not
+/// within the 5 m `avoid_radius_m`, but nearer than the robot's walk), the robot leaves
+/// the target to mate 2: no goal, and it stays put for `wait_rounds` rounds (5 by
+/// default). Mate 2 then announces no goal (in round 3), and once its wait is over the
+/// robot searches again and sets out east: in round 7 by default, in round 3 with
+/// `wait_rounds` 1. With mate 2's goal 8.5 m from the target, with `wait_rounds` 0, or with
+/// mate 0 alone heard (a team of two), it sets out east at once.
+#[test]
+fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
+    let mates = |mate_2_x: f64| [(0, Some(DVec2::new(7.0, 1.5))), (2, Some(DVec2::new(mate_2_x, 1.5)))];
+    let near = mates(23.5);
+    let withdrawn: &[(u32, Option<DVec2>)] = &[(2, None)];
+    let quiet: &[(u32, Option<DVec2>)] = &[];
+    let east = |goal: Option<DVec2>| goal.is_some_and(|g| g.x > 16.5);
+    for (wait_rounds, params) in [(5, Params::default()), (1, Params::default().with("wait_rounds", "1"))] {
+        // Heard in rounds 2 (both goals) and 3 (mate 2 withdraws), then nothing.
+        let mut heard = vec![&near[..], withdrawn];
+        heard.extend(std::iter::repeat_n(quiet, wait_rounds - 1));
+        let (first, after) = goals_after_announcements(&heard, &params);
+        assert!(first.x < 7.5, "the west end first, got {first}");
+        for (k, &(goal, action)) in after.iter().enumerate().take(wait_rounds) {
+            assert_eq!((goal, action), (None, Action::Idle), "round {}, {params:?}", k + 2);
+        }
+        let set_out = after[wait_rounds];
+        assert!(
+            east(set_out.0),
+            "east in round {}, {params:?}: {set_out:?}",
+            wait_rounds + 2
+        );
+    }
+    let no_wait = Params::default().with("wait_rounds", "0");
+    let far = mates(25.5);
+    for (mates, params) in [
+        (&far[..], &Params::default()),
+        (&near[..], &no_wait),
+        (&near[..1], &Params::default()),
+    ] {
+        let (_, after) = goals_after_announcements(&[mates], params);
+        assert!(
+            east(after[0].0),
+            "the east end with {mates:?}, {params:?}: got {:?}",
+            after[0]
+        );
     }
 }

@@ -27,6 +27,11 @@ pub(super) struct Sharing {
     /// `Spoke`).
     #[serde(default)]
     pub(super) spoke_mates: Option<f64>,
+    /// Rounds a robot of a small team waits when it leaves its new target to a team mate
+    /// nearer to it (0: never; see `Frontier::leave_to_mates`). Checkpoints written
+    /// before this existed resume with 0, as they ran.
+    #[serde(default)]
+    pub(super) wait_rounds: u64,
 }
 
 /// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
@@ -34,6 +39,11 @@ pub(super) struct Sharing {
 /// size. Only robots in a crowd hear more than 64 goals, and for them merging hundreds a
 /// round is costly (BENCHMARKS.md, "Defaults of `cooperative`").
 pub(super) const MAX_CLAIMS: u64 = 64;
+
+/// Rounds a `cooperative` robot of a small team waits, by default, when it leaves its new
+/// target to a team mate (see [`Sharing::wait_rounds`]). Teams of 4 and 8 walk less with 5
+/// than with 1 or 3 (BENCHMARKS.md, "Exploration quality").
+pub(super) const WAIT_ROUNDS: u64 = 5;
 
 fn default_max_claims() -> usize {
     MAX_CLAIMS as usize
@@ -46,12 +56,14 @@ impl Sharing {
         let max_claims = p.u64_in("max_claims", MAX_CLAIMS, 0..=1_000_000)? as usize;
         let max_detour_m = p.opt_f64_in("max_detour_m", 0.0..=MAX_DISTANCE_M)?;
         let spoke_mates = p.opt_f64_in("spoke_mates", 0.0..=1.0e9)?;
+        let wait_rounds = p.u64_in("wait_rounds", WAIT_ROUNDS, 0..=1_000_000)?;
         Ok(Self {
             every_rounds,
             avoid_radius_m,
             max_claims,
             max_detour_m,
             spoke_mates,
+            wait_rounds,
         })
     }
 }

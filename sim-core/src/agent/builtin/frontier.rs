@@ -225,11 +225,20 @@ pub(super) struct Frontier {
     /// settled between mates (see [`Frontier::yield_to_lower_ids`]).
     #[serde(default)]
     crowd: bool,
+    /// The round until which it waits, having left its target to a team mate (see
+    /// [`Frontier::leave_to_mates`]).
+    #[serde(default)]
+    waiting_until: u64,
 }
 
 /// `cooperative` robots that have heard fewer team mates than this settle clashing goals
 /// ([`Frontier::yield_to_lower_ids`]); in crowds each clash would cost a search.
 const SMALL_TEAM_MATES: f64 = 12.0;
+
+/// Team mates a `cooperative` robot must have heard (and fewer than [`SMALL_TEAM_MATES`])
+/// before it leaves targets to them ([`Frontier::leave_to_mates`]): with one mate, waiting
+/// costs more time than the walk it saves (BENCHMARKS.md, "Exploration quality").
+const WAITING_TEAM_MATES: f64 = 2.0;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
 /// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
@@ -265,6 +274,7 @@ impl Frontier {
             spoke: sharing.and_then(|s| s.spoke_mates).map(Spoke::from_mates),
             mates: MatesSketch::default(),
             crowd: false,
+            waiting_until: 0,
         }
     }
 
@@ -282,6 +292,52 @@ impl Frontier {
         });
         if clash {
             nav.clear();
+        }
+    }
+
+    /// Whether this robot leaves targets to its team mates: it shares, waits a positive
+    /// number of rounds, and is in a small team of at least [`WAITING_TEAM_MATES`] mates
+    /// heard.
+    fn leaves_targets(&self) -> bool {
+        self.sharing.is_some_and(|s| s.wait_rounds > 0) && !self.crowd && self.mates.count() >= WAITING_TEAM_MATES
+    }
+
+    /// Leave a new target to a team mate: when the target (set this round, `before` being
+    /// the goal before) lies nearer to a mate's announced goal than the robot's route to
+    /// it, drop the route and wait `wait_rounds` rounds (then search again). The mate,
+    /// once at its goal, is nearer; walking there would cross the ground the mate is
+    /// exploring. Returns whether the robot waits. O(claims).
+    fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>) -> bool {
+        let Some(target) = ctx.goal().filter(|&t| Some(t) != before) else {
+            return false;
+        };
+        let Some(wait_rounds) = self.sharing.map(|s| s.wait_rounds) else {
+            return false;
+        };
+        let (me, home) = (ctx.me.id.get(), ctx.home().center());
+        let nav = self.core.frontier.navigator();
+        let walk_m = nav.remaining_m(ctx.position());
+        let nearer_mate = self
+            .claims
+            .iter()
+            .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
+        if nearer_mate {
+            nav.clear();
+            ctx.set_goal(None);
+            self.waiting_until = ctx.round + wait_rounds;
+        }
+        nearer_mate
+    }
+
+    /// Announce the goal to team mates, only when it changed: claims stay cheap in crowds.
+    fn announce_goal(&mut self, ctx: &mut Ctx) {
+        if self.sharing.is_some() && ctx.goal() != self.announced {
+            self.announced = ctx.goal();
+            let goal = ctx.goal();
+            ctx.broadcast(Payload::Position {
+                position: ctx.position(),
+                goal,
+            });
         }
     }
 }
@@ -360,27 +416,32 @@ impl Strategy for Frontier {
             }
             return a;
         }
+        let leaves_targets = self.leaves_targets();
+        if leaves_targets && ctx.round < self.waiting_until {
+            ctx.set_goal(None);
+            self.announce_goal(ctx);
+            return Action::Idle;
+        }
+        let before = ctx.goal();
         let claims = &self.claims;
         let spoke = self.spoke.as_mut();
         let mates_heard = self.mates.count();
-        let action = match spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator(), mates_heard)) {
-            Some(a) => a,
-            None => self.core.explore(
+        let action = if let Some(a) = spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator(), mates_heard)) {
+            a
+        } else {
+            let a = self.core.explore(
                 ctx,
                 || claims.iter().map(|c| goal_of(c.1, home)).collect(),
                 radius,
                 max_detour_m,
-            ),
+            );
+            if leaves_targets && self.leave_to_mates(ctx, before) {
+                Action::Idle
+            } else {
+                a
+            }
         };
-        // Announce a goal only when it changes: claims stay cheap in crowds.
-        if self.sharing.is_some() && ctx.goal() != self.announced {
-            self.announced = ctx.goal();
-            let goal = ctx.goal();
-            ctx.broadcast(Payload::Position {
-                position: ctx.position(),
-                goal,
-            });
-        }
+        self.announce_goal(ctx);
         action
     }
 }

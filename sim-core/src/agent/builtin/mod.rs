@@ -76,7 +76,9 @@ fn register_builtins(r: &mut StrategyRegistry) {
         "frontier exploration that shares known maps and treasure sightings, and avoids team mates' goals \
          (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
          unbounded by default; in teams of fewer than 12 mates heard, a robot yields a target to a mate \
-         with a lower id that announces a goal near it); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
+         with a lower id that announces a goal near it, and in teams of 3 to 12 a robot whose new target is \
+         nearer to a mate's goal than to itself leaves it to the mate and waits wait_rounds rounds, 5 by \
+         default, 0: never); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
          team mates (never by default), it walks out along its bearing from home to just beyond the edge \
          of its known map, exploring frontiers where that is blocked",
         |p| {
@@ -87,6 +89,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
                 "max_detour_m",
                 "replan_within_view",
                 "spoke_mates",
+                "wait_rounds",
             ])?;
             let share = explorer::Sharing::from_params(p)?;
             let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
