@@ -387,7 +387,8 @@ fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
 /// the target to mate 2: no goal, and it stays put for `wait_rounds` rounds (5 by
 /// default). Mate 2 then announces no goal (in round 3), and once its wait is over the
 /// robot searches again and sets out east: in round 7 by default, in round 3 with
-/// `wait_rounds` 1. With mate 2's goal 8.5 m from the target, with `wait_rounds` 0, or with
+/// `wait_rounds` 1. Were mate 2 to keep its goal, the robot would take the target once it
+/// has left it for 80 rounds. With mate 2's goal 8.5 m from the target, with `wait_rounds` 0, or with
 /// mate 0 alone heard (a team of two), it sets out east at once.
 #[test]
 fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
@@ -412,6 +413,14 @@ fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
             wait_rounds + 2
         );
     }
+    // Both mates keep their goals (and say so every 10 rounds, as claims are forgotten
+    // after 50): the robot searches again every 5 rounds, finds the same target and leaves
+    // it again, and takes it once it has left it for 80 rounds (round 82).
+    let heard: Vec<_> = (0..81).map(|k| if k % 10 == 0 { &near[..] } else { quiet }).collect();
+    let (_, after) = goals_after_announcements(&heard, &Params::default());
+    let moved = after.iter().position(|&step| step != (None, Action::Idle));
+    assert_eq!(moved, Some(80), "waits to round 81: {:?}", moved.map(|k| after[k]));
+    assert!(east(after[80].0), "east in round 82: {:?}", after[80]);
     let no_wait = Params::default().with("wait_rounds", "0");
     let far = mates(25.5);
     for (mates, params) in [

@@ -43,9 +43,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "teams.xml",
         rounds: 800,
-        digest: 0x28dd_1493_9da3_89a3,
-        metrics_crc: 0x6657_3530,
-        robots_crc: 0x1646_fb65,
+        digest: 0xde16_e099_5fb8_be0c,
+        metrics_crc: 0x9c3a_9b6c,
+        robots_crc: 0x180e_57ce,
     },
     Golden {
         config: "tactics.xml",

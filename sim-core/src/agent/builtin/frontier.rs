@@ -229,6 +229,9 @@ pub(super) struct Frontier {
     /// [`Frontier::leave_to_mates`]).
     #[serde(default)]
     waiting_until: u64,
+    /// The last target it left to a team mate, and the round it first did.
+    #[serde(default)]
+    left_since: Option<(DVec2, u64)>,
 }
 
 /// `cooperative` robots that have heard fewer team mates than this settle clashing goals
@@ -239,6 +242,15 @@ const SMALL_TEAM_MATES: f64 = 12.0;
 /// before it leaves targets to them ([`Frontier::leave_to_mates`]): with one mate, waiting
 /// costs more time than the walk it saves (BENCHMARKS.md, "Exploration quality").
 const WAITING_TEAM_MATES: f64 = 2.0;
+
+/// Rounds a `cooperative` robot leaves the same target (within [`SAME_LEFT_TARGET_M`]) to its
+/// team mates before it takes it after all: a mate held up, in a doorway crowded with
+/// waiting robots, say, would otherwise hold them all. With 20 or 40 rounds teams of 8
+/// walked more (BENCHMARKS.md, "Exploration quality").
+const LEAVE_AT_MOST_ROUNDS: u64 = 80;
+
+/// Targets this near count as the same for [`LEAVE_AT_MOST_ROUNDS`].
+const SAME_LEFT_TARGET_M: f64 = 1.0;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
 /// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
@@ -275,6 +287,7 @@ impl Frontier {
             mates: MatesSketch::default(),
             crowd: false,
             waiting_until: 0,
+            left_since: None,
         }
     }
 
@@ -306,7 +319,8 @@ impl Frontier {
     /// the goal before) lies nearer to a mate's announced goal than the robot's route to
     /// it, drop the route and wait `wait_rounds` rounds (then search again). The mate,
     /// once at its goal, is nearer; walking there would cross the ground the mate is
-    /// exploring. Returns whether the robot waits. O(claims).
+    /// exploring. A target left for [`LEAVE_AT_MOST_ROUNDS`] is taken. Returns whether the
+    /// robot waits. O(claims).
     fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>) -> bool {
         let Some(target) = ctx.goal().filter(|&t| Some(t) != before) else {
             return false;
@@ -317,11 +331,15 @@ impl Frontier {
         let (me, home) = (ctx.me.id.get(), ctx.home().center());
         let nav = self.core.frontier.navigator();
         let walk_m = nav.remaining_m(ctx.position());
-        let nearer_mate = self
-            .claims
-            .iter()
-            .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
+        let left_since = self.left_since.filter(|l| l.0.distance(target) <= SAME_LEFT_TARGET_M);
+        let left_long = left_since.is_some_and(|l| ctx.round >= l.1 + LEAVE_AT_MOST_ROUNDS);
+        let nearer_mate = !left_long
+            && self
+                .claims
+                .iter()
+                .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
         if nearer_mate {
+            self.left_since = Some(left_since.unwrap_or((target, ctx.round)));
             nav.clear();
             ctx.set_goal(None);
             self.waiting_until = ctx.round + wait_rounds;
