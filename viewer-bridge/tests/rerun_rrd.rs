@@ -507,6 +507,15 @@ fn view_logs_the_maps_cells() {
     assert!(blocked > w * h / 4, "a maze is mostly walls: {blocked} blocked cells");
 }
 
+/// Held by each test that streams to a live receiver, for the whole test: on two cores,
+/// two runs streaming at once, their receivers and the polls of what those saved starve each
+/// other, and a receiver that takes no data for 10 s makes its run give up the rest (as
+/// runs do: "could not flush the Rerun stream").
+fn one_live_stream_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    static LIVE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    LIVE.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 /// A headless `rerun` that receives on a free port and saves what arrives to `save`; returns
 /// it and its port.
 ///
@@ -560,6 +569,7 @@ fn listening(child: &mut Child, port: u16) -> bool {
 
 #[test]
 fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
+    let _live = one_live_stream_at_a_time();
     let Some(python) = python("live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run") else {
         return;
     };
@@ -652,6 +662,7 @@ fn same_seed_same_recording_whatever_the_thread_count() {
 #[cfg(unix)]
 #[test]
 fn a_paused_viewer_does_not_hold_up_the_run() {
+    let _live = one_live_stream_at_a_time();
     let Some(python) = python("a_paused_viewer_does_not_hold_up_the_run") else {
         return;
     };
@@ -891,6 +902,7 @@ fn a_server_that_refuses_the_stream_is_a_clear_error_before_any_round() {
 #[cfg(unix)]
 #[test]
 fn a_stopped_run_ends_its_live_stream_normally() {
+    let _live = one_live_stream_at_a_time();
     let Some(python) = python("a_stopped_run_ends_its_live_stream_normally") else {
         return;
     };
@@ -975,6 +987,7 @@ fn relay(ip: std::net::IpAddr, to: u16) -> (std::net::SocketAddr, Relayed) {
 /// schema, a stream is cut into depends on how fast the run goes.
 #[test]
 fn a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not() {
+    let _live = one_live_stream_at_a_time();
     let test = "a_stream_to_another_host_is_compressed_and_one_to_this_machine_is_not";
     let Some(python) = python(test) else {
         return;
