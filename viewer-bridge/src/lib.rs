@@ -26,3 +26,15 @@ pub mod run;
 pub mod stop;
 pub mod sweep;
 pub mod viewer;
+
+/// Why `path`, the `what` a run is to write, cannot be created: its folder does not exist
+/// (`None` when it does, or when the path names no folder). Checked before the work that
+/// would write it, and said plainly rather than as the writer's error.
+pub(crate) fn missing_folder(what: &str, path: &std::path::Path) -> Option<String> {
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir())?;
+    Some(format!(
+        "cannot write the {what} {}: the folder {} does not exist",
+        path.display(),
+        dir.display()
+    ))
+}

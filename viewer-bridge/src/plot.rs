@@ -299,12 +299,8 @@ pub fn metrics_figure(
     if inputs.is_empty() {
         return Err(PlotError("no CSV to plot".into()));
     }
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir()) {
-        return Err(PlotError(format!(
-            "cannot write the figure {}: the folder {} does not exist",
-            output.display(),
-            dir.display()
-        )));
+    if let Some(message) = crate::missing_folder("figure", output) {
+        return Err(PlotError(message));
     }
     if width < 200 || height < 200 || width > 20_000 || height > 20_000 {
         return Err(PlotError(format!(

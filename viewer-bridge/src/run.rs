@@ -312,14 +312,12 @@ impl Outputs {
             )?),
             None => None,
         };
-        if let Some(c) = &run.checkpoint
-            && let Some(dir) = c.path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir())
+        if let Some(message) = run
+            .checkpoint
+            .as_ref()
+            .and_then(|c| crate::missing_folder("checkpoint", &c.path))
         {
-            bail!(
-                "cannot write the checkpoint {}: the folder {} does not exist",
-                c.path.display(),
-                dir.display()
-            );
+            bail!(message);
         }
         let checkpoints = run
             .checkpoint
@@ -412,9 +410,10 @@ impl Outputs {
                 ("robot stats", run.robot_stats.clone()),
                 (
                     "checkpoint",
-                    (self.checkpoints.as_ref().is_some_and(|c| c.written() > 0))
-                        .then(|| run.checkpoint.as_ref().map(|c| c.path.clone()))
-                        .flatten(),
+                    run.checkpoint
+                        .as_ref()
+                        .filter(|_| self.checkpoints.as_ref().is_some_and(|c| c.written() > 0))
+                        .map(|c| c.path.clone()),
                 ),
             ]
             .into_iter()

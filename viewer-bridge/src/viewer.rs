@@ -141,14 +141,8 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
     let rec = match target {
         ViewerTarget::Rrd(path) => {
             // Rerun's own error repeats itself three times over; say it once.
-            if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty())
-                && !dir.is_dir()
-            {
-                bail!(
-                    "cannot write the recording {}: the folder {} does not exist",
-                    path.display(),
-                    dir.display()
-                );
+            if let Some(message) = crate::missing_folder("recording", path) {
+                bail!(message);
             }
             builder
                 .batcher_config(file_batching())
