@@ -41,8 +41,8 @@ pub(super) struct Sharing {
 pub(super) const MAX_CLAIMS: u64 = 64;
 
 /// Rounds a `cooperative` robot of a small team waits, by default, when it leaves its new
-/// target to a team mate (see [`Sharing::wait_rounds`]). Teams of 4 and 8 walk less with 5
-/// than with 1 or 3 (BENCHMARKS.md, "Exploration quality").
+/// target to a team mate (see [`Sharing::wait_rounds`]; BENCHMARKS.md, "Exploration
+/// quality").
 pub(super) const WAIT_ROUNDS: u64 = 5;
 
 fn default_max_claims() -> usize {

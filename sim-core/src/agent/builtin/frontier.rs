@@ -245,8 +245,8 @@ const WAITING_TEAM_MATES: f64 = 2.0;
 
 /// Rounds a `cooperative` robot leaves the same target (within [`SAME_LEFT_TARGET_M`]) to its
 /// team mates before it takes it after all: a mate held up, in a doorway crowded with
-/// waiting robots, say, would otherwise hold them all. With 20 or 40 rounds teams of 8
-/// walked more (BENCHMARKS.md, "Exploration quality").
+/// waiting robots, say, would otherwise hold them all (BENCHMARKS.md, "Exploration
+/// quality").
 const LEAVE_AT_MOST_ROUNDS: u64 = 80;
 
 /// Targets this near count as the same for [`LEAVE_AT_MOST_ROUNDS`].
@@ -308,24 +308,23 @@ impl Frontier {
         }
     }
 
-    /// Whether this robot leaves targets to its team mates: it shares, waits a positive
-    /// number of rounds, and is in a small team of at least [`WAITING_TEAM_MATES`] mates
-    /// heard.
-    fn leaves_targets(&self) -> bool {
-        self.sharing.is_some_and(|s| s.wait_rounds > 0) && !self.crowd && self.mates.count() >= WAITING_TEAM_MATES
+    /// The rounds this robot waits when it leaves a target to its team mates, if it does:
+    /// it shares, waits a positive number of rounds, and is in a small team of at least
+    /// [`WAITING_TEAM_MATES`] mates heard.
+    fn leaves_targets(&self) -> Option<u64> {
+        self.sharing
+            .map(|s| s.wait_rounds)
+            .filter(|&w| w > 0 && !self.crowd && self.mates.count() >= WAITING_TEAM_MATES)
     }
 
     /// Leave a new target to a team mate: when the target (set this round, `before` being
     /// the goal before) lies nearer to a mate's announced goal than the robot's route to
-    /// it, drop the route and wait `wait_rounds` rounds (then search again). The mate,
+    /// it, drop the route and wait `wait_rounds` (then search again). The mate,
     /// once at its goal, is nearer; walking there would cross the ground the mate is
     /// exploring. A target left for [`LEAVE_AT_MOST_ROUNDS`] is taken. Returns whether the
     /// robot waits. O(claims).
-    fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>) -> bool {
+    fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>, wait_rounds: u64) -> bool {
         let Some(target) = ctx.goal().filter(|&t| Some(t) != before) else {
-            return false;
-        };
-        let Some(wait_rounds) = self.sharing.map(|s| s.wait_rounds) else {
             return false;
         };
         let (me, home) = (ctx.me.id.get(), ctx.home().center());
@@ -435,7 +434,7 @@ impl Strategy for Frontier {
             return a;
         }
         let leaves_targets = self.leaves_targets();
-        if leaves_targets && ctx.round < self.waiting_until {
+        if leaves_targets.is_some() && ctx.round < self.waiting_until {
             ctx.set_goal(None);
             self.announce_goal(ctx);
             return Action::Idle;
@@ -453,7 +452,7 @@ impl Strategy for Frontier {
                 radius,
                 max_detour_m,
             );
-            if leaves_targets && self.leave_to_mates(ctx, before) {
+            if leaves_targets.is_some_and(|wait_rounds| self.leave_to_mates(ctx, before, wait_rounds)) {
                 Action::Idle
             } else {
                 a
