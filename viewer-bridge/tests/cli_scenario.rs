@@ -29,14 +29,7 @@ fn run_config(name: &str, xml: &str, extra: &[&str]) -> (bool, String) {
 #[test]
 fn a_crowd_that_cannot_fit_at_home_is_refused_at_once() {
     let started = Instant::now();
-    let (ok, err) = run_config(
-        "crowd.xml",
-        r#"<simulation rounds="5">
-  <map file="MAP"/>
-  <group name="crowd" count="100000000" type="explorer" strategy="random_walk"/>
-</simulation>"#,
-        &[],
-    );
+    let (ok, err) = run_config("crowd.xml", &random_walkers(100_000_000, 5), &[]);
     assert!(!ok, "a crowd of 10^8 robots was accepted");
     // The demo map is 128 m × 128 m: 16,384 m², and explorer discs of radius 0.125 m
     // cover 0.049 m² each, so at most 16,384 / 0.0491 ≈ 333,772 fit even with no walls.
@@ -197,26 +190,25 @@ fn tactics_listed_and_composed_by_name_in_a_config() {
     assert!(explored > 0.5, "{last}");
 }
 
-/// One explorer on the demo map for `rounds` rounds.
-fn one_explorer(rounds: u64) -> String {
+/// `count` random-walking explorers on the demo map for `rounds` rounds (their group on
+/// line 3, column 3).
+fn random_walkers(count: u64, rounds: u64) -> String {
     format!(
         r#"<simulation rounds="{rounds}">
   <map file="MAP"/>
-  <group name="g" count="1" type="explorer" strategy="random_walk"/>
+  <group name="g" count="{count}" type="explorer" strategy="random_walk"/>
 </simulation>"#
     )
 }
 
+/// One explorer on the demo map for `rounds` rounds.
+fn one_explorer(rounds: u64) -> String {
+    random_walkers(1, rounds)
+}
+
 #[test]
 fn a_config_without_robots_is_refused_at_its_group() {
-    let (ok, err) = run_config(
-        "none.xml",
-        r#"<simulation rounds="5">
-  <map file="MAP"/>
-  <group name="g" count="0" type="explorer" strategy="random_walk"/>
-</simulation>"#,
-        &[],
-    );
+    let (ok, err) = run_config("none.xml", &random_walkers(0, 5), &[]);
     assert!(!ok);
     assert!(
         err.contains("none.xml:3:3: no robots to simulate: every <group> has count 0"),

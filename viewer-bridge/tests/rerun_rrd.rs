@@ -769,6 +769,7 @@ fn run_spawned(dir: &Path, rounds: u64, port: u16, path: &std::ffi::OsStr) -> st
 #[test]
 fn spawn_starts_the_rerun_on_path_and_streams_to_it() {
     use std::os::unix::fs::PermissionsExt;
+    let _live = one_live_stream_at_a_time();
 
     let Some(python) = python("spawn_starts_the_rerun_on_path_and_streams_to_it") else {
         return;
