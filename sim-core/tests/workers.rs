@@ -392,12 +392,16 @@ fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
 /// mate 0 alone heard (a team of two), it sets out east at once.
 #[test]
 fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
+    // Searching again, the robot takes the nearest frontier clear of the mates' goals, as
+    // without comparing frontiers (comparing, both ends have a mate's goal nearer than the
+    // robot's walk, and it would take the nearer: see the next test).
+    let base = Params::default().with("compare_frontiers", "0");
     let mates = |mate_2_x: f64| [(0, Some(DVec2::new(7.0, 1.5))), (2, Some(DVec2::new(mate_2_x, 1.5)))];
     let near = mates(23.5);
     let withdrawn: &[(u32, Option<DVec2>)] = &[(2, None)];
     let quiet: &[(u32, Option<DVec2>)] = &[];
     let east = |goal: Option<DVec2>| goal.is_some_and(|g| g.x > 16.5);
-    for (wait_rounds, params) in [(5, Params::default()), (1, Params::default().with("wait_rounds", "1"))] {
+    for (wait_rounds, params) in [(5, base.clone()), (1, base.clone().with("wait_rounds", "1"))] {
         // Heard in rounds 2 (both goals) and 3 (mate 2 withdraws), then nothing.
         let mut heard = vec![&near[..], withdrawn];
         heard.extend(std::iter::repeat_n(quiet, wait_rounds - 1));
@@ -417,17 +421,13 @@ fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
     // after 50): the robot searches again every 5 rounds, finds the same target and leaves
     // it again, and takes it once it has left it for 80 rounds (round 82).
     let heard: Vec<_> = (0..81).map(|k| if k % 10 == 0 { &near[..] } else { quiet }).collect();
-    let (_, after) = goals_after_announcements(&heard, &Params::default());
+    let (_, after) = goals_after_announcements(&heard, &base);
     let moved = after.iter().position(|&step| step != (None, Action::Idle));
     assert_eq!(moved, Some(80), "waits to round 81: {:?}", moved.map(|k| after[k]));
     assert!(east(after[80].0), "east in round 82: {:?}", after[80]);
-    let no_wait = Params::default().with("wait_rounds", "0");
+    let no_wait = base.clone().with("wait_rounds", "0");
     let far = mates(25.5);
-    for (mates, params) in [
-        (&far[..], &Params::default()),
-        (&near[..], &no_wait),
-        (&near[..1], &Params::default()),
-    ] {
+    for (mates, params) in [(&far[..], &base), (&near[..], &no_wait), (&near[..1], &base)] {
         let (_, after) = goals_after_announcements(&[mates], params);
         assert!(
             east(after[0].0),
@@ -435,4 +435,58 @@ fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
             after[0]
         );
     }
+}
+
+/// The goal of a `cooperative` robot (id 1) with `params`, deciding for the first time in a
+/// 64 m corridor whose middle it knows (from x = 16 m to 48 m; it stands at 24.5 m), having
+/// just heard mate 2 announce `mate_goal`. The west frontier's target lies just across x = 16
+/// m, 8.5 m away; the east one's just across x = 48 m, 23.5 m away.
+fn first_goal_hearing(mate_goal: DVec2, params: &Params) -> DVec2 {
+    let art = [
+        "#".repeat(64),
+        format!("{}R{}", ".".repeat(24), ".".repeat(39)),
+        "#".repeat(64),
+    ]
+    .join("\n");
+    let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();
+    for x in 16..48 {
+        w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, 1.5), 0.75);
+    }
+    w.robot.id = RobotId::new(1);
+    let announced = Message {
+        from: RobotId::new(2),
+        sent_round: w.round.saturating_sub(1),
+        to: Recipient::Broadcast,
+        payload: Arc::new(Payload::Position {
+            position: mate_goal,
+            goal: Some(mate_goal),
+        }),
+    };
+    w.mind.perception.inbox = Inbox::from(vec![announced]);
+    let mut s = StrategyRegistry::with_builtins().create("cooperative", params).unwrap();
+    s.decide(&mut w.ctx());
+    w.mind.output.goal().expect("a frontier")
+}
+
+/// A robot of a small team takes, of the frontiers nearest to it (`compare_frontiers`, 8),
+/// one that no team mate's goal is nearer to than its own route. Mate 2's goal at x = 10.5
+/// m lies 5.5 m from the west target (the robot would walk 8.5 m), outside the 1 m
+/// `avoid_radius_m`: the robot takes the east target. At x = 40 m the mate's goal is 24 m
+/// from the west target and 8 m from the east one: the robot takes the west. With
+/// `compare_frontiers` 0 it takes the nearest frontier clear of the mate's goal: west.
+#[test]
+fn a_small_teams_robot_takes_a_frontier_no_mate_is_nearer_to() {
+    let near_radius = Params::default().with("avoid_radius_m", "1");
+    let east = first_goal_hearing(DVec2::new(10.5, 1.5), &near_radius);
+    assert!(east.x > 47.5, "east, as the mate is nearer to the west target: {east}");
+    let west = first_goal_hearing(DVec2::new(40.0, 1.5), &near_radius);
+    assert!(
+        (15.0..16.5).contains(&west.x),
+        "west, as the mate is nearer to the east target: {west}"
+    );
+    let nearest = first_goal_hearing(
+        DVec2::new(10.5, 1.5),
+        &near_radius.clone().with("compare_frontiers", "0"),
+    );
+    assert!((15.0..16.5).contains(&nearest.x), "west, without comparing: {nearest}");
 }

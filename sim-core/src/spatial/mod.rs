@@ -23,7 +23,7 @@ pub use geometry::{
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};
 pub use known_map::KnownMap;
-pub use nav::{LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
+pub use nav::{FoundGoal, LazyNavGraph, NavGraph, NavNodeId, Piece, PieceMemo, Route, Terrain};
 pub use obstacle_map::ObstacleMap;
 pub use quadtree::{BitGrid, CellSet, Components, PartialCells, Region, RegionQuadtree, Square};
 pub(crate) use quadtree::{BlockMemo, Finger};

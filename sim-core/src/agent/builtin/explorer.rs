@@ -32,6 +32,12 @@ pub(super) struct Sharing {
     /// before this existed resume with 0, as they ran.
     #[serde(default)]
     pub(super) wait_rounds: u64,
+    /// A robot of a small team takes, of this many frontiers nearest to it, the one its team
+    /// mates' goals are least often nearer to (0: the nearest frontier clear of their goals;
+    /// see `Navigator::least_contested_frontier_route`). Checkpoints written before this
+    /// existed resume with 0, as they ran.
+    #[serde(default)]
+    pub(super) compare_frontiers: usize,
 }
 
 /// Team mates' goals a cooperative robot remembers by default: a scalable memory list of
@@ -45,6 +51,10 @@ pub(super) const MAX_CLAIMS: u64 = 64;
 /// quality").
 pub(super) const WAIT_ROUNDS: u64 = 5;
 
+/// Frontiers a `cooperative` robot of a small team compares, by default (see
+/// [`Sharing::compare_frontiers`]; BENCHMARKS.md, "Exploration quality").
+pub(super) const COMPARE_FRONTIERS: u64 = 8;
+
 fn default_max_claims() -> usize {
     MAX_CLAIMS as usize
 }
@@ -57,6 +67,7 @@ impl Sharing {
         let max_detour_m = p.opt_f64_in("max_detour_m", 0.0..=MAX_DISTANCE_M)?;
         let spoke_mates = p.opt_f64_in("spoke_mates", 0.0..=1.0e9)?;
         let wait_rounds = p.u64_in("wait_rounds", WAIT_ROUNDS, 0..=1_000_000)?;
+        let compare_frontiers = p.u64_in("compare_frontiers", COMPARE_FRONTIERS, 0..=1_000)? as usize;
         Ok(Self {
             every_rounds,
             avoid_radius_m,
@@ -64,6 +75,7 @@ impl Sharing {
             max_detour_m,
             spoke_mates,
             wait_rounds,
+            compare_frontiers,
         })
     }
 }

@@ -426,6 +426,9 @@ impl Strategy for Frontier {
             if !self.crowd {
                 self.yield_to_lower_ids(ctx, radius);
             }
+            // In crowds each comparison would cost a longer search.
+            let compare = if self.crowd { 0 } else { share.compare_frontiers };
+            self.core.frontier.compare_frontiers(compare);
         }
         if let Some(a) = self.core.reflexes(ctx) {
             if let Some(spoke) = &mut self.spoke {

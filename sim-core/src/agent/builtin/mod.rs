@@ -78,7 +78,9 @@ fn register_builtins(r: &mut StrategyRegistry) {
          unbounded by default; in teams of fewer than 12 mates heard, a robot yields a target to a mate \
          with a lower id that announces a goal near it, and in teams of 3 to 12 a robot whose new target is \
          nearer to a mate's goal than to itself leaves it to the mate and waits wait_rounds rounds, 5 by \
-         default, 0: never); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
+         default, 0: never; in teams of fewer than 12 mates heard, a robot takes of the compare_frontiers \
+         frontiers nearest to it, 8 by default, the one fewest mates' goals are nearer to, 0: the nearest \
+         frontier clear of them); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
          team mates (never by default), it walks out along its bearing from home to just beyond the edge \
          of its known map, exploring frontiers where that is blocked",
         |p| {
@@ -90,6 +92,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
                 "replan_within_view",
                 "spoke_mates",
                 "wait_rounds",
+                "compare_frontiers",
             ])?;
             let share = explorer::Sharing::from_params(p)?;
             let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;

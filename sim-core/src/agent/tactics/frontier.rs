@@ -101,6 +101,11 @@ pub struct FrontierSeeking {
     /// Ranking by target: targets given up (see [`GIVE_UP_ROUNDS`]), oldest first.
     #[serde(default)]
     given_up: Vec<DVec2>,
+    /// With claims to avoid, take the least contested of this many nearest frontiers (0,
+    /// the default: the nearest clear of them; see
+    /// [`Navigator::least_contested_frontier_route`]).
+    #[serde(default)]
+    compare_frontiers: usize,
     /// What the searches learnt of this robot's map (worked out again after a restore).
     #[serde(skip)]
     memo: PieceMemo,
@@ -119,6 +124,7 @@ impl Default for FrontierSeeking {
             rechecked: None,
             progress: None,
             given_up: Vec::new(),
+            compare_frontiers: 0,
             memo: PieceMemo::default(),
         }
     }
@@ -162,6 +168,14 @@ impl FrontierSeeking {
         self
     }
 
+    /// From now on, when team mates' goals are to be avoided, take the least contested of the
+    /// `count` frontiers nearest to the robot
+    /// ([`Navigator::least_contested_frontier_route`]) instead of the nearest clear of the
+    /// goals; 0: the nearest clear of them. Strategies set it as their team changes.
+    pub fn compare_frontiers(&mut self, count: usize) {
+        self.compare_frontiers = count;
+    }
+
     /// The route follower (strategies that also go elsewhere share it).
     pub fn navigator(&mut self) -> &mut Navigator {
         &mut self.nav
@@ -190,9 +204,13 @@ impl FrontierSeeking {
         let need_plan = self.nav.is_idle() || self.target_revealed(ctx);
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let (memo, by_target, reveal_first) = (&mut self.memo, self.by_target, self.reveal_first);
+            let compare = self.compare_frontiers;
             let given_up = &self.given_up;
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
+                if compare > 0 && !avoid.is_empty() {
+                    return Navigator::least_contested_frontier_route(ctx, memo, &avoid, compare);
+                }
                 if let Some(views) = by_target
                     && avoid.is_empty()
                 {

@@ -7,7 +7,7 @@ use glam::DVec2;
 use super::{SEARCH_BUDGET, blocked};
 use crate::agent::ctx::Ctx;
 use crate::spatial::{
-    Aabb, BlockCells, Finger, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
+    Aabb, BlockCells, Finger, FoundGoal, KnownMap, NavGraph, NavNodeId, Overlap, PieceMemo, Route, Shape, Square,
 };
 use crate::world::Action;
 
@@ -181,6 +181,50 @@ impl Navigator {
         search(memo, 1.0)
     }
 
+    /// Route to the least contested of the `k` frontiers nearest by route (`MinPos`, after
+    /// Bautin, Simonin and Charpillet, 2012): each frontier's rank is the number of
+    /// `mates` (team mates' announced goals, where they are headed) that lie nearer to its
+    /// target, in a straight line, than this robot's route; the frontier of lowest rank
+    /// wins, the nearest of those. Targets are ranked by the walk to them, as
+    /// [`nearest_frontier_route`](Self::nearest_frontier_route) does with no view charged,
+    /// and a target within [`SAME_FRONTIER_M`] of a nearer one counts as the same frontier.
+    /// A robot so takes a frontier its mates will not reach first, rather than the nearest,
+    /// which a mate may be about to explore. Cost: one search settling the pieces nearer
+    /// than the `k`-th target, and `k` × mates distances.
+    pub fn least_contested_frontier_route(ctx: &Ctx, memo: &mut PieceMemo, mates: &[DVec2], k: usize) -> Option<Route> {
+        let terrain = ctx.terrain()?;
+        let known = terrain.known;
+        let nav = ctx.nav();
+        let p = ctx.position();
+        let start_hint = memo.route_end();
+        let by_walk = Ranking::ByTarget {
+            seen_cost_m: 0.0,
+            max_known: 1.0,
+        };
+        let search = FrontierSearch::new(by_walk, nav, known, &[], 0.0, f64::INFINITY, memo);
+        let found = nav.search_cheapest_goals(
+            p,
+            start_hint,
+            |m| search.usable(m),
+            |n, d, at, reached| search.goal(n, d, at, reached),
+            &|_| 0.0,
+            k,
+            SEARCH_BUDGET,
+        );
+        let mut frontiers: Vec<FoundGoal> = Vec::with_capacity(found.len());
+        for f in found {
+            if frontiers.iter().all(|g| g.point.distance(f.point) > SAME_FRONTIER_M) {
+                frontiers.push(f);
+            }
+        }
+        let rank = |f: &FoundGoal| mates.iter().filter(|m| m.distance(f.point) < f.cost_m).count();
+        // Cheapest first already: the first of the lowest rank is the nearest of them.
+        let best = (0..frontiers.len()).min_by_key(|&i| (rank(&frontiers[i]), i))?;
+        let chosen = frontiers.swap_remove(best);
+        search.memo.into_inner().set_route_end(chosen.nodes.last().copied());
+        Some(nav.route_to_found(p, chosen, terrain))
+    }
+
     /// A frontier search (see [`frontier_route_memo`](Self::frontier_route_memo)) ranking
     /// frontiers as `ranking` says.
     fn frontier_search(
@@ -197,21 +241,7 @@ impl Navigator {
         let p = ctx.position();
         let view_m = ctx.kind.view_radius_m;
         let start_hint = memo.route_end();
-        let search = FrontierSearch {
-            ranking,
-            nav,
-            known,
-            avoid,
-            avoid_radius_m,
-            max_detour_m,
-            step_in: 0.5 * known.grid().cell_m(),
-            touched: RefCell::new(Vec::with_capacity(32)),
-            skipped: Cell::new(None),
-            memo: RefCell::new(memo),
-            // The pieces asked about lie close together: descents of the known map start
-            // from where the last one passed.
-            finger: RefCell::new(Finger::new(known.tree())),
-        };
+        let search = FrontierSearch::new(ranking, nav, known, avoid, avoid_radius_m, max_detour_m, memo);
         let route = match ranking {
             Ranking::ByEntry => nav.search_knowing_reached(
                 p,
@@ -241,6 +271,11 @@ impl Navigator {
         route
     }
 }
+
+/// Targets of [`Navigator::least_contested_frontier_route`] this near a nearer one count as
+/// the same frontier: its search finds one target per piece, and a frontier's unknown edge
+/// borders many pieces.
+pub const SAME_FRONTIER_M: f64 = 2.0;
 
 /// Waypoints past the next that a robot held back by a wall looks at for one in straight
 /// reach.
@@ -294,6 +329,37 @@ struct FrontierSearch<'a, 'm> {
     skipped: Cell<Option<(NavNodeId, f64, DVec2)>>,
     memo: RefCell<&'m mut PieceMemo>,
     finger: RefCell<Finger<'a>>,
+}
+
+impl<'a, 'm> FrontierSearch<'a, 'm> {
+    /// A search for frontiers as `ranking` says, on `nav` with the robot's `known` map and
+    /// its `memo`, skipping targets within `avoid_radius_m` of `avoid` for up to
+    /// `max_detour_m` (see [`Navigator::frontier_route`]).
+    fn new(
+        ranking: Ranking,
+        nav: &'a NavGraph,
+        known: &'a KnownMap,
+        avoid: &'a [DVec2],
+        avoid_radius_m: f64,
+        max_detour_m: f64,
+        memo: &'m mut PieceMemo,
+    ) -> Self {
+        Self {
+            ranking,
+            nav,
+            known,
+            avoid,
+            avoid_radius_m,
+            max_detour_m,
+            step_in: 0.5 * known.grid().cell_m(),
+            touched: RefCell::new(Vec::with_capacity(32)),
+            skipped: Cell::new(None),
+            memo: RefCell::new(memo),
+            // The pieces asked about lie close together: descents of the known map start
+            // from where the last one passed.
+            finger: RefCell::new(Finger::new(known.tree())),
+        }
+    }
 }
 
 impl FrontierSearch<'_, '_> {

@@ -112,6 +112,18 @@ fn unmorton(key: u64) -> (u32, u32) {
     (gather(key), gather(key >> 1))
 }
 
+/// A goal found by [`NavGraph::search_cheapest_goals`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct FoundGoal {
+    /// The walk to the goal's node, on in a straight line to the goal point, plus the
+    /// search's bias of the point, m.
+    pub cost_m: f64,
+    /// Nodes from start to goal.
+    pub nodes: Vec<NavNodeId>,
+    /// The goal point.
+    pub point: DVec2,
+}
+
 /// A route found on the graph.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Route {
@@ -807,7 +819,20 @@ impl NavGraph {
                 let e = key as u32;
                 let (at, d, n, parent) = entry[e as usize];
                 if parent == GOAL_ENTRY {
-                    return Some(found(e, entry, marks));
+                    let Goals::Cheapest(_, out, k) = goals else {
+                        return Some(found(e, entry, marks));
+                    };
+                    let (nodes, point) = found(e, entry, marks);
+                    let mut out = out.borrow_mut();
+                    out.push(FoundGoal {
+                        cost_m: entry[e as usize].1,
+                        nodes,
+                        point,
+                    });
+                    if out.len() >= k {
+                        return None;
+                    }
+                    continue;
                 }
                 let node = NavNodeId(n);
                 // An entry other than the node's current one was bettered since.
@@ -818,8 +843,9 @@ impl NavGraph {
                 settled += 1;
                 let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
                 if let Some((NavNodeId(g), goal)) = is_goal(node, d, at, &reached) {
-                    let Goals::Nearest(bias) = goals else {
-                        return Some((chain_to(entry, marks, g), goal));
+                    let bias = match goals {
+                        Goals::Nearest(bias) | Goals::Cheapest(bias, _, _) => bias,
+                        Goals::First => return Some((chain_to(entry, marks, g), goal)),
                     };
                     // It waits for the nodes nearer than itself, in the heap.
                     let cost = d + at.distance(goal) + bias(goal);
@@ -831,6 +857,25 @@ impl NavGraph {
                     }
                 }
                 if settled >= max_nodes {
+                    if let Goals::Cheapest(_, out, k) = goals {
+                        // The goals waiting in the queue, cheapest first, as `Nearest` takes
+                        // the best of them.
+                        let mut out = out.borrow_mut();
+                        while out.len() < k
+                            && let Some(Reverse(key)) = heap.pop()
+                        {
+                            let e = key as u32;
+                            if entry[e as usize].3 == GOAL_ENTRY {
+                                let (nodes, point) = found(e, entry, marks);
+                                out.push(FoundGoal {
+                                    cost_m: entry[e as usize].1,
+                                    nodes,
+                                    point,
+                                });
+                            }
+                        }
+                        return None;
+                    }
                     return best_goal.map(|(_, e)| found(e, entry, marks));
                 }
                 for m in self.neighbors(node) {
@@ -853,6 +898,48 @@ impl NavGraph {
             }
             None
         })
+    }
+
+    /// The `k` cheapest goals, cheapest first, as [`search_nearest_goal`](Self::search_nearest_goal)
+    /// ranks them (the first is the goal that search routes to, when the search is not cut
+    /// short by `max_nodes`): the search goes on past the first goal until `k` have come out
+    /// of its queue, or every usable node is settled, or `max_nodes` are. Fewer than `k`
+    /// when there are fewer. Cost: the nodes nearer than the `k`-th goal are settled.
+    /// Checked by `cheapest_goals_are_those_nearest_by_route_in_order`.
+    #[allow(clippy::too_many_arguments)] // `search_nearest_goal`'s, and how many goals
+    pub fn search_cheapest_goals(
+        &self,
+        from: DVec2,
+        start_hint: Option<NavNodeId>,
+        usable: impl FnMut(NavNodeId) -> bool,
+        is_goal: impl FnMut(NavNodeId, f64, DVec2, &dyn Fn(NavNodeId) -> bool) -> Option<(NavNodeId, DVec2)>,
+        bias: &dyn Fn(DVec2) -> f64,
+        k: usize,
+        max_nodes: usize,
+    ) -> Vec<FoundGoal> {
+        let out = RefCell::new(Vec::with_capacity(k));
+        if k > 0 {
+            let none = self.best_first(
+                from,
+                start_hint,
+                usable,
+                is_goal,
+                Goals::Cheapest(bias, &out, k),
+                None,
+                max_nodes,
+            );
+            debug_assert!(
+                none.is_none(),
+                "a search for the cheapest goals gathers them, it routes to none"
+            );
+        }
+        out.into_inner()
+    }
+
+    /// The route to a goal [`search_cheapest_goals`](Self::search_cheapest_goals) found from
+    /// `from`, pulled taut for a robot in `terrain`.
+    pub fn route_to_found(&self, from: DVec2, goal: FoundGoal, terrain: Terrain) -> Route {
+        self.taut_route(from, goal.nodes, goal.point, terrain)
     }
 
     /// Shortest route from `from` to `to` through nodes the terrain's known map touches,
@@ -982,6 +1069,9 @@ enum Goals<'b> {
     /// The goal nearest by the walk to its node's entry plus the straight line on, plus
     /// the bias (never negative) of the goal point.
     Nearest(&'b dyn Fn(DVec2) -> f64),
+    /// As `Nearest`, but the goals are gathered, cheapest first, until there are as many
+    /// as asked for (the search then ends without a route).
+    Cheapest(&'b dyn Fn(DVec2) -> f64, &'b RefCell<Vec<FoundGoal>>, usize),
 }
 
 /// The parent mark of a search entry that is a goal waiting in the heap, not a node.
