@@ -442,16 +442,7 @@ fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
 /// just heard mate 2 announce `mate_goal`. The west frontier's target lies just across x = 16
 /// m, 8.5 m away; the east one's just across x = 48 m, 23.5 m away.
 fn first_goal_hearing(mate_goal: DVec2, params: &Params) -> DVec2 {
-    let art = [
-        "#".repeat(64),
-        format!("{}R{}", ".".repeat(24), ".".repeat(39)),
-        "#".repeat(64),
-    ]
-    .join("\n");
-    let mut w = TestWorld::from_ascii(&art, 1.0).unwrap();
-    for x in 16..48 {
-        w = w.knowing_disc(DVec2::new(f64::from(x) + 0.5, 1.5), 0.75);
-    }
+    let mut w = common::corridor(64, 24, 16..48);
     w.robot.id = RobotId::new(1);
     let announced = Message {
         from: RobotId::new(2),

@@ -755,7 +755,7 @@ impl NavGraph {
     /// cheapest; the search settles the nodes nearer than it as well, a few more than the
     /// first-accepted search. In big pieces the first node accepted can hold a goal metres
     /// farther than a later one's. Checked by
-    /// `nearest_goal_search_takes_the_goal_nearest_by_route`.
+    /// `goal_searches_take_the_goals_nearest_by_route`.
     #[allow(clippy::too_many_arguments)] // `search_knowing_reached`'s, and the bias
     pub fn search_nearest_goal(
         &self,
@@ -815,6 +815,15 @@ impl NavGraph {
                 let (goal, _, n, _) = entry[e as usize];
                 (chain_to(entry, marks, n), goal)
             };
+            // A goal entry as `Goals::Cheapest` gathers it.
+            let gathered = |e: u32, entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)]| {
+                let (nodes, point) = found(e, entry, marks);
+                FoundGoal {
+                    cost_m: entry[e as usize].1,
+                    nodes,
+                    point,
+                }
+            };
             while let Some(Reverse(key)) = heap.pop() {
                 let e = key as u32;
                 let (at, d, n, parent) = entry[e as usize];
@@ -822,13 +831,8 @@ impl NavGraph {
                     let Goals::Cheapest(_, out, k) = goals else {
                         return Some(found(e, entry, marks));
                     };
-                    let (nodes, point) = found(e, entry, marks);
                     let mut out = out.borrow_mut();
-                    out.push(FoundGoal {
-                        cost_m: entry[e as usize].1,
-                        nodes,
-                        point,
-                    });
+                    out.push(gathered(e, entry, marks));
                     if out.len() >= k {
                         return None;
                     }
@@ -866,12 +870,7 @@ impl NavGraph {
                         {
                             let e = key as u32;
                             if entry[e as usize].3 == GOAL_ENTRY {
-                                let (nodes, point) = found(e, entry, marks);
-                                out.push(FoundGoal {
-                                    cost_m: entry[e as usize].1,
-                                    nodes,
-                                    point,
-                                });
+                                out.push(gathered(e, entry, marks));
                             }
                         }
                         return None;
@@ -905,7 +904,7 @@ impl NavGraph {
     /// short by `max_nodes`): the search goes on past the first goal until `k` have come out
     /// of its queue, or every usable node is settled, or `max_nodes` are. Fewer than `k`
     /// when there are fewer. Cost: the nodes nearer than the `k`-th goal are settled.
-    /// Checked by `cheapest_goals_are_those_nearest_by_route_in_order`.
+    /// Checked by `goal_searches_take_the_goals_nearest_by_route`.
     #[allow(clippy::too_many_arguments)] // `search_nearest_goal`'s, and how many goals
     pub fn search_cheapest_goals(
         &self,
