@@ -104,7 +104,7 @@ impl Explorer {
 
     /// [`explore`](Self::explore) with no team mates' goals to avoid.
     pub(super) fn explore_unclaimed(&mut self, ctx: &mut Ctx) -> Action {
-        self.explore(ctx, Vec::new, 0.0, f64::INFINITY)
+        self.explore(ctx, Vec::new, 0.0, f64::INFINITY, 0)
     }
 
     /// One step of frontier exploration (see [`FrontierSeeking::seek`]); home when nothing
@@ -115,8 +115,12 @@ impl Explorer {
         avoid: impl FnOnce() -> Vec<DVec2>,
         avoid_radius_m: f64,
         max_detour_m: f64,
+        compare_frontiers: usize,
     ) -> Action {
-        if let Some(a) = self.frontier.seek(ctx, avoid, avoid_radius_m, max_detour_m) {
+        if let Some(a) = self
+            .frontier
+            .seek(ctx, avoid, avoid_radius_m, max_detour_m, compare_frontiers)
+        {
             return a;
         }
         // Nothing left to explore: go home and wait there.

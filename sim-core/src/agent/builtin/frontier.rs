@@ -426,9 +426,6 @@ impl Strategy for Frontier {
             if !self.crowd {
                 self.yield_to_lower_ids(ctx, radius);
             }
-            // In crowds each comparison would cost a longer search.
-            let compare = if self.crowd { 0 } else { share.compare_frontiers };
-            self.core.frontier.compare_frontiers(compare);
         }
         if let Some(a) = self.core.reflexes(ctx) {
             if let Some(spoke) = &mut self.spoke {
@@ -446,6 +443,8 @@ impl Strategy for Frontier {
         let claims = &self.claims;
         let spoke = self.spoke.as_mut();
         let mates_heard = self.mates.count();
+        // In crowds each comparison would cost a longer search.
+        let compare = self.sharing.filter(|_| !self.crowd).map_or(0, |s| s.compare_frontiers);
         let action = if let Some(a) = spoke.and_then(|s| s.step(ctx, self.core.frontier.navigator(), mates_heard)) {
             a
         } else {
@@ -454,6 +453,7 @@ impl Strategy for Frontier {
                 || claims.iter().map(|c| goal_of(c.1, home)).collect(),
                 radius,
                 max_detour_m,
+                compare,
             );
             if leaves_targets.is_some_and(|wait_rounds| self.leave_to_mates(ctx, before, wait_rounds)) {
                 Action::Idle

@@ -101,11 +101,6 @@ pub struct FrontierSeeking {
     /// Ranking by target: targets given up (see [`GIVE_UP_ROUNDS`]), oldest first.
     #[serde(default)]
     given_up: Vec<DVec2>,
-    /// With claims to avoid, take the least contested of this many nearest frontiers (0,
-    /// the default: the nearest clear of them; see
-    /// [`Navigator::least_contested_frontier_route`]).
-    #[serde(default)]
-    compare_frontiers: usize,
     /// What the searches learnt of this robot's map (worked out again after a restore).
     #[serde(skip)]
     memo: PieceMemo,
@@ -124,7 +119,6 @@ impl Default for FrontierSeeking {
             rechecked: None,
             progress: None,
             given_up: Vec::new(),
-            compare_frontiers: 0,
             memo: PieceMemo::default(),
         }
     }
@@ -168,14 +162,6 @@ impl FrontierSeeking {
         self
     }
 
-    /// From now on, when team mates' goals are to be avoided, take the least contested of the
-    /// `count` frontiers nearest to the robot
-    /// ([`Navigator::least_contested_frontier_route`]) instead of the nearest clear of the
-    /// goals; 0: the nearest clear of them. Strategies set it as their team changes.
-    pub fn compare_frontiers(&mut self, count: usize) {
-        self.compare_frontiers = count;
-    }
-
     /// The route follower (strategies that also go elsewhere share it).
     pub fn navigator(&mut self) -> &mut Navigator {
         &mut self.nav
@@ -186,13 +172,16 @@ impl FrontierSeeking {
     /// target is chosen: in crowds they are hundreds, and most rounds keep the target), or
     /// the nearest frontier at all if every one is taken or the nearest clear one is more
     /// than about `max_detour_m` farther (see [`Navigator::frontier_route`];
-    /// `f64::INFINITY`: no bound). `None` when none is known.
+    /// `f64::INFINITY`: no bound). With goals to avoid and `compare_frontiers` above 0, the
+    /// least contested of that many nearest frontiers instead
+    /// ([`Navigator::least_contested_frontier_route`]). `None` when none is known.
     pub fn seek(
         &mut self,
         ctx: &mut Ctx,
         avoid: impl FnOnce() -> Vec<DVec2>,
         avoid_radius_m: f64,
         max_detour_m: f64,
+        compare_frontiers: usize,
     ) -> Option<Action> {
         // Keep walking to a frontier target even once it is seen: the way on reveals more in
         // the same direction, and a new search only every few metres keeps planning cheap.
@@ -204,12 +193,11 @@ impl FrontierSeeking {
         let need_plan = self.nav.is_idle() || self.target_revealed(ctx);
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
             let (memo, by_target, reveal_first) = (&mut self.memo, self.by_target, self.reveal_first);
-            let compare = self.compare_frontiers;
             let given_up = &self.given_up;
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
-                if compare > 0 && !avoid.is_empty() {
-                    return Navigator::least_contested_frontier_route(ctx, memo, &avoid, compare);
+                if compare_frontiers > 0 && !avoid.is_empty() {
+                    return Navigator::least_contested_frontier_route(ctx, memo, &avoid, compare_frontiers);
                 }
                 if let Some(views) = by_target
                     && avoid.is_empty()
@@ -300,7 +288,7 @@ impl FrontierSeeking {
 
 impl Tactic for FrontierSeeking {
     fn suggest(&mut self, ctx: &mut Ctx) -> Option<Action> {
-        self.seek(ctx, Vec::new, 0.0, f64::INFINITY)
+        self.seek(ctx, Vec::new, 0.0, f64::INFINITY, 0)
     }
 
     fn needs(&self) -> Needs {
