@@ -214,7 +214,8 @@ impl RerunObserver {
         self
     }
 
-    /// The recording stream.
+    /// The recording stream; once a live stream has been closed at the end of the run, a
+    /// disabled one.
     pub fn recording(&self) -> &rerun::RecordingStream {
         &self.rec
     }
@@ -1352,11 +1353,15 @@ impl Observer for RerunObserver {
             WhenBehind::Wait => self.rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string()),
             WhenBehind::SkipWorld => self.flush_live(),
         };
-        if let Err(e) = flushed {
-            eprintln!("warning: could not flush the Rerun stream: {e}");
-            if self.when_behind == WhenBehind::SkipWorld {
-                self.abandon_stream();
+        match flushed {
+            Err(e) => {
+                eprintln!("warning: could not flush the Rerun stream: {e}");
+                if self.when_behind == WhenBehind::SkipWorld {
+                    self.abandon_stream();
+                }
             }
+            Ok(()) if self.when_behind == WhenBehind::SkipWorld => self.close_live(),
+            Ok(()) => {}
         }
         self.closing = t0.elapsed();
         Ok(())
@@ -1394,7 +1399,11 @@ impl RerunObserver {
         let (done, flushed) = crossbeam_channel::bounded(1);
         let rec = self.rec.clone();
         let spawned = std::thread::Builder::new().name("rerun-flush".into()).spawn(move || {
-            let _ = done.send(rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string()));
+            let result = rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string());
+            // Let go of the handle before saying so: the caller then holds the last one (see
+            // `close_live`), not this thread, which the process may not wait for.
+            drop(rec);
+            let _ = done.send(result);
         });
         if let Err(e) = spawned {
             return Err(format!("cannot start the flush: {e}"));
@@ -1402,6 +1411,26 @@ impl RerunObserver {
         flushed
             .recv_timeout(FINISH_TIMEOUT + std::time::Duration::from_secs(1))
             .unwrap_or_else(|_| Err("the viewer took no data".to_owned()))
+    }
+
+    /// Close a flushed live stream, waiting at most [`FINISH_TIMEOUT`]. A flush only hands
+    /// the messages to the gRPC connection; dropping the stream's last handle ends the
+    /// connection once the viewer has taken them all. Done here, the run cannot end (and its
+    /// process exit) with the last rounds still on their way. Rerun's close waits for ever on
+    /// a viewer that stops taking data, so it runs on a thread left behind after the wait.
+    fn close_live(&mut self) {
+        let rec = std::mem::replace(&mut self.rec, rerun::RecordingStream::disabled());
+        let (done, closed) = crossbeam_channel::bounded(1);
+        let spawned = std::thread::Builder::new().name("rerun-close".into()).spawn(move || {
+            drop(rec);
+            let _ = done.send(());
+        });
+        let finished = spawned.is_ok() && closed.recv_timeout(FINISH_TIMEOUT).is_ok();
+        if !finished {
+            eprintln!(
+                "warning: the Rerun viewer did not take the end of the recording; the last rounds may not reach it"
+            );
+        }
     }
 }
 

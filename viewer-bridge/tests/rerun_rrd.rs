@@ -113,16 +113,21 @@ fn try_summarise(python: &Path, rrd: &Path) -> Result<Value, String> {
 fn wait_until(python: &Path, rrd: &Path, what: &str, run_stderr: &[u8], complete: impl Fn(&Value) -> bool) -> Value {
     let t0 = Instant::now();
     loop {
-        if let Ok(s) = try_summarise(python, rrd)
-            && complete(&s)
+        let read = try_summarise(python, rrd);
+        if let Ok(s) = &read
+            && complete(s)
         {
-            return s;
+            return read.unwrap();
         }
         assert!(
             t0.elapsed() < Duration::from_mins(1),
-            "{} never held {what}; the run's stderr: {}",
+            "{} never held {what}; the run's stderr: {}; last read: {}",
             rrd.display(),
-            String::from_utf8_lossy(run_stderr)
+            String::from_utf8_lossy(run_stderr),
+            read.map_or_else(
+                |e| format!("failed: {e}"),
+                |s| format!("rounds {}, rows {}", s["rounds"], s["rows"])
+            )
         );
         std::thread::sleep(Duration::from_millis(200));
     }
