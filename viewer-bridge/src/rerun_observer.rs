@@ -1575,4 +1575,67 @@ mod tests {
             proptest::prop_assert_eq!(sorted, expected);
         }
     }
+
+    /// A sink that takes every message and notes when Rerun lets go of it, which it does
+    /// when the stream's last handle is dropped.
+    struct DropNoted(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+    impl rerun::sink::LogSink for DropNoted {
+        fn send(&self, _msg: rerun::log::LogMsg) {}
+
+        fn flush_blocking(&self, _timeout: std::time::Duration) -> Result<(), rerun::sink::SinkFlushError> {
+            Ok(())
+        }
+    }
+
+    impl Drop for DropNoted {
+        fn drop(&mut self) {
+            self.0.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+
+    /// Five random walkers in an empty 20 m square, for `rounds` rounds.
+    fn walkers(rounds: u64) -> Simulation {
+        use sim_core::engine::{Group, ScenarioBuilder};
+        use sim_core::spatial::{Grid, ObstacleMap};
+        use sim_core::world::{HomeBase, MapData};
+        let grid = Grid::from_size_m(DVec2::ZERO, 0.5, 20.0, 20.0).unwrap();
+        let map = MapData {
+            obstacles: ObstacleMap::from_fn(grid, |_, _| false),
+            home: HomeBase::Disc {
+                center: DVec2::splat(10.0),
+                radius_m: 1.0,
+            },
+            treasures: Vec::new(),
+        };
+        let registry = sim_core::agent::StrategyRegistry::with_builtins();
+        let scenario = ScenarioBuilder::new(std::sync::Arc::new(map))
+            .with_rounds(rounds)
+            .with_types(vec![RobotType::explorer()])
+            .with_group(Group::new("random_walk", 0, 5))
+            .build(&registry)
+            .unwrap();
+        Simulation::new(scenario).unwrap()
+    }
+
+    #[test]
+    fn a_live_stream_is_closed_by_the_end_of_the_run() {
+        let closed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let rec = rerun::RecordingStreamBuilder::new("closing").buffered().unwrap();
+        rec.set_sink(Box::new(DropNoted(std::sync::Arc::clone(&closed))));
+        let mut observer = RerunObserver::new(rec, LogOptions::default()).with_when_behind(WhenBehind::SkipWorld);
+        let mut sim = walkers(5);
+        observer.on_start(&sim).unwrap();
+        while sim.round() < sim.total_rounds() {
+            sim.step();
+            observer.on_round(&sim, sim.report()).unwrap();
+        }
+        observer.on_finish(&sim).unwrap();
+        // Closed here, by the run's own thread: the process may exit next.
+        assert!(
+            closed.load(std::sync::atomic::Ordering::SeqCst),
+            "the stream was still open"
+        );
+        drop(observer);
+    }
 }
