@@ -492,9 +492,11 @@ pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
 /// stop signal ([`crate::stop`]): the round in progress is finished, and the observers are
 /// told the run ended either way. Returns the signal, if one stopped the run.
 ///
-/// With a `loan`, the whole loop runs on the pool with its workers kept awake between
-/// parallel steps and lending their cores on `loan` ([`with_hot_workers_lending`]), as
-/// `smartteams-bench` runs; otherwise each round wakes them. The results are the same.
+/// With a `loan`, the rounds run on the pool with its workers kept awake between parallel
+/// steps and lending their cores on `loan` ([`with_hot_workers_lending`]), as
+/// `smartteams-bench` runs; otherwise each round wakes them. The results are the same. The
+/// end (flushing and closing a recording) comes after the polling: the idle cores then go
+/// to the recording's threads and a viewer on this machine.
 fn run_rounds(
     sim: &mut Simulation,
     pool: &rayon::ThreadPool,
@@ -503,27 +505,34 @@ fn run_rounds(
 ) -> Result<Option<Signal>, sim_core::io::ObserverError> {
     if let Some(loan) = loan {
         pool.install(|| {
-            with_hot_workers_lending(loan, || {
+            let played = with_hot_workers_lending(loan, || {
                 play_rounds(sim, observers, |sim| {
                     sim.step();
                 })
-            })
+            })?;
+            finish_rounds(sim, observers, played)
         })
     } else {
-        play_rounds(sim, observers, |sim| {
+        let played = play_rounds(sim, observers, |sim| {
             pool.install(|| {
                 sim.step();
             });
-        })
+        })?;
+        finish_rounds(sim, observers, played)
     }
 }
 
-/// The loop of [`run_rounds`], each round played by `step`.
+/// How the rounds of [`play_rounds`] ended: the signal that stopped them, and the first
+/// observer error of a round.
+type Played = (Option<Signal>, Option<sim_core::io::ObserverError>);
+
+/// The loop of [`run_rounds`], each round played by `step`, after telling the observers the
+/// run starts (an error there ends the run before any round, with nothing to finish).
 fn play_rounds(
     sim: &mut Simulation,
     observers: &mut [&mut (dyn Observer + Send)],
     mut step: impl FnMut(&mut Simulation),
-) -> Result<Option<Signal>, sim_core::io::ObserverError> {
+) -> Result<Played, sim_core::io::ObserverError> {
     for o in observers.iter_mut() {
         o.on_start(sim)?;
     }
@@ -542,8 +551,16 @@ fn play_rounds(
             }
         }
     }
-    // Every observer hears the end, even after one failed, so that the others close what
-    // they wrote (a recording's footer); the first error is the one reported.
+    Ok((stopped, failed))
+}
+
+/// Tell every observer the run ended, even after one failed, so that the others close what
+/// they wrote (a recording's footer); the first error is the one reported.
+fn finish_rounds(
+    sim: &Simulation,
+    observers: &mut [&mut (dyn Observer + Send)],
+    (stopped, mut failed): Played,
+) -> Result<Option<Signal>, sim_core::io::ObserverError> {
     for o in observers.iter_mut() {
         let finished = o.on_finish(sim);
         if failed.is_none() {
