@@ -1392,46 +1392,58 @@ impl RerunObserver {
         self.send(frame, true)
     }
 
-    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`]: Rerun's own flush waits for
-    /// ever on a viewer that takes no data (its batcher is stuck sending), so it runs on a
-    /// thread of its own, left behind if it does not finish.
+    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).
     fn flush_live(&self) -> Result<(), String> {
-        let (done, flushed) = crossbeam_channel::bounded(1);
         let rec = self.rec.clone();
-        let spawned = std::thread::Builder::new().name("rerun-flush".into()).spawn(move || {
-            let result = rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string());
-            // Let go of the handle before saying so: the caller then holds the last one (see
-            // `close_live`), not this thread, which the process may not wait for.
-            drop(rec);
-            let _ = done.send(result);
-        });
-        if let Err(e) = spawned {
-            return Err(format!("cannot start the flush: {e}"));
+        let flushed = on_thread_within(
+            "rerun-flush",
+            FINISH_TIMEOUT + std::time::Duration::from_secs(1),
+            move || {
+                let result = rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string());
+                // Let go of the handle before saying so: the caller then holds the last one (see
+                // `close_live`), not this thread, which the process may not wait for.
+                drop(rec);
+                result
+            },
+        );
+        match flushed {
+            Ok(Some(result)) => result,
+            Ok(None) => Err("the viewer took no data".to_owned()),
+            Err(e) => Err(format!("cannot start the flush: {e}")),
         }
-        flushed
-            .recv_timeout(FINISH_TIMEOUT + std::time::Duration::from_secs(1))
-            .unwrap_or_else(|_| Err("the viewer took no data".to_owned()))
     }
 
-    /// Close a flushed live stream, waiting at most [`FINISH_TIMEOUT`]. A flush only hands
-    /// the messages to the gRPC connection; dropping the stream's last handle ends the
-    /// connection once the viewer has taken them all. Done here, the run cannot end (and its
-    /// process exit) with the last rounds still on their way. Rerun's close waits for ever on
-    /// a viewer that stops taking data, so it runs on a thread left behind after the wait.
+    /// Close a flushed live stream, waiting at most [`FINISH_TIMEOUT`] (see
+    /// [`on_thread_within`]). A flush only hands the messages to the gRPC connection;
+    /// dropping the stream's last handle ends the connection once the viewer has taken them
+    /// all. Done here, the run cannot end (and its process exit) with the last rounds still
+    /// on their way.
     fn close_live(&mut self) {
         let rec = std::mem::replace(&mut self.rec, rerun::RecordingStream::disabled());
-        let (done, closed) = crossbeam_channel::bounded(1);
-        let spawned = std::thread::Builder::new().name("rerun-close".into()).spawn(move || {
-            drop(rec);
-            let _ = done.send(());
-        });
-        let finished = spawned.is_ok() && closed.recv_timeout(FINISH_TIMEOUT).is_ok();
-        if !finished {
+        if !matches!(
+            on_thread_within("rerun-close", FINISH_TIMEOUT, move || drop(rec)),
+            Ok(Some(()))
+        ) {
             eprintln!(
                 "warning: the Rerun viewer did not take the end of the recording; the last rounds may not reach it"
             );
         }
     }
+}
+
+/// What `f` returns, run on a thread of its own named `name`, if it ends within `timeout`;
+/// `Ok(None)` if it does not, and the thread is left behind. Rerun's flush and close wait for
+/// ever on a viewer that takes no data (its batcher is stuck sending).
+fn on_thread_within<T: Send + 'static>(
+    name: &str,
+    timeout: std::time::Duration,
+    f: impl FnOnce() -> T + Send + 'static,
+) -> std::io::Result<Option<T>> {
+    let (done, finished) = crossbeam_channel::bounded(1);
+    std::thread::Builder::new().name(name.to_owned()).spawn(move || {
+        let _ = done.send(f());
+    })?;
+    Ok(finished.recv_timeout(timeout).ok())
 }
 
 /// How long the end of a run waits for a live viewer to take the rest of the recording.
