@@ -147,7 +147,7 @@ pub struct RerunObserver {
     when_behind: WhenBehind,
     frames: Option<crossbeam_channel::Sender<Frame>>,
     progress: std::sync::Arc<Progress>,
-    worker: Option<std::thread::JoinHandle<rerun::RecordingStreamResult<std::time::Duration>>>,
+    worker: Option<LoggingThread>,
     last_explored_round: Option<u64>,
     last_known_round: Option<u64>,
     /// Robots whose known map changed since their region was last logged.
@@ -391,7 +391,7 @@ impl RerunObserver {
     /// Wait for the logging thread (after its queue was closed) and take its result.
     fn join_worker(&mut self) -> Result<(), ObserverError> {
         if let Some(worker) = self.worker.take() {
-            match worker.join() {
+            match worker.handle.join() {
                 Ok(Ok(busy)) => self.worker_busy = busy,
                 Ok(Err(e)) => return Err(e.into()),
                 Err(_) => return Err(ObserverError::from("the Rerun logging thread panicked")),
@@ -424,6 +424,24 @@ fn map_on_pool<T: Sync, U: Send>(items: &[T], f: impl Fn(&T) -> U + Sync + Send)
         items.par_iter().map(f).collect()
     } else {
         items.iter().map(f).collect()
+    }
+}
+
+/// The logging thread ([`log_frames`]) and the end of its work.
+struct LoggingThread {
+    handle: std::thread::JoinHandle<rerun::RecordingStreamResult<std::time::Duration>>,
+    /// Never sent on; disconnected once the thread's closure has returned or unwound, so
+    /// that the end of a run waits for the thread without polling.
+    ended: crossbeam_channel::Receiver<()>,
+}
+
+impl LoggingThread {
+    /// Whether the thread's work ends within `timeout` (at once if it has ended).
+    fn ends_within(&self, timeout: std::time::Duration) -> bool {
+        matches!(
+            self.ended.recv_timeout(timeout),
+            Err(crossbeam_channel::RecvTimeoutError::Disconnected)
+        )
     }
 }
 
@@ -1263,17 +1281,19 @@ impl Observer for RerunObserver {
         let loan = self.core_loan.clone();
         progress.tick();
         let map = sim.shared_map();
-        self.worker = Some(
-            std::thread::Builder::new()
-                .name("rerun-observer".into())
-                .spawn(move || {
-                    crate::viewer::lower_priority();
-                    // The map's raster and outlines are built here, beside the first rounds.
-                    layers::log_static_map(&rec, &map)?;
-                    drop(map);
-                    log_frames(&rec, &rx, logger, &progress, loan.as_deref())
-                })?,
-        );
+        let (ended_tx, ended) = crossbeam_channel::bounded(0);
+        let handle = std::thread::Builder::new()
+            .name("rerun-observer".into())
+            .spawn(move || {
+                // Dropped when this closure returns or unwinds: see `LoggingThread::ended`.
+                let _ended: crossbeam_channel::Sender<()> = ended_tx;
+                crate::viewer::lower_priority();
+                // The map's raster and outlines are built here, beside the first rounds.
+                layers::log_static_map(&rec, &map)?;
+                drop(map);
+                log_frames(&rec, &rx, logger, &progress, loan.as_deref())
+            })?;
+        self.worker = Some(LoggingThread { handle, ended });
         self.frames = Some(tx);
         let world = self.snapshot_world(sim, false, false);
         self.send(
@@ -1334,11 +1354,8 @@ impl Observer for RerunObserver {
             WhenBehind::SkipWorld => {
                 // A paused viewer can block the logging thread for ever: give it a while,
                 // then leave it (it holds its own handle on the stream).
-                let deadline = t0 + FINISH_TIMEOUT;
-                while self.worker.as_ref().is_some_and(|w| !w.is_finished()) && std::time::Instant::now() < deadline {
-                    std::thread::sleep(std::time::Duration::from_millis(20));
-                }
-                if self.worker.as_ref().is_some_and(std::thread::JoinHandle::is_finished) {
+                let left = FINISH_TIMEOUT.saturating_sub(t0.elapsed());
+                if self.worker.as_ref().is_none_or(|w| w.ends_within(left)) {
                     self.join_worker()?;
                 } else {
                     self.worker = None;
