@@ -36,16 +36,16 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "demo.xml",
         rounds: 600,
-        digest: 0xad15_adf3_d281_439f,
-        metrics_crc: 0x4789_a9d0,
-        robots_crc: 0x30d3_1ab7,
+        digest: 0xbce8_b5f2_7435_5d3f,
+        metrics_crc: 0x5eda_225d,
+        robots_crc: 0x1409_048d,
     },
     Golden {
         config: "teams.xml",
         rounds: 800,
-        digest: 0xc257_ebfd_621e_4269,
-        metrics_crc: 0x85ba_6eff,
-        robots_crc: 0x952b_da74,
+        digest: 0x00cc_d0d4_7e81_3071,
+        metrics_crc: 0x92b2_10f8,
+        robots_crc: 0xf5f3_6830,
     },
     Golden {
         config: "tactics.xml",

@@ -208,9 +208,10 @@ thread_local! {
 pub(super) struct Frontier {
     core: Explorer,
     sharing: Option<Sharing>,
-    /// Team mates' announced goals, with the round heard (forgotten after 50 rounds),
-    /// sorted by robot id. In a crowd hundreds arrive a round, in sender order, so they are
-    /// merged into this sorted list in one pass.
+    /// Team mates' announced goals, with the round heard, sorted by robot id: forgotten
+    /// after 50 rounds and, in a crowd, when farther than 20 m or 4 `avoid_radius_m`. In a
+    /// crowd hundreds arrive a round, in sender order, so they are merged into this sorted
+    /// list in one pass.
     claims: Claims,
     announced: Option<DVec2>,
     shared_area: f64,
@@ -381,8 +382,14 @@ impl Strategy for Frontier {
         if let Some(share) = self.sharing {
             share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
             radius = share.avoid_radius_m;
-            // Only claims near enough to matter are kept, so crowds stay cheap.
-            let near = (4.0 * radius).max(20.0);
+            // In a crowd only claims near enough to matter are kept, so crowds stay cheap. A
+            // small team keeps every mate's goal, however far: heard from a mate about to
+            // leave radio range, it keeps the two apart after they part.
+            let near = if self.crowd {
+                (4.0 * radius).max(20.0)
+            } else {
+                f64::INFINITY
+            };
             let p = ctx.position();
             let round = ctx.round;
             // This round's announcements, and the merge, in buffers of the worker thread, not
