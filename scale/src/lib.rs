@@ -400,42 +400,119 @@ pub fn measure(scenario: Scenario, rounds: u64, threads: usize) -> Result<Measur
 
 /// [`measure`] with step 3's turns shared as `sharing` says.
 pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: TurnSharing) -> Result<Measurement> {
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
-    pool.install(|| {
+    let mut run = TimedRun::new(scenario, threads, sharing)?;
+    run.play(rounds);
+    Ok(run.measurement())
+}
+
+/// [`measure_with`] for several runs at once (each a scenario, its thread count and how it
+/// shares step 3's turns), played
+/// in turn `block` rounds at a time (0: each run's rounds in one go, one run after the
+/// other), each on its own workers. Alternated, a drift of the machine's speed (this VM's
+/// speed moves by a third within seconds) falls on every run alike, so that their ratio
+/// holds still. The measurements come in the order of `runs`.
+///
+/// ```
+/// use scale::{RandomWalk, measure_alternated};
+/// use sim_core::engine::TurnSharing;
+///
+/// let walk = || RandomWalk { robots: 20, side_m: 64.0, ..RandomWalk::default() }.scenario();
+/// let runs = vec![(walk()?, 1, TurnSharing::Auto), (walk()?, 2, TurnSharing::SideBySide)];
+/// let ms = measure_alternated(runs, 10, 3)?;
+/// assert_eq!((ms[0].rounds, ms[1].rounds), (10, 10));
+/// assert_eq!(ms[0].digest, ms[1].digest);
+/// // The same rounds as one run played in one go.
+/// assert_eq!(ms[0].digest, scale::measure(walk()?, 10, 1)?.digest);
+/// # Ok::<(), scale::Error>(())
+/// ```
+pub fn measure_alternated(
+    runs: Vec<(Scenario, usize, TurnSharing)>,
+    rounds: u64,
+    block: u64,
+) -> Result<Vec<Measurement>> {
+    let mut timed = runs
+        .into_iter()
+        .map(|(scenario, threads, sharing)| TimedRun::new(scenario, threads, sharing))
+        .collect::<Result<Vec<_>>>()?;
+    let block = if block == 0 { rounds } else { block };
+    let mut played = 0;
+    while played < rounds {
+        let n = block.min(rounds - played);
+        for run in &mut timed {
+            run.play(n);
+        }
+        played += n;
+    }
+    Ok(timed.iter().map(TimedRun::measurement).collect())
+}
+
+/// A simulation on its own pool of workers, with its set-up and rounds timed.
+struct TimedRun {
+    pool: rayon::ThreadPool,
+    sim: Simulation,
+    setup_s: f64,
+    rounds: u64,
+    rounds_s: f64,
+}
+
+impl TimedRun {
+    /// Build the simulation on a pool of `threads` workers (0: one per core).
+    fn new(scenario: Scenario, threads: usize, sharing: TurnSharing) -> Result<Self> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build()?;
         let t0 = Instant::now();
         // Planning is timed for `PhaseTimes::planning` (two clock reads a search).
-        let mut sim = Simulation::new(scenario)?
+        let sim = pool
+            .install(|| Simulation::new(scenario))?
             .with_time_planning(true)
             .with_turn_sharing(sharing);
         let setup_s = t0.elapsed().as_secs_f64();
-        let t1 = Instant::now();
-        // The bench has the cores to itself: the workers poll between parallel steps
-        // instead of sleeping (see `with_hot_workers`; SMARTTEAMS_COLD_WORKERS=1 lets them
-        // sleep, to measure the difference).
-        let mut rounds_loop = || {
-            for _ in 0..rounds {
-                sim.step();
+        Ok(Self {
+            pool,
+            sim,
+            setup_s,
+            rounds: 0,
+            rounds_s: 0.0,
+        })
+    }
+
+    /// Play and time `rounds` more rounds.
+    fn play(&mut self, rounds: u64) {
+        let sim = &mut self.sim;
+        let t = Instant::now();
+        self.pool.install(|| {
+            // The bench has the cores to itself: the workers poll between parallel steps
+            // instead of sleeping (see `with_hot_workers`; SMARTTEAMS_COLD_WORKERS=1 lets
+            // them sleep, to measure the difference).
+            let mut rounds_loop = || {
+                for _ in 0..rounds {
+                    sim.step();
+                }
+            };
+            if std::env::var_os("SMARTTEAMS_COLD_WORKERS").is_some() {
+                rounds_loop();
+            } else {
+                sim_core::engine::with_hot_workers(rounds_loop);
             }
-        };
-        if std::env::var_os("SMARTTEAMS_COLD_WORKERS").is_some() {
-            rounds_loop();
-        } else {
-            sim_core::engine::with_hot_workers(rounds_loop);
-        }
-        let rounds_s = t1.elapsed().as_secs_f64();
-        let digest = sim.positions_digest();
-        Ok(Measurement {
+        });
+        self.rounds_s += t.elapsed().as_secs_f64();
+        self.rounds += rounds;
+    }
+
+    /// What the run has measured so far.
+    fn measurement(&self) -> Measurement {
+        let sim = &self.sim;
+        Measurement {
             robots: sim.robots().len(),
             leaves: sim.obstacles().leaf_count(),
-            rounds,
-            setup_s,
+            rounds: self.rounds,
+            setup_s: self.setup_s,
             generate_s: 0.0,
-            rounds_s,
+            rounds_s: self.rounds_s,
             peak_rss_bytes: peak_rss_bytes(),
             robot_memory_bytes: sim.robot_memory_bytes(),
             explored_fraction: sim.report().metrics.explored_fraction,
-            digest,
+            digest: sim.positions_digest(),
             phases: sim.phase_times(),
-        })
-    })
+        }
+    }
 }

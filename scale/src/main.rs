@@ -110,9 +110,15 @@ enum Scenario {
     /// measured speed-up at each of `--threads` (default 1,2).
     Scaling {
         /// How step 3 shares its turns: `auto` (as runs do), `in-order` or `side-by-side`
-        /// (as on a machine with more cores, for the sequential share there).
-        #[arg(long, default_value = "auto")]
-        turns: TurnSharing,
+        /// (as on a machine with more cores, for the sequential share there); a list runs
+        /// each thread count with each, to compare them.
+        #[arg(long, default_value = "auto", value_delimiter = ',')]
+        turns: Vec<TurnSharing>,
+        /// Play the runs in turn, this many rounds at a time, each on its own simulation
+        /// (0: one run after the other), so that a drift of the machine's speed falls on
+        /// all of them alike.
+        #[arg(long, default_value_t = 0)]
+        alternate: u64,
         #[command(subcommand)]
         scenario: Timed,
     },
@@ -276,13 +282,17 @@ fn run(cli: &Cli) -> Result<()> {
             }
         }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
-        Scenario::Scaling { ref scenario, turns } => {
+        Scenario::Scaling {
+            ref scenario,
+            ref turns,
+            alternate,
+        } => {
             let threads = if cli.threads.is_empty() {
                 vec![1, 2]
             } else {
                 cli.threads.clone()
             };
-            scaling(scenario, cli.rounds, &threads, turns)
+            scaling(scenario, cli.rounds, &threads, turns, alternate)
         }
     }
 }
@@ -312,23 +322,50 @@ fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
     Ok(())
 }
 
-/// The scaling report of a timed scenario: one run per thread count, each on a scenario
-/// built afresh (same seed, same map).
-fn scaling(timed: &Timed, rounds: u64, threads: &[usize], sharing: TurnSharing) -> Result<()> {
-    let mut runs = Vec::new();
+/// The scaling report of a timed scenario: one run per thread count and way of sharing
+/// turns, each on a scenario built afresh (same seed, same map), one after the other or,
+/// with `alternate` rounds, in turn (see [`scale::measure_alternated`]).
+fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing], alternate: u64) -> Result<()> {
     let mut name = "";
-    for &n in threads {
-        let (scenario_name, scenario, _) = build_scenario(timed)?;
-        name = scenario_name;
-        let m = measure_with(scenario, rounds, n, sharing)?;
-        eprintln!("scaling: {n} thread(s): {:.1} rounds/s", m.rounds_per_s());
-        runs.push((n, m));
+    let mut planned = Vec::new();
+    for &sharing in turns {
+        for &n in threads {
+            let (scenario_name, scenario, _) = build_scenario(timed)?;
+            name = scenario_name;
+            let label = if turns.len() > 1 {
+                format!("{n} thr {sharing}")
+            } else {
+                format!("{n} thr")
+            };
+            planned.push((label, n, scenario, sharing));
+        }
     }
-    let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, m)| m.digest).collect();
+    let mut runs = Vec::new();
+    if alternate == 0 {
+        for (label, n, scenario, sharing) in planned {
+            let m = measure_with(scenario, rounds, n, sharing)?;
+            eprintln!("scaling: {label}: {:.1} rounds/s", m.rounds_per_s());
+            runs.push((label, n, m));
+        }
+    } else {
+        let (labels, scenarios): (Vec<_>, Vec<_>) = planned
+            .into_iter()
+            .map(|(label, n, scenario, sharing)| ((label, n), (scenario, n, sharing)))
+            .unzip();
+        let measured = scale::measure_alternated(scenarios, rounds, alternate)?;
+        for ((label, n), m) in labels.into_iter().zip(measured) {
+            eprintln!(
+                "scaling: {label}: {:.1} rounds/s, alternated every {alternate} rounds",
+                m.rounds_per_s()
+            );
+            runs.push((label, n, m));
+        }
+    }
+    let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, _, m)| m.digest).collect();
     print_scaling(name, &runs, &digests);
     anyhow::ensure!(
         digests.len() == 1,
-        "the runs' digests differ between thread counts: the round is not deterministic"
+        "the runs' digests differ: the round is not deterministic"
     );
     Ok(())
 }
@@ -429,9 +466,9 @@ fn print_measurement(name: &str, m: &scale::Measurement) {
 
 /// The scaling report: per step, its time on each thread count and whether it runs on one
 /// thread; then the sequential share on the first run and Amdahl's bounds.
-fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)], digests: &std::collections::BTreeSet<u64>) {
+fn print_scaling(name: &str, runs: &[(String, usize, scale::Measurement)], digests: &std::collections::BTreeSet<u64>) {
     use scale::scaling::{amdahl, karp_flatt, phases, sequential_share};
-    let Some((first_threads, first)) = runs.first() else {
+    let Some((first_label, first_threads, first)) = runs.first() else {
         return;
     };
     println!(
@@ -439,31 +476,37 @@ fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)], digests: &std
         first.robots,
         first.rounds,
         if digests.len() == 1 {
-            format!("{:016x} on every thread count", first.digest)
+            format!("{:016x} in every run", first.digest)
         } else {
-            format!("DIFFERS between thread counts: {digests:016x?}")
+            format!("DIFFERS between runs: {digests:016x?}")
         }
     );
     let base = phases(&first.phases);
-    let by_run: Vec<_> = runs.iter().map(|(_, m)| phases(&m.phases)).collect();
+    let by_run: Vec<_> = runs.iter().map(|(_, _, m)| phases(&m.phases)).collect();
+    let width = runs
+        .iter()
+        .map(|(label, _, _)| label.len() + 6)
+        .max()
+        .unwrap_or(0)
+        .max(12);
     print!("  {:<34}", "step");
-    for (n, _) in runs {
-        print!("{:>12}", format!("{n} thr (s)"));
+    for (label, _, _) in runs {
+        print!("{:>width$}", format!("{label} (s)"));
     }
     println!("  runs on");
     for (k, phase) in base.iter().enumerate() {
         print!("  {:<34}", phase.name);
         for list in &by_run {
-            print!("{:>12.3}", list[k].time.as_secs_f64());
+            print!("{:>width$.3}", list[k].time.as_secs_f64());
         }
         println!("  {}", if phase.one_thread { "one thread" } else { "all workers" });
     }
     print!("  {:<34}", "round (wall)");
-    for (_, m) in runs {
-        print!("{:>12.3}", m.rounds_s);
+    for (_, _, m) in runs {
+        print!("{:>width$.3}", m.rounds_s);
     }
     println!();
-    for (n, m) in &runs[1..] {
+    for (label, n, m) in &runs[1..] {
         let speedup = first.rounds_s / m.rounds_s;
         // The Karp-Flatt metric needs a one-thread baseline.
         let serial = karp_flatt(speedup, *n)
@@ -471,7 +514,11 @@ fn print_scaling(name: &str, runs: &[(usize, scale::Measurement)], digests: &std
             .map_or(String::new(), |e| {
                 format!(" (Karp-Flatt serial fraction {:.1} %)", 100.0 * e)
             });
-        println!("  {first_threads} -> {n} threads: {speedup:.2}x{serial}");
+        if runs.iter().all(|(label, n, _)| *label == format!("{n} thr")) {
+            println!("  {first_threads} -> {n} threads: {speedup:.2}x{serial}");
+        } else {
+            println!("  {first_label} -> {label}: {speedup:.2}x{serial}");
+        }
     }
     let s = sequential_share(&base);
     println!(

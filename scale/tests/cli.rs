@@ -115,7 +115,7 @@ fn scaling_report_lists_every_thread_count_and_one_digest() {
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("on every thread count"), "{text}");
+    assert!(text.contains("in every run"), "{text}");
     assert!(text.contains("1 thr (s)") && text.contains("2 thr (s)"), "{text}");
     assert!(text.contains("1 -> 2 threads: "), "{text}");
     let share: f64 = text
@@ -142,6 +142,50 @@ fn scaling_report_lists_every_thread_count_and_one_digest() {
         steps <= wall + 0.006 && steps >= wall * 0.8 - 0.006,
         "{steps} against {wall}: {text}"
     );
+}
+
+/// Alternated, the scaling report plays each thread count with each way of sharing turns
+/// asked, in turn, to the same digest: side by side and in id order give one outcome.
+#[test]
+fn alternated_scaling_compares_ways_of_sharing_turns_with_one_digest() {
+    let out = bench(&[
+        "--rounds",
+        "200",
+        "--threads",
+        "2",
+        "scaling",
+        "--alternate",
+        "30",
+        "--turns",
+        "in-order,side-by-side",
+        "random-walk",
+        "--robots",
+        "1000",
+        "--side-m",
+        "256",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(text.contains("in every run"), "{text}");
+    assert!(
+        text.contains("2 thr in-order (s)") && text.contains("2 thr side-by-side (s)"),
+        "{text}"
+    );
+    assert!(text.contains("2 thr in-order -> 2 thr side-by-side: "), "{text}");
+    assert_eq!(err.matches("alternated every 30 rounds").count(), 2, "{err}");
+    // Side by side, step 3's turns are shared out; in id order they are not.
+    let row = |name: &str| -> Vec<f64> {
+        text.lines()
+            .find(|l| l.trim_start().starts_with(name))
+            .unwrap_or_else(|| panic!("no {name} row in {text}"))
+            .split_whitespace()
+            .filter_map(|w| w.parse().ok())
+            .collect()
+    };
+    let (in_order, side_by_side) = (row("resolve: turns in id order"), row("resolve: turns side by side"));
+    assert!(in_order[0] > 0.0 && in_order[1] == 0.0, "{text}");
+    assert!(side_by_side[0] == 0.0 && side_by_side[1] > 0.0, "{text}");
 }
 
 /// A parameter the compared explorer does not take stops `exploration` before its table,

@@ -253,6 +253,7 @@ pub struct Simulation {
 /// assert!(TurnSharing::SideBySide.side_by_side(10, 1));
 /// assert_eq!("side-by-side".parse::<TurnSharing>().unwrap(), TurnSharing::SideBySide);
 /// assert!("sideways".parse::<TurnSharing>().is_err());
+/// assert_eq!(TurnSharing::InOrder.to_string(), "in-order");
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum TurnSharing {
@@ -292,6 +293,17 @@ impl std::str::FromStr for TurnSharing {
                 "turns go 'auto', 'in-order' or 'side-by-side', got '{s}'"
             ))),
         }
+    }
+}
+
+impl std::fmt::Display for TurnSharing {
+    /// As command lines spell it (what [`FromStr`](std::str::FromStr) reads back).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TurnSharing::InOrder => "in-order",
+            TurnSharing::Auto => "auto",
+            TurnSharing::SideBySide => "side-by-side",
+        })
     }
 }
 
