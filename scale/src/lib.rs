@@ -406,11 +406,11 @@ pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: Tu
 }
 
 /// [`measure_with`] for several runs at once (each a scenario, its thread count and how it
-/// shares step 3's turns), played
-/// in turn `block` rounds at a time (0: each run's rounds in one go, one run after the
-/// other), each on its own workers. Alternated, a drift of the machine's speed (this VM's
-/// speed moves by a third within seconds) falls on every run alike, so that their ratio
-/// holds still. The measurements come in the order of `runs`.
+/// shares step 3's turns), played in turn `block` rounds at a time (0: each run's rounds in
+/// one go, one run after the other), each on its own workers. Alternated, a drift of the
+/// machine's speed (a VM's can move by a third within seconds) falls on every run alike,
+/// so that their ratios hold still. The measurements come in the order of `runs`. Cost:
+/// every run's simulation is in memory at once.
 ///
 /// ```
 /// use scale::{RandomWalk, measure_alternated};
