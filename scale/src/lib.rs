@@ -405,12 +405,12 @@ pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: Tu
     Ok(run.measurement())
 }
 
-/// [`measure_with`] for several runs at once (each a scenario, its thread count and how it
-/// shares step 3's turns), played in turn `block` rounds at a time (0: each run's rounds in
-/// one go, one run after the other), each on its own workers. Alternated, a drift of the
-/// machine's speed (a VM's can move by a third within seconds) falls on every run alike,
-/// so that their ratios hold still. The measurements come in the order of `runs`. Cost:
-/// every run's simulation is in memory at once.
+/// [`measure_with`] for several runs (each a scenario, its thread count and how it shares
+/// step 3's turns), played in turn `block` rounds at a time, each on its own workers; with
+/// `block` 0, one run after the other, each built when its turn comes. Alternated, a drift
+/// of the machine's speed (a VM's can move by a third within seconds) falls on every run
+/// alike, so that their ratios hold still. The measurements come in the order of `runs`.
+/// Cost: alternated, every run's simulation is in memory at once.
 ///
 /// ```
 /// use scale::{RandomWalk, measure_alternated};
@@ -421,8 +421,9 @@ pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: Tu
 /// let ms = measure_alternated(runs, 10, 3)?;
 /// assert_eq!((ms[0].rounds, ms[1].rounds), (10, 10));
 /// assert_eq!(ms[0].digest, ms[1].digest);
-/// // The same rounds as one run played in one go.
-/// assert_eq!(ms[0].digest, scale::measure(walk()?, 10, 1)?.digest);
+/// // The same rounds as the runs played one after the other.
+/// let one_by_one = measure_alternated(vec![(walk()?, 1, TurnSharing::Auto)], 10, 0)?;
+/// assert_eq!(ms[0].digest, one_by_one[0].digest);
 /// # Ok::<(), scale::Error>(())
 /// ```
 pub fn measure_alternated(
@@ -430,11 +431,16 @@ pub fn measure_alternated(
     rounds: u64,
     block: u64,
 ) -> Result<Vec<Measurement>> {
+    if block == 0 {
+        return runs
+            .into_iter()
+            .map(|(scenario, threads, sharing)| measure_with(scenario, rounds, threads, sharing))
+            .collect();
+    }
     let mut timed = runs
         .into_iter()
         .map(|(scenario, threads, sharing)| TimedRun::new(scenario, threads, sharing))
         .collect::<Result<Vec<_>>>()?;
-    let block = if block == 0 { rounds } else { block };
     let mut played = 0;
     while played < rounds {
         let n = block.min(rounds - played);

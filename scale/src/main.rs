@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use scale::fig4::Fig4;
-use scale::{Kernel, RandomWalk, Swarm, measure, measure_with};
+use scale::{Kernel, RandomWalk, Swarm, measure};
 use sim_core::engine::TurnSharing;
 
 /// The allocator: a round allocates and frees messages, payloads and search buffers on every
@@ -340,26 +340,22 @@ fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing],
             planned.push((label, n, scenario, sharing));
         }
     }
-    let mut runs = Vec::new();
-    if alternate == 0 {
-        for (label, n, scenario, sharing) in planned {
-            let m = measure_with(scenario, rounds, n, sharing)?;
-            eprintln!("scaling: {label}: {:.1} rounds/s", m.rounds_per_s());
-            runs.push((label, n, m));
-        }
+    let (labels, scenarios): (Vec<_>, Vec<_>) = planned
+        .into_iter()
+        .map(|(label, n, scenario, sharing)| ((label, n), (scenario, n, sharing)))
+        .unzip();
+    let how = if alternate == 0 {
+        String::new()
     } else {
-        let (labels, scenarios): (Vec<_>, Vec<_>) = planned
-            .into_iter()
-            .map(|(label, n, scenario, sharing)| ((label, n), (scenario, n, sharing)))
-            .unzip();
-        let measured = scale::measure_alternated(scenarios, rounds, alternate)?;
-        for ((label, n), m) in labels.into_iter().zip(measured) {
-            eprintln!(
-                "scaling: {label}: {:.1} rounds/s, alternated every {alternate} rounds",
-                m.rounds_per_s()
-            );
-            runs.push((label, n, m));
-        }
+        format!(", alternated every {alternate} rounds")
+    };
+    let mut runs = Vec::new();
+    for ((label, n), m) in labels
+        .into_iter()
+        .zip(scale::measure_alternated(scenarios, rounds, alternate)?)
+    {
+        eprintln!("scaling: {label}: {:.1} rounds/s{how}", m.rounds_per_s());
+        runs.push((label, n, m));
     }
     let digests: std::collections::BTreeSet<u64> = runs.iter().map(|(_, _, m)| m.digest).collect();
     print_scaling(name, &runs, &digests);
@@ -506,6 +502,8 @@ fn print_scaling(name: &str, runs: &[(String, usize, scale::Measurement)], diges
         print!("{:>width$.3}", m.rounds_s);
     }
     println!();
+    // Thread counts alone: "1 -> 2 threads"; with ways of sharing turns, the runs' labels.
+    let by_threads_only = runs.iter().all(|(label, n, _)| *label == format!("{n} thr"));
     for (label, n, m) in &runs[1..] {
         let speedup = first.rounds_s / m.rounds_s;
         // The Karp-Flatt metric needs a one-thread baseline.
@@ -514,7 +512,7 @@ fn print_scaling(name: &str, runs: &[(String, usize, scale::Measurement)], diges
             .map_or(String::new(), |e| {
                 format!(" (Karp-Flatt serial fraction {:.1} %)", 100.0 * e)
             });
-        if runs.iter().all(|(label, n, _)| *label == format!("{n} thr")) {
+        if by_threads_only {
             println!("  {first_threads} -> {n} threads: {speedup:.2}x{serial}");
         } else {
             println!("  {first_label} -> {label}: {speedup:.2}x{serial}");
