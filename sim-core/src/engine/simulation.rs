@@ -285,14 +285,12 @@ impl std::str::FromStr for TurnSharing {
 
     /// `auto`, `in-order` or `side-by-side` (as command lines spell them).
     fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "auto" => Ok(TurnSharing::Auto),
-            "in-order" => Ok(TurnSharing::InOrder),
-            "side-by-side" => Ok(TurnSharing::SideBySide),
-            _ => Err(crate::Error::InvalidParameter(format!(
-                "turns go 'auto', 'in-order' or 'side-by-side', got '{s}'"
-            ))),
-        }
+        [TurnSharing::Auto, TurnSharing::InOrder, TurnSharing::SideBySide]
+            .into_iter()
+            .find(|t| t.to_string() == s)
+            .ok_or_else(|| {
+                crate::Error::InvalidParameter(format!("turns go 'auto', 'in-order' or 'side-by-side', got '{s}'"))
+            })
     }
 }
 
