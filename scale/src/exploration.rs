@@ -327,23 +327,67 @@ pub fn explore_with(
     robots: u32,
     max_rounds: u64,
 ) -> Result<Exploration> {
+    Ok(play(map, strategy, params, robots, max_rounds, |_| {})?.0)
+}
+
+/// [`explore_with`], keeping where the robots stood at the start and after every round, and
+/// what they explored, for [`crate::trace::picture`]. The run is the same.
+pub fn explore_traced(
+    map: &Arc<MapData>,
+    strategy: &str,
+    params: &Params,
+    robots: u32,
+    max_rounds: u64,
+) -> Result<(Exploration, Walks)> {
+    let mut positions = Vec::new();
+    let (run, sim) = play(map, strategy, params, robots, max_rounds, |sim| {
+        positions.push(sim.robots().iter().map(|r| r.position).collect());
+    })?;
+    let walks = Walks {
+        positions,
+        explored: sim.explored().clone(),
+    };
+    Ok((run, walks))
+}
+
+/// Play a run of [`explore_with`], calling `observe` before the first round and after each.
+fn play(
+    map: &Arc<MapData>,
+    strategy: &str,
+    params: &Params,
+    robots: u32,
+    max_rounds: u64,
+    mut observe: impl FnMut(&Simulation),
+) -> Result<(Exploration, Simulation)> {
     let mut sim = simulation(map, strategy, params, robots, max_rounds)?;
+    observe(&sim);
     while sim.round() < max_rounds {
-        let m = sim.step().metrics;
-        if m.explored_98_round > 0 {
+        let done = sim.step().metrics.explored_98_round > 0;
+        observe(&sim);
+        if done {
             break;
         }
     }
     let m = sim.report().metrics;
     let [_, at_90, at_98] = m.explored_milestones();
-    Ok(Exploration {
+    let run = Exploration {
         rounds: sim.round(),
         explored: m.explored_fraction,
         at_90,
         at_98,
         distance_m: m.distance_m,
         overlap_m: m.overlap_m,
-    })
+    };
+    Ok((run, sim))
+}
+
+/// Where a run's robots stood and what they explored ([`explore_traced`]).
+#[derive(Clone, Debug)]
+pub struct Walks {
+    /// `positions[r][i]`: robot `i` at the start (`r` = 0) and after round `r`.
+    pub positions: Vec<Vec<DVec2>>,
+    /// The union of their views at the end.
+    pub explored: KnownMap,
 }
 
 /// The built-in strategies and [`GREEDY_REFERENCE`].
@@ -469,7 +513,7 @@ pub fn indoor_maps() -> Result<Vec<NamedMap>> {
         }))
     };
     let border = |x: f64, y: f64, w: f64, h: f64| x < 0.3 || y < 0.3 || x > w - 0.3 || y > h - 0.3;
-    // A ring corridor 2 m wide round a 12 m block, with a dead-end room off each side.
+    // A ring corridor 3.7 m wide round a 12 m block, with a dead-end room off two of its sides.
     let ring = |x: f64, y: f64| {
         let block = (4.0..16.0).contains(&x) && (4.0..16.0).contains(&y);
         let outer = border(x, y, 20.0, 20.0);

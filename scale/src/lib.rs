@@ -18,6 +18,7 @@ pub mod fig4;
 pub mod kernel;
 pub mod paths;
 pub mod scaling;
+pub mod trace;
 /// Charts (shared with `smartteams plot`).
 pub use viewer_bridge::plot;
 

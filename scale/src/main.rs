@@ -5,7 +5,7 @@ mod curves;
 
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use scale::fig4::Fig4;
 use scale::{Kernel, RandomWalk, Swarm, measure};
@@ -206,6 +206,11 @@ enum Scenario {
         /// the table; then the teams' speed-ups and summed distances over every start.
         #[arg(long, default_value_t = 0)]
         starts: usize,
+        /// Draw each map's two walks into this folder, `MAP.png`: the reference's on the
+        /// left, `--strategy`'s on the right, blue to 90 % explored, red from there on, the
+        /// start green, what stayed unseen pink (from home; not with `--starts`).
+        #[arg(long, value_name = "DIR", conflicts_with = "starts")]
+        trace: Option<std::path::PathBuf>,
     },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
     /// map, and explored fraction against rounds; CSV and PNG files.
@@ -263,6 +268,7 @@ fn run(cli: &Cli) -> Result<()> {
             ref teams,
             ref only,
             starts,
+            ref trace,
         } => {
             let compared = Compared {
                 strategy: strategy.clone(),
@@ -278,7 +284,8 @@ fn run(cli: &Cli) -> Result<()> {
             if starts > 0 {
                 exploration_from_starts(&compared, data.as_deref(), &teams, only.as_deref(), starts, cli.rounds)
             } else {
-                exploration(&compared, data.as_deref(), &teams, only.as_deref(), cli.rounds)
+                let maps = exploration_maps(data.as_deref(), only.as_deref())?;
+                exploration(&compared, &maps, &teams, trace.as_deref(), cli.rounds)
             }
         }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
@@ -800,21 +807,28 @@ fn mean(xs: &[f64]) -> String {
 /// The exploration-quality table (see `Scenario::Exploration`).
 fn exploration(
     compared: &Compared,
-    data: Option<&std::path::Path>,
+    maps: &[scale::exploration::NamedMap],
     teams: &Teams,
-    only: Option<&str>,
+    trace: Option<&std::path::Path>,
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore};
+    if let Some(dir) = trace {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot make the folder {}", dir.display()))?;
+    }
     let strategy = &compared.strategy;
-    let maps = exploration_maps(data, only)?;
     println!(
         "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
     );
     let (mut sum90, mut n90) = (0.0, 0);
-    for (name, map) in &maps {
-        let reference = explore(map, GREEDY_REFERENCE, 1, max_rounds)?;
-        let built_in = compared.explore(map, max_rounds)?;
+    for (name, map) in maps {
+        let (reference, built_in) = match trace {
+            Some(dir) => traced_runs(compared, name, map, max_rounds, dir)?,
+            None => (
+                explore(map, GREEDY_REFERENCE, 1, max_rounds)?,
+                compared.explore(map, max_rounds)?,
+            ),
+        };
         if let (Some((_, a)), Some((_, b))) = (built_in.at_90, reference.at_90) {
             sum90 += a / b;
             n90 += 1;
@@ -835,6 +849,43 @@ fn exploration(
         println!("mean ratio to 90 %: {:.2} over {n90} maps", sum90 / f64::from(n90));
     }
     Ok(())
+}
+
+/// The reference's and `compared`'s runs on `map`, the same runs as untraced, with the
+/// picture of both walks ([`scale::trace::picture`]) written to `dir/NAME.png`.
+fn traced_runs(
+    compared: &Compared,
+    name: &str,
+    map: &std::sync::Arc<sim_core::world::MapData>,
+    max_rounds: u64,
+    dir: &std::path::Path,
+) -> Result<(scale::exploration::Exploration, scale::exploration::Exploration)> {
+    use scale::exploration::{GREEDY_REFERENCE, explore_traced};
+    let (reference, reference_walks) = explore_traced(
+        map,
+        GREEDY_REFERENCE,
+        &sim_core::agent::Params::default(),
+        1,
+        max_rounds,
+    )?;
+    let (built_in, walks) = explore_traced(map, &compared.strategy, &compared.params, 1, max_rounds)?;
+    let path = dir.join(format!("{}.png", file_stem(name)));
+    scale::trace::picture(map, &[(&reference, &reference_walks), (&built_in, &walks)])
+        .save(&path)
+        .with_context(|| format!("cannot write the picture {}", path.display()))?;
+    eprintln!("exploration: {name}: {}", path.display());
+    Ok((reference, built_in))
+}
+
+/// A map's name as a file name: lower case, a dash for each run of other characters than
+/// letters and digits ("depot (ROS)" → "depot-ros").
+fn file_stem(name: &str) -> String {
+    let lower = name.to_lowercase();
+    let words: Vec<&str> = lower
+        .split(|c: char| !c.is_alphanumeric())
+        .filter(|w| !w.is_empty())
+        .collect();
+    words.join("-")
 }
 
 /// Metres walked by a milestone, or `-`.

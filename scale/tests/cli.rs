@@ -217,6 +217,55 @@ fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
     );
 }
 
+/// `exploration --trace DIR` plays the same runs as without it (the same table line) and
+/// draws both walks on the loop into `DIR/indoor-loop.png`: two panels of 400 px (200 cells
+/// of 0.1 m, 2 px a cell) with the start, the walk to 90 % and the walk on to 98 % in each.
+/// It cannot be asked for with `--starts`, and a folder it cannot make is named.
+#[test]
+fn exploration_traces_draw_both_walks_without_changing_the_runs() {
+    use scale::trace::{FROM_90, GAP_PX, START, TO_90};
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "--rounds",
+        "3000",
+        "exploration",
+        "--only",
+        "indoor loop",
+        "--teams",
+        "0",
+    ];
+    let plain = bench(&args);
+    let traced = bench(&[&args[..], &["--trace", dir.path().to_str().unwrap()]].concat());
+    assert!(traced.status.success(), "{}", String::from_utf8_lossy(&traced.stderr));
+    let line = |out: &std::process::Output| {
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        text.lines().find(|l| l.starts_with("indoor loop |")).map(str::to_owned)
+    };
+    assert!(line(&plain).is_some());
+    assert_eq!(line(&plain), line(&traced));
+    let picture = image::open(dir.path().join("indoor-loop.png")).unwrap().to_rgb8();
+    assert_eq!(picture.dimensions(), (2 * 400 + GAP_PX, 400));
+    for panel in [0..400, 400 + GAP_PX..2 * 400 + GAP_PX] {
+        let has = |colour| {
+            panel
+                .clone()
+                .any(|x| (0..400).any(|y| *picture.get_pixel(x, y) == colour))
+        };
+        assert!(has(START) && has(TO_90) && has(FROM_90), "panel {panel:?}");
+    }
+    let both = bench(&[&args[..], &["--trace", "t", "--starts", "1"]].concat());
+    assert!(!both.status.success());
+    assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
+    let blocked = dir.path().join("indoor-loop.png").join("sub");
+    let out = bench(&[&args[..], &["--trace", blocked.to_str().unwrap()]].concat());
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot make the folder") && err.contains("indoor-loop.png"),
+        "{err}"
+    );
+}
+
 /// `exploration --starts` also runs the teams from every start: the line for 2 robots on the
 /// loop, from home and one start, gives the mean of the two speed-ups over one robot and the
 /// counts of runs at least 1.6× faster and within 1.25× the distance, as the library's own
