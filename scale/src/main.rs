@@ -208,7 +208,8 @@ enum Scenario {
         starts: usize,
         /// Draw each map's two walks into this folder, `MAP.png`: the reference's on the
         /// left, `--strategy`'s on the right, blue to 90 % explored, red from there on, the
-        /// start green, what stayed unseen pink (from home; not with `--starts`).
+        /// start green, what stayed unseen pink; and the teams', one robot first, into
+        /// `MAP-teams.png` (from home; not with `--starts`).
         #[arg(long, value_name = "DIR", conflicts_with = "starts")]
         trace: Option<std::path::PathBuf>,
     },
@@ -712,7 +713,7 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
-            team_runs.extend(TeamRuns::run(&m, teams, max_rounds)?);
+            team_runs.extend(TeamRuns::run(&m, teams, max_rounds, None)?);
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
         all90.extend(at90);
@@ -743,21 +744,35 @@ struct TeamRuns {
 }
 
 impl TeamRuns {
-    /// The runs on `map`; `None` when `teams` holds no size.
-    fn run(map: &std::sync::Arc<sim_core::world::MapData>, teams: &Teams, max_rounds: u64) -> Result<Option<Self>> {
-        use scale::exploration::explore_with;
+    /// The runs on `map`; `None` when `teams` holds no size. With `picture`, their walks
+    /// are drawn there side by side, one robot's first.
+    fn run(
+        map: &std::sync::Arc<sim_core::world::MapData>,
+        teams: &Teams,
+        max_rounds: u64,
+        picture: Option<&std::path::Path>,
+    ) -> Result<Option<Self>> {
+        use scale::exploration::{explore_traced, explore_with};
         if !teams.sizes.iter().any(|&n| n > 0) {
             return Ok(None);
         }
-        let explore = |n| explore_with(map, "cooperative", &teams.params, n, max_rounds);
-        let solo = explore(1)?;
-        let teams = teams
-            .sizes
-            .iter()
-            .filter(|&&n| n > 0)
-            .map(|&n| Ok((n, explore(n)?)))
-            .collect::<Result<_>>()?;
-        Ok(Some(Self { solo, teams }))
+        let sizes = std::iter::once(1).chain(teams.sizes.iter().copied().filter(|&n| n > 0));
+        let (mut runs, mut walks) = (Vec::new(), Vec::new());
+        for n in sizes {
+            if picture.is_some() {
+                let (run, walked) = explore_traced(map, "cooperative", &teams.params, n, max_rounds)?;
+                runs.push((n, run));
+                walks.push(walked);
+            } else {
+                runs.push((n, explore_with(map, "cooperative", &teams.params, n, max_rounds)?));
+            }
+        }
+        if let Some(path) = picture {
+            let panels: Vec<_> = runs.iter().map(|(_, run)| run).zip(&walks).collect();
+            save_picture(map, &panels, path)?;
+        }
+        let (_, solo) = runs.remove(0);
+        Ok(Some(Self { solo, teams: runs }))
     }
 
     /// How many times fewer rounds `team` took to 90 % than the lone robot, and its summed
@@ -833,7 +848,8 @@ fn exploration(
             sum90 += a / b;
             n90 += 1;
         }
-        let team_cells = team_cells(map, teams, max_rounds)?;
+        let team_picture = trace.map(|dir| dir.join(format!("{}-teams.png", file_stem(name))));
+        let team_cells = team_cells(map, teams, max_rounds, team_picture.as_deref())?;
         println!(
             "{name} | {} / {} | {} / {} | {} / {} | {}",
             metres(reference.at_90),
@@ -870,11 +886,21 @@ fn traced_runs(
     )?;
     let (built_in, walks) = explore_traced(map, &compared.strategy, &compared.params, 1, max_rounds)?;
     let path = dir.join(format!("{}.png", file_stem(name)));
-    scale::trace::picture(map, &[(&reference, &reference_walks), (&built_in, &walks)])
-        .save(&path)
-        .with_context(|| format!("cannot write the picture {}", path.display()))?;
-    eprintln!("exploration: {name}: {}", path.display());
+    save_picture(map, &[(&reference, &reference_walks), (&built_in, &walks)], &path)?;
     Ok((reference, built_in))
+}
+
+/// The picture of `runs` on `map` ([`scale::trace::picture`]) written to `path`.
+fn save_picture(
+    map: &sim_core::world::MapData,
+    runs: &[(&scale::exploration::Exploration, &scale::exploration::Walks)],
+    path: &std::path::Path,
+) -> Result<()> {
+    scale::trace::picture(map, runs)
+        .save(path)
+        .with_context(|| format!("cannot write the picture {}", path.display()))?;
+    eprintln!("exploration: {}", path.display());
+    Ok(())
 }
 
 /// A map's name as a file name: lower case, a dash for each run of other characters than
@@ -895,9 +921,14 @@ fn metres(at: Option<(u64, f64)>) -> String {
 
 /// The teams' cell of the exploration table: one `cooperative` robot's rounds and metres to
 /// 90 %, then each team size of `teams` with its speed-up, summed metres and overlap (empty
-/// when `teams` holds no size).
-fn team_cells(map: &std::sync::Arc<sim_core::world::MapData>, teams: &Teams, max_rounds: u64) -> Result<String> {
-    let Some(runs) = TeamRuns::run(map, teams, max_rounds)? else {
+/// when `teams` holds no size); with `picture`, the runs' walks drawn there.
+fn team_cells(
+    map: &std::sync::Arc<sim_core::world::MapData>,
+    teams: &Teams,
+    max_rounds: u64,
+    picture: Option<&std::path::Path>,
+) -> Result<String> {
+    let Some(runs) = TeamRuns::run(map, teams, max_rounds, picture)? else {
         return Ok(String::new());
     };
     let rounds = |at: Option<(u64, f64)>| at.map_or("-".into(), |(r, _)| r.to_string());

@@ -219,8 +219,9 @@ fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
 
 /// `exploration --trace DIR` plays the same runs as without it (the same table line) and
 /// draws both walks on the loop into `DIR/indoor-loop.png`: two panels of 400 px (200 cells
-/// of 0.1 m, 2 px a cell) with the start, the walk to 90 % and the walk on to 98 % in each.
-/// It cannot be asked for with `--starts`, and a folder it cannot make is named.
+/// of 0.1 m, 2 px a cell) with the start, the walk to 90 % and the walk on to 98 % in each;
+/// and one robot's and two robots' walks into `DIR/indoor-loop-teams.png`. It cannot be
+/// asked for with `--starts`, and a folder it cannot make is named.
 #[test]
 fn exploration_traces_draw_both_walks_without_changing_the_runs() {
     use scale::trace::{FROM_90, GAP_PX, START, TO_90};
@@ -232,7 +233,7 @@ fn exploration_traces_draw_both_walks_without_changing_the_runs() {
         "--only",
         "indoor loop",
         "--teams",
-        "0",
+        "2",
     ];
     let plain = bench(&args);
     let traced = bench(&[&args[..], &["--trace", dir.path().to_str().unwrap()]].concat());
@@ -253,6 +254,8 @@ fn exploration_traces_draw_both_walks_without_changing_the_runs() {
         };
         assert!(has(START) && has(TO_90) && has(FROM_90), "panel {panel:?}");
     }
+    let teams = image::open(dir.path().join("indoor-loop-teams.png")).unwrap();
+    assert_eq!((teams.width(), teams.height()), (2 * 400 + GAP_PX, 400));
     let both = bench(&[&args[..], &["--trace", "t", "--starts", "1"]].concat());
     assert!(!both.status.success());
     assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
