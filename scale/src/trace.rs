@@ -183,9 +183,9 @@ mod tests {
         (map, run, walks)
     }
 
-    /// Every pixel's colour worked out from the map by hand: blocked left of x = 5 m (200
-    /// px), explored to 7.5 m (300 px), unseen beyond; the walk's row, 2.5 m up, is pixel
-    /// row 100 (rows counted down from 5 m); the start's pixel at x 210.
+    /// Pixels whose colours were worked out from the map by hand: blocked left of x = 5 m
+    /// (200 px), explored to 7.5 m (300 px), unseen beyond; the walk's row, 2.5 m up, is
+    /// pixel row 99 (rows counted down from 5 m, the 100th); the start's pixel at x 210.
     #[test]
     fn a_panel_draws_the_map_the_walk_by_phase_and_the_start() {
         let (map, run, walks) = half_blocked();
