@@ -335,7 +335,7 @@ fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
 /// with `alternate` rounds, in turn (see [`scale::measure_alternated`]).
 fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing], alternate: u64) -> Result<()> {
     let mut name = "";
-    let mut planned = Vec::new();
+    let (mut labels, mut scenarios) = (Vec::new(), Vec::new());
     for &sharing in turns {
         for &n in threads {
             let (scenario_name, scenario, _) = build_scenario(timed)?;
@@ -345,13 +345,10 @@ fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing],
             } else {
                 format!("{n} thr")
             };
-            planned.push((label, n, scenario, sharing));
+            labels.push((label, n));
+            scenarios.push((scenario, n, sharing));
         }
     }
-    let (labels, scenarios): (Vec<_>, Vec<_>) = planned
-        .into_iter()
-        .map(|(label, n, scenario, sharing)| ((label, n), (scenario, n, sharing)))
-        .unzip();
     let how = if alternate == 0 {
         String::new()
     } else {
