@@ -117,6 +117,11 @@ impl RandomWalk {
 
     /// Generate the map and build the scenario.
     pub fn scenario(&self) -> Result<Scenario> {
+        self.scenario_on(&self.map()?)
+    }
+
+    /// Generate the map: white noise of `density`, the home disc kept clear.
+    pub fn map(&self) -> Result<Arc<MapData>> {
         let opts = GenerateOptions {
             width_m: self.side_m,
             height_m: self.side_m,
@@ -142,8 +147,13 @@ impl RandomWalk {
             },
             treasures: Vec::new(),
         };
+        Ok(Arc::new(map))
+    }
+
+    /// The scenario on `map` (made by [`map`](Self::map)): runs on one map share it.
+    pub fn scenario_on(&self, map: &Arc<MapData>) -> Result<Scenario> {
         let registry = StrategyRegistry::with_builtins();
-        Ok(ScenarioBuilder::new(Arc::new(map))
+        Ok(ScenarioBuilder::new(Arc::clone(map))
             .with_name("dense-random-walk")
             .with_seed(self.seed)
             .with_rounds(u64::MAX)
@@ -216,6 +226,11 @@ impl Swarm {
 
     /// Generate the map and build the scenario.
     pub fn scenario(&self) -> Result<Scenario> {
+        self.scenario_on(&self.map()?)
+    }
+
+    /// Generate the map: the mesas, the home disc and the treasures.
+    pub fn map(&self) -> Result<Arc<MapData>> {
         let opts = GenerateOptions {
             width_m: self.side_m,
             height_m: self.side_m,
@@ -251,6 +266,11 @@ impl Swarm {
             },
             treasures,
         };
+        Ok(Arc::new(map))
+    }
+
+    /// The scenario on `map` (made by [`map`](Self::map)): runs on one map share it.
+    pub fn scenario_on(&self, map: &Arc<MapData>) -> Result<Scenario> {
         let scouts = self.robots * 8 / 10;
         let diggers = (self.robots - scouts) / 2;
         let haulers = self.robots - scouts - diggers;
@@ -263,7 +283,7 @@ impl Swarm {
         let types =
             [scout, RobotType::excavator(), RobotType::transporter()].map(|t| t.with_radio_bytes_per_round(radio));
         let registry = StrategyRegistry::with_builtins();
-        Ok(ScenarioBuilder::new(Arc::new(map))
+        Ok(ScenarioBuilder::new(Arc::clone(map))
             .with_name("swarm")
             .with_seed(self.seed)
             .with_rounds(u64::MAX)
@@ -406,41 +426,45 @@ pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: Tu
     Ok(run.measurement())
 }
 
-/// [`measure_with`] for several runs (each a scenario, its thread count and how it shares
-/// step 3's turns), played in turn `block` rounds at a time, each on its own workers; with
-/// `block` 0, one run after the other, each built when its turn comes. Alternated, a drift
-/// of the machine's speed (a VM's can move by a third within seconds) falls on every run
-/// alike, so that their ratios hold still. The measurements come in the order of `runs`.
-/// Cost: alternated, every run's simulation is in memory at once.
+/// [`measure_with`] for several runs (each a thread count and how it shares step 3's
+/// turns), each on a scenario `make` builds, played in turn `block` rounds at a time, each
+/// on its own workers; with `block` 0, one run after the other, each built when its turn
+/// comes and dropped before the next. Alternated, a drift of the machine's speed (a VM's
+/// can move by a third within seconds) falls on every run alike, so that their ratios hold
+/// still. The measurements come in the order of `runs`. Cost: alternated, every run's
+/// simulation is in memory at once; one after the other, one at a time. A `make` that
+/// shares one map (as [`Swarm::scenario_on`] does) generates it once for all the runs.
 ///
 /// ```
 /// use scale::{RandomWalk, measure_alternated};
 /// use sim_core::engine::TurnSharing;
 ///
-/// let walk = || RandomWalk { robots: 20, side_m: 64.0, ..RandomWalk::default() }.scenario();
-/// let runs = vec![(walk()?, 1, TurnSharing::Auto), (walk()?, 2, TurnSharing::SideBySide)];
-/// let ms = measure_alternated(runs, 10, 3)?;
+/// let walk = RandomWalk { robots: 20, side_m: 64.0, ..RandomWalk::default() };
+/// let map = walk.map()?;
+/// let make = || walk.scenario_on(&map);
+/// let ms = measure_alternated(make, &[(1, TurnSharing::Auto), (2, TurnSharing::SideBySide)], 10, 3)?;
 /// assert_eq!((ms[0].rounds, ms[1].rounds), (10, 10));
 /// assert_eq!(ms[0].digest, ms[1].digest);
 /// // The same rounds as the runs played one after the other.
-/// let one_by_one = measure_alternated(vec![(walk()?, 1, TurnSharing::Auto)], 10, 0)?;
+/// let one_by_one = measure_alternated(make, &[(1, TurnSharing::Auto)], 10, 0)?;
 /// assert_eq!(ms[0].digest, one_by_one[0].digest);
 /// # Ok::<(), scale::Error>(())
 /// ```
 pub fn measure_alternated(
-    runs: Vec<(Scenario, usize, TurnSharing)>,
+    make: impl Fn() -> Result<Scenario>,
+    runs: &[(usize, TurnSharing)],
     rounds: u64,
     block: u64,
 ) -> Result<Vec<Measurement>> {
     if block == 0 {
         return runs
-            .into_iter()
-            .map(|(scenario, threads, sharing)| measure_with(scenario, rounds, threads, sharing))
+            .iter()
+            .map(|&(threads, sharing)| measure_with(make()?, rounds, threads, sharing))
             .collect();
     }
     let mut timed = runs
-        .into_iter()
-        .map(|(scenario, threads, sharing)| TimedRun::new(scenario, threads, sharing))
+        .iter()
+        .map(|&(threads, sharing)| TimedRun::new(make()?, threads, sharing))
         .collect::<Result<Vec<_>>>()?;
     let mut played = 0;
     while played < rounds {

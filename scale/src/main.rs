@@ -318,7 +318,8 @@ fn one_thread_count(threads: &[usize]) -> Result<usize> {
 /// workers, and print the measurement.
 fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
     let t0 = Instant::now();
-    let (name, scenario, csv_row) = build_scenario(timed)?;
+    let (name, make, csv_row) = scenario_maker(timed)?;
+    let scenario = make()?;
     let generate_s = t0.elapsed().as_secs_f64();
     let mut m = measure(scenario, rounds, threads)?;
     m.generate_s = generate_s;
@@ -331,22 +332,20 @@ fn time_scenario(timed: &Timed, rounds: u64, threads: usize) -> Result<()> {
 }
 
 /// The scaling report of a timed scenario: one run per thread count and way of sharing
-/// turns, each on a scenario built afresh (same seed, same map), one after the other or,
+/// turns, each on a scenario built afresh on one map (same seed), one after the other or,
 /// with `alternate` rounds, in turn (see [`scale::measure_alternated`]).
 fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing], alternate: u64) -> Result<()> {
-    let mut name = "";
-    let (mut labels, mut scenarios) = (Vec::new(), Vec::new());
+    let (name, make, _) = scenario_maker(timed)?;
+    let (mut labels, mut plan) = (Vec::new(), Vec::new());
     for &sharing in turns {
         for &n in threads {
-            let (scenario_name, scenario, _) = build_scenario(timed)?;
-            name = scenario_name;
             let label = if turns.len() > 1 {
                 format!("{n} thr {sharing}")
             } else {
                 format!("{n} thr")
             };
             labels.push((label, n));
-            scenarios.push((scenario, n, sharing));
+            plan.push((n, sharing));
         }
     }
     let how = if alternate == 0 {
@@ -357,7 +356,7 @@ fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing],
     let mut runs = Vec::new();
     for ((label, n), m) in labels
         .into_iter()
-        .zip(scale::measure_alternated(scenarios, rounds, alternate)?)
+        .zip(scale::measure_alternated(make, &plan, rounds, alternate)?)
     {
         eprintln!("scaling: {label}: {:.1} rounds/s{how}", m.rounds_per_s());
         runs.push((label, n, m));
@@ -371,9 +370,12 @@ fn scaling(timed: &Timed, rounds: u64, threads: &[usize], turns: &[TurnSharing],
     Ok(())
 }
 
-/// A timed scenario with its generated map: its name, the scenario, and whether the
-/// measurement is printed as a CSV row.
-fn build_scenario(scenario: &Timed) -> Result<(&'static str, sim_core::engine::Scenario, bool)> {
+/// Builds a timed scenario on its map, generated or loaded once.
+type MakeScenario = Box<dyn Fn() -> scale::Result<sim_core::engine::Scenario>>;
+
+/// A timed scenario: its name, its map (generated or loaded now, once) with what builds the
+/// scenario on it, and whether the measurement is printed as a CSV row.
+fn scenario_maker(scenario: &Timed) -> Result<(&'static str, MakeScenario, bool)> {
     Ok(match *scenario {
         Timed::RandomWalk {
             robots,
@@ -388,7 +390,8 @@ fn build_scenario(scenario: &Timed) -> Result<(&'static str, sim_core::engine::S
                 seed,
                 ..RandomWalk::default()
             };
-            ("random-walk", rw.scenario()?, false)
+            let map = rw.map()?;
+            ("random-walk", Box::new(move || rw.scenario_on(&map)), false)
         }
         Timed::Swarm {
             robots,
@@ -412,7 +415,8 @@ fn build_scenario(scenario: &Timed) -> Result<(&'static str, sim_core::engine::S
                 seed,
                 ..Swarm::default()
             };
-            ("swarm", swarm.scenario()?, csv_row)
+            let map = swarm.map()?;
+            ("swarm", Box::new(move || swarm.scenario_on(&map)), csv_row)
         }
         Timed::Kernel {
             robots,
@@ -424,12 +428,15 @@ fn build_scenario(scenario: &Timed) -> Result<(&'static str, sim_core::engine::S
                 seed,
                 max_detour_m,
             };
-            ("kernel", kernel.scenario(&Kernel::map())?, false)
+            let map = Kernel::map();
+            ("kernel", Box::new(move || kernel.scenario(&map)), false)
         }
         Timed::Config { ref file } => {
             let config = sim_core::io::SimConfig::load(file)?;
+            let map = std::sync::Arc::new(config.load_map()?);
             let registry = sim_core::agent::StrategyRegistry::with_builtins();
-            ("config", config.scenario(&registry)?, false)
+            let make = move || Ok(config.scenario_with_map(&registry, std::sync::Arc::clone(&map))?);
+            ("config", Box::new(make), false)
         }
     })
 }
