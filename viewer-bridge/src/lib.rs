@@ -20,6 +20,7 @@ pub mod blueprint;
 pub mod cli;
 pub mod layers;
 pub mod plot;
+pub mod priority;
 pub mod progress;
 pub mod rerun_observer;
 pub mod run;

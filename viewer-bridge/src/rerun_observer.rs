@@ -27,6 +27,7 @@ use sim_core::spatial::{Aabb, RegionQuadtree};
 use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, Robot, RobotType, RoundMetrics, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
+use crate::priority::{LoggingWait, STARVED_AFTER, StarvationWatch};
 
 /// The sequence timeline every per-round entity is logged on.
 pub const TIMELINE: &str = "round";
@@ -166,6 +167,8 @@ pub struct RerunObserver {
     worker_busy: std::time::Duration,
     /// The round's pollers' cores, lent to the logging thread while it has worlds to log.
     core_loan: Option<std::sync::Arc<CoreLoan>>,
+    /// Tells the user when the run waits for logging that other programs starve.
+    starvation: StarvationWatch,
 }
 
 impl RerunObserver {
@@ -196,6 +199,7 @@ impl RerunObserver {
             closing: std::time::Duration::ZERO,
             worker_busy: std::time::Duration::ZERO,
             core_loan: None,
+            starvation: StarvationWatch::default(),
         }
     }
 
@@ -360,13 +364,23 @@ impl RerunObserver {
                 loan.lend();
             }
         }
-        if tx.send(frame).is_err() {
-            // The thread stopped: its result says why.
-            self.frames = None;
-            self.join_worker()?;
-            return Err(ObserverError::from("the Rerun logging thread stopped"));
+        let tx = tx.clone();
+        let wait = LoggingWait::begin();
+        loop {
+            match tx.send_timeout(frame, STARVED_AFTER) {
+                Ok(()) => return Ok(()),
+                Err(crossbeam_channel::SendTimeoutError::Timeout(f)) => {
+                    self.starvation.check(&wait);
+                    frame = f;
+                }
+                Err(crossbeam_channel::SendTimeoutError::Disconnected(_)) => {
+                    // The thread stopped: its result says why.
+                    self.frames = None;
+                    self.join_worker()?;
+                    return Err(ObserverError::from("the Rerun logging thread stopped"));
+                }
+            }
         }
-        Ok(())
     }
 
     /// Let go of a live stream whose viewer takes no data. Dropping the last handle of a
@@ -1287,7 +1301,7 @@ impl Observer for RerunObserver {
             .spawn(move || {
                 // Dropped when this closure returns or unwinds: see `LoggingThread::ended`.
                 let _ended: crossbeam_channel::Sender<()> = ended_tx;
-                crate::viewer::lower_priority();
+                crate::priority::lower_priority();
                 // The map's raster and outlines are built here, beside the first rounds.
                 layers::log_static_map(&rec, &map)?;
                 drop(map);
@@ -1349,8 +1363,14 @@ impl Observer for RerunObserver {
         self.log_last_round(sim)?;
         // Closing the queue lets the logging thread finish what is queued and stop.
         self.frames = None;
+        let wait = LoggingWait::begin();
         match self.when_behind {
-            WhenBehind::Wait => self.join_worker()?,
+            WhenBehind::Wait => {
+                if self.worker.as_ref().is_some_and(|w| !w.ends_within(STARVED_AFTER)) {
+                    self.starvation.check(&wait);
+                }
+                self.join_worker()?;
+            }
             WhenBehind::SkipWorld => {
                 // A paused viewer can block the logging thread for ever: give it a while,
                 // then leave it (it holds its own handle on the stream).
@@ -1359,7 +1379,10 @@ impl Observer for RerunObserver {
                     self.join_worker()?;
                 } else {
                     self.worker = None;
-                    eprintln!("warning: the Rerun viewer is not taking data; the last rounds may not reach it");
+                    // Starved of the CPU, the logging thread is behind, not the viewer.
+                    if !self.starvation.check(&wait) {
+                        eprintln!("warning: the Rerun viewer is not taking data; the last rounds may not reach it");
+                    }
                     self.abandon_stream();
                     return Ok(());
                 }
@@ -1367,7 +1390,7 @@ impl Observer for RerunObserver {
         }
         // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
         let flushed = match self.when_behind {
-            WhenBehind::Wait => self.rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string()),
+            WhenBehind::Wait => self.flush_file(&wait),
             WhenBehind::SkipWorld => self.flush_live(),
         };
         match flushed {
@@ -1407,6 +1430,19 @@ impl RerunObserver {
             world: Some(world),
         };
         self.send(frame, true)
+    }
+
+    /// Flush a file's stream, waiting at most [`FINISH_TIMEOUT`] (what is left is written
+    /// when the stream closes); a flush that lasts [`STARVED_AFTER`] asks whether the
+    /// logging is starved (`wait`, begun when the rounds ended).
+    fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
+        if self.rec.flush_with_timeout(STARVED_AFTER).is_ok() {
+            return Ok(());
+        }
+        self.starvation.check(wait);
+        self.rec
+            .flush_with_timeout(FINISH_TIMEOUT.saturating_sub(STARVED_AFTER))
+            .map_err(|e| e.to_string())
     }
 
     /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).

@@ -98,6 +98,7 @@ pub fn open(
     target: &ViewerTarget,
     blueprint: rerun::blueprint::Blueprint,
 ) -> Result<rerun::RecordingStream> {
+    crate::priority::logging_priority().map_err(anyhow::Error::msg)?;
     let builder = rerun::RecordingStreamBuilder::new(APPLICATION_ID)
         .recording_name(name)
         .with_blueprint(blueprint);
@@ -105,7 +106,7 @@ pub fn open(
     // opens the stream: a low one, so that they take the cores the rounds leave idle.
     let rec = std::thread::scope(|s| {
         s.spawn(|| {
-            lower_priority();
+            crate::priority::lower_priority();
             open_stream(builder, target)
         })
         .join()
@@ -115,25 +116,6 @@ pub fn open(
     rec.set_log_time_enabled(false);
     rec.set_log_tick_enabled(false);
     Ok(rec)
-}
-
-/// Lower the calling thread's scheduling priority to the least: logging runs beside the
-/// rounds without taking their cores. On Linux that is `SCHED_IDLE`, which a waking round
-/// thread preempts at once (a nice-19 thread keeps the core to the end of its slice, about a
-/// millisecond, while the round waits for the thread it holds up); elsewhere the lowest
-/// priority. Where neither is allowed, nothing.
-pub fn lower_priority() {
-    #[cfg(target_os = "linux")]
-    let idle = thread_priority::set_thread_priority_and_policy(
-        thread_priority::thread_native_id(),
-        thread_priority::ThreadPriority::Min,
-        thread_priority::ThreadSchedulePolicy::Normal(thread_priority::NormalThreadSchedulePolicy::Idle),
-    );
-    #[cfg(not(target_os = "linux"))]
-    let idle: Result<(), ()> = Err(());
-    if idle.is_err() {
-        let _ = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min);
-    }
 }
 
 /// The stream of `builder` to `target`.
