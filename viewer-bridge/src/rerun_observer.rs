@@ -364,6 +364,13 @@ impl RerunObserver {
                 loan.lend();
             }
         }
+        // The queue is full only when the logging thread is behind: only then is the wait
+        // timed (a read of `/proc`), to tell a starved thread.
+        frame = match tx.try_send(frame) {
+            Ok(()) => return Ok(()),
+            Err(crossbeam_channel::TrySendError::Full(f)) => f,
+            Err(crossbeam_channel::TrySendError::Disconnected(_)) => return self.logging_thread_stopped(),
+        };
         let tx = tx.clone();
         let wait = LoggingWait::begin();
         loop {
@@ -373,14 +380,16 @@ impl RerunObserver {
                     self.starvation.check(&wait);
                     frame = f;
                 }
-                Err(crossbeam_channel::SendTimeoutError::Disconnected(_)) => {
-                    // The thread stopped: its result says why.
-                    self.frames = None;
-                    self.join_worker()?;
-                    return Err(ObserverError::from("the Rerun logging thread stopped"));
-                }
+                Err(crossbeam_channel::SendTimeoutError::Disconnected(_)) => return self.logging_thread_stopped(),
             }
         }
+    }
+
+    /// The logging thread stopped taking frames: its result says why.
+    fn logging_thread_stopped(&mut self) -> Result<(), ObserverError> {
+        self.frames = None;
+        self.join_worker()?;
+        Err(ObserverError::from("the Rerun logging thread stopped"))
     }
 
     /// Let go of a live stream whose viewer takes no data. Dropping the last handle of a
