@@ -62,9 +62,11 @@ pub fn lower_priority() {
 pub const STARVED_AFTER: Duration = Duration::from_secs(2);
 
 /// Tells a recording starved of the CPU: the run has waited [`STARVED_AFTER`] or more for its
-/// logging threads while the process used less than a quarter of one core, so those threads
-/// had work and no core (logging that merely has much to do keeps a core busy). Says so once.
-/// Linux only (the process's CPU time comes from `/proc/self/stat`); elsewhere it never does.
+/// logging threads while the process used less than a quarter of one core and its threads
+/// spent at least half that time ready to run but waiting for a core. Logging that merely
+/// has much to do keeps a core busy; logging held up by a slow disk or network is not
+/// waiting for a core. Says so once. Linux only (CPU and run-queue times come from
+/// `/proc/self`); elsewhere it never does.
 #[derive(Debug, Default)]
 pub struct StarvationWatch {
     warned: bool,
@@ -75,6 +77,7 @@ pub struct StarvationWatch {
 pub struct LoggingWait {
     since: Instant,
     cpu: Option<Duration>,
+    queued: Option<Duration>,
 }
 
 impl LoggingWait {
@@ -83,15 +86,20 @@ impl LoggingWait {
         Self {
             since: Instant::now(),
             cpu: process_cpu_time(),
+            queued: run_queue_time(),
         }
     }
 
     /// Whether, [`STARVED_AFTER`] or more into the wait, the process has used less than a
-    /// quarter of a core.
+    /// quarter of a core while its threads waited for a core half the time or more.
     fn starved(&self) -> bool {
         let wall = self.since.elapsed();
-        wall >= STARVED_AFTER
-            && matches!((self.cpu, process_cpu_time()), (Some(before), Some(now)) if (now.saturating_sub(before)) * 4 < wall)
+        let grew = |before: Option<Duration>, now: Option<Duration>| Some(now?.saturating_sub(before?));
+        let (Some(cpu), Some(queued)) = (grew(self.cpu, process_cpu_time()), grew(self.queued, run_queue_time()))
+        else {
+            return false;
+        };
+        wall >= STARVED_AFTER && cpu * 4 < wall && queued * 2 >= wall
     }
 }
 
@@ -115,6 +123,22 @@ fn process_cpu_time() -> Option<Duration> {
     std::fs::read_to_string("/proc/self/stat")
         .ok()
         .and_then(|s| cpu_time_of_stat(&s))
+}
+
+/// The time this process's threads have spent ready to run but waiting for a core: the sum
+/// of the second field of `/proc/self/task/*/schedstat` (nanoseconds; a thread that has
+/// ended no longer counts).
+fn run_queue_time() -> Option<Duration> {
+    let mut total = 0u64;
+    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
+        if let Some(ns) = std::fs::read_to_string(task.path().join("schedstat"))
+            .ok()
+            .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
+        {
+            total += ns;
+        }
+    }
+    Some(Duration::from_nanos(total))
 }
 
 /// User plus system time of a `/proc/PID/stat` line, in the kernel's clock ticks of 1/100 s
