@@ -62,11 +62,10 @@ pub fn lower_priority() {
 pub const STARVED_AFTER: Duration = Duration::from_secs(2);
 
 /// Tells a recording starved of the CPU: the run has waited [`STARVED_AFTER`] or more for its
-/// logging threads while the process used less than a quarter of one core and its threads
-/// spent at least half that time ready to run but waiting for a core. Logging that merely
-/// has much to do keeps a core busy; logging held up by a slow disk or network is not
-/// waiting for a core. Says so once. Linux only (CPU and run-queue times come from
-/// `/proc/self`); elsewhere it never does.
+/// logging threads while the process used less than a quarter of one core, and another of
+/// its threads is ready to run now. Logging that merely has much to do keeps a core busy;
+/// logging held up by a slow disk or network is asleep, not ready to run. Says so once.
+/// Linux only (CPU time and thread states come from `/proc`); elsewhere it never does.
 #[derive(Debug, Default)]
 pub struct StarvationWatch {
     warned: bool,
@@ -77,7 +76,6 @@ pub struct StarvationWatch {
 pub struct LoggingWait {
     since: Instant,
     cpu: Option<Duration>,
-    queued: Option<Duration>,
 }
 
 impl LoggingWait {
@@ -86,20 +84,21 @@ impl LoggingWait {
         Self {
             since: Instant::now(),
             cpu: process_cpu_time(),
-            queued: run_queue_time(),
         }
     }
 
     /// Whether, [`STARVED_AFTER`] or more into the wait, the process has used less than a
-    /// quarter of a core while its threads waited for a core half the time or more.
+    /// quarter of a core while another of its threads is ready to run.
     fn starved(&self) -> bool {
         let wall = self.since.elapsed();
-        let grew = |before: Option<Duration>, now: Option<Duration>| Some(now?.saturating_sub(before?));
-        let (Some(cpu), Some(queued)) = (grew(self.cpu, process_cpu_time()), grew(self.queued, run_queue_time()))
+        let Some(cpu) = self
+            .cpu
+            .zip(process_cpu_time())
+            .map(|(before, now)| now.saturating_sub(before))
         else {
             return false;
         };
-        wall >= STARVED_AFTER && cpu * 4 < wall && queued * 2 >= wall
+        wall >= STARVED_AFTER && cpu * 4 < wall && another_thread_runnable()
     }
 }
 
@@ -125,20 +124,26 @@ fn process_cpu_time() -> Option<Duration> {
         .and_then(|s| cpu_time_of_stat(&s))
 }
 
-/// The time this process's threads have spent ready to run but waiting for a core: the sum
-/// of the second field of `/proc/self/task/*/schedstat` (nanoseconds; a thread that has
-/// ended no longer counts).
-fn run_queue_time() -> Option<Duration> {
-    let mut total = 0u64;
-    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
-        if let Some(ns) = std::fs::read_to_string(task.path().join("schedstat"))
-            .ok()
-            .and_then(|s| s.split_whitespace().nth(1)?.parse::<u64>().ok())
-        {
-            total += ns;
-        }
-    }
-    Some(Duration::from_nanos(total))
+/// Whether a thread of this process other than the calling one is running or ready to run
+/// (state `R` in `/proc/self/task/*/stat`). A thread waiting for a core is `R`; one waiting
+/// for a disk, the network or a lock is not.
+fn another_thread_runnable() -> bool {
+    let me = std::fs::read_to_string("/proc/thread-self/stat").ok();
+    let me = me.as_deref().and_then(|s| s.split_whitespace().next());
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
+        return false;
+    };
+    tasks.flatten().any(|task| {
+        let name = task.file_name();
+        Some(name.to_string_lossy().as_ref()) != me
+            && std::fs::read_to_string(task.path().join("stat")).is_ok_and(|s| state_of_stat(&s) == Some('R'))
+    })
+}
+
+/// The state letter of a `/proc/PID/stat` line: the first field after the command name (in
+/// parentheses, which may hold spaces and parentheses).
+fn state_of_stat(stat: &str) -> Option<char> {
+    stat[stat.rfind(')')? + 1..].split_whitespace().next()?.chars().next()
 }
 
 /// User plus system time of a `/proc/PID/stat` line, in the kernel's clock ticks of 1/100 s
@@ -164,6 +169,15 @@ mod tests {
         let line = "4242 (rerun (x) y) S 1 4242 4242 0 -1 4194560 1234 0 0 0 250 37 0 0 20 0 11 0 100 0 0";
         assert_eq!(cpu_time_of_stat(line), Some(Duration::from_millis(2870)));
         assert_eq!(cpu_time_of_stat("4242 (x) S 1"), None);
+    }
+
+    /// The state is the first field after the name's last parenthesis.
+    #[test]
+    fn the_state_follows_the_name() {
+        let line = "4242 (rerun (x) y) S 1 4242 4242 0 -1 4194560 1234 0 0 0 250 37 0 0 20 0 11 0 100 0 0";
+        assert_eq!(state_of_stat(line), Some('S'));
+        assert_eq!(state_of_stat("4242 (a) R) R 1"), Some('R'));
+        assert_eq!(state_of_stat("4242 (a"), None);
     }
 
     /// A wait shorter than [`STARVED_AFTER`] is never starved, whatever the CPU time.
