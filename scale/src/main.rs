@@ -723,12 +723,15 @@ fn exploration_from_starts(
         all90.extend(at90);
         all98.extend(at98);
     }
+    let farther = |ratios: &[f64]| ratios.iter().filter(|&&r| r > 1.0).count();
     println!(
-        "mean over every start: {} to 90 % ({} runs), {} to 98 % ({} runs)",
+        "mean over every start: {} to 90 % ({} runs), {} to 98 % ({} runs); farther than the reference in {} and {} of them",
         mean(&all90),
         all90.len(),
         mean(&all98),
-        all98.len()
+        all98.len(),
+        farther(&all90),
+        farther(&all98)
     );
     print_team_runs(&team_runs);
     Ok(())

@@ -317,3 +317,51 @@ fn teams_run_from_every_start_as_the_library_runs_them() {
     );
     assert_eq!(line, expected, "{text}");
 }
+
+/// `exploration --starts` ends with the means over every start and how many of those runs
+/// walked farther than the reference, as the library's runs of both explorers from home and
+/// the start give them (the indoor loop, where `frontier` walks farther to 98 %).
+#[test]
+fn starts_count_the_runs_farther_than_the_reference() {
+    use scale::exploration::{GREEDY_REFERENCE, explore, indoor_maps, starting_at, starts_along_the_reference};
+    let rounds = 20_000;
+    let out = bench(&[
+        "--rounds",
+        "20000",
+        "exploration",
+        "--only",
+        "indoor loop",
+        "--teams",
+        "0",
+        "--starts",
+        "1",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("mean over every start"))
+        .unwrap_or_else(|| panic!("no means in {text}"));
+    let (_, map) = indoor_maps()
+        .unwrap()
+        .into_iter()
+        .find(|(name, _)| name == "indoor loop")
+        .unwrap();
+    let start = starts_along_the_reference(&map, 1, rounds).unwrap()[0];
+    let (mut at90, mut at98) = (Vec::new(), Vec::new());
+    for m in [map.clone(), starting_at(&map, start)] {
+        let built_in = explore(&m, "frontier", 1, rounds).unwrap();
+        let reference = explore(&m, GREEDY_REFERENCE, 1, rounds).unwrap();
+        at90.push(built_in.at_90.unwrap().1 / reference.at_90.unwrap().1);
+        at98.push(built_in.at_98.unwrap().1 / reference.at_98.unwrap().1);
+    }
+    let farther = |r: &[f64]| r.iter().filter(|&&x| x > 1.0).count();
+    let expected = format!(
+        "mean over every start: {:.2} to 90 % (2 runs), {:.2} to 98 % (2 runs); farther than the reference in {} and {} of them",
+        at90.iter().sum::<f64>() / 2.0,
+        at98.iter().sum::<f64>() / 2.0,
+        farther(&at90),
+        farther(&at98)
+    );
+    assert_eq!(line, expected, "{text}");
+}
