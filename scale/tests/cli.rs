@@ -269,22 +269,24 @@ fn exploration_traces_draw_both_walks_without_changing_the_runs() {
     );
 }
 
-/// `exploration --starts` also runs the teams from every start: the line for 2 robots on the
-/// loop, from home and one start, gives the mean of the two speed-ups over one robot and the
-/// counts of runs at least 1.6× faster and within 1.25× the distance, as the library's own
-/// runs from the same starts give them.
-#[test]
-fn teams_run_from_every_start_as_the_library_runs_them() {
-    use scale::exploration::{explore, indoor_maps, starting_at, starts_along_the_reference};
-    let rounds = 3_000;
+/// The line of `smartteams-bench --rounds ROUNDS exploration --only "indoor loop" --teams
+/// TEAMS --starts 1` that starts with `prefix`, and the loop's maps from home and from that
+/// one start, for the library to run.
+fn loop_from_every_start(
+    rounds: u64,
+    teams: &str,
+    prefix: &str,
+) -> (String, [std::sync::Arc<sim_core::world::MapData>; 2]) {
+    use scale::exploration::{indoor_maps, starting_at, starts_along_the_reference};
+    let rounds_arg = rounds.to_string();
     let out = bench(&[
         "--rounds",
-        "3000",
+        &rounds_arg,
         "exploration",
         "--only",
         "indoor loop",
         "--teams",
-        "2",
+        teams,
         "--starts",
         "1",
     ]);
@@ -292,18 +294,36 @@ fn teams_run_from_every_start_as_the_library_runs_them() {
     let text = String::from_utf8_lossy(&out.stdout);
     let line = text
         .lines()
-        .find(|l| l.starts_with("2 cooperative robots"))
-        .unwrap_or_else(|| panic!("no team line in {text}"));
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("no line `{prefix}…` in {text}"));
     let (_, map) = indoor_maps()
         .unwrap()
         .into_iter()
         .find(|(name, _)| name == "indoor loop")
         .unwrap();
     let start = starts_along_the_reference(&map, 1, rounds).unwrap()[0];
+    let from_start = starting_at(&map, start);
+    (line.to_owned(), [map, from_start])
+}
+
+/// `exploration --starts` also runs the teams from every start: the line for 2 robots on the
+/// loop, from home and one start, gives the mean of the two speed-ups over one robot and the
+/// counts of runs at least 1.6× faster and within 1.25× the distance, as the library's own
+/// runs from the same starts give them.
+#[test]
+fn teams_run_from_every_start_as_the_library_runs_them() {
+    let rounds = 3_000;
+    let (line, maps) = loop_from_every_start(rounds, "2", "2 cooperative robots");
     let (mut speedups, mut ratios) = (Vec::new(), Vec::new());
-    for m in [map.clone(), starting_at(&map, start)] {
-        let (r1, d1) = explore(&m, "cooperative", 1, rounds).unwrap().at_90.unwrap();
-        let (r2, d2) = explore(&m, "cooperative", 2, rounds).unwrap().at_90.unwrap();
+    for m in &maps {
+        let (r1, d1) = scale::exploration::explore(m, "cooperative", 1, rounds)
+            .unwrap()
+            .at_90
+            .unwrap();
+        let (r2, d2) = scale::exploration::explore(m, "cooperative", 2, rounds)
+            .unwrap()
+            .at_90
+            .unwrap();
         speedups.push(r1 as f64 / r2 as f64);
         ratios.push(d2 / d1);
     }
@@ -315,7 +335,7 @@ fn teams_run_from_every_start_as_the_library_runs_them() {
         ratios.iter().sum::<f64>() / 2.0,
         ratios.iter().filter(|&&x| x <= 1.25).count()
     );
-    assert_eq!(line, expected, "{text}");
+    assert_eq!(line, expected);
 }
 
 /// `exploration --starts` ends with the means over every start and how many of those runs
@@ -323,35 +343,13 @@ fn teams_run_from_every_start_as_the_library_runs_them() {
 /// the start give them (the indoor loop, where `frontier` walks farther to 98 %).
 #[test]
 fn starts_count_the_runs_farther_than_the_reference() {
-    use scale::exploration::{GREEDY_REFERENCE, explore, indoor_maps, starting_at, starts_along_the_reference};
+    use scale::exploration::{GREEDY_REFERENCE, explore};
     let rounds = 20_000;
-    let out = bench(&[
-        "--rounds",
-        "20000",
-        "exploration",
-        "--only",
-        "indoor loop",
-        "--teams",
-        "0",
-        "--starts",
-        "1",
-    ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8_lossy(&out.stdout);
-    let line = text
-        .lines()
-        .find(|l| l.starts_with("mean over every start"))
-        .unwrap_or_else(|| panic!("no means in {text}"));
-    let (_, map) = indoor_maps()
-        .unwrap()
-        .into_iter()
-        .find(|(name, _)| name == "indoor loop")
-        .unwrap();
-    let start = starts_along_the_reference(&map, 1, rounds).unwrap()[0];
+    let (line, maps) = loop_from_every_start(rounds, "0", "mean over every start");
     let (mut at90, mut at98) = (Vec::new(), Vec::new());
-    for m in [map.clone(), starting_at(&map, start)] {
-        let built_in = explore(&m, "frontier", 1, rounds).unwrap();
-        let reference = explore(&m, GREEDY_REFERENCE, 1, rounds).unwrap();
+    for m in &maps {
+        let built_in = explore(m, "frontier", 1, rounds).unwrap();
+        let reference = explore(m, GREEDY_REFERENCE, 1, rounds).unwrap();
         at90.push(built_in.at_90.unwrap().1 / reference.at_90.unwrap().1);
         at98.push(built_in.at_98.unwrap().1 / reference.at_98.unwrap().1);
     }
@@ -363,5 +361,5 @@ fn starts_count_the_runs_farther_than_the_reference() {
         farther(&at90),
         farther(&at98)
     );
-    assert_eq!(line, expected, "{text}");
+    assert_eq!(line, expected);
 }
