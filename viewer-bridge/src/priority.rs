@@ -13,14 +13,15 @@ pub const LOGGING_PRIORITY_VAR: &str = "SMARTTEAMS_LOGGING_PRIORITY";
 /// Whether the logging threads run at the lowest priority ([`LOGGING_PRIORITY_VAR`] unset or
 /// `idle`) or at normal priority (`normal`); an error names the variable and its values.
 pub fn logging_priority() -> Result<LoggingPriority, String> {
-    match std::env::var(LOGGING_PRIORITY_VAR) {
-        Err(std::env::VarError::NotPresent) => Ok(LoggingPriority::Idle),
-        Ok(v) if v.eq_ignore_ascii_case("idle") => Ok(LoggingPriority::Idle),
-        Ok(v) if v.eq_ignore_ascii_case("normal") => Ok(LoggingPriority::Normal),
-        Ok(v) => Err(format!("{LOGGING_PRIORITY_VAR}={v}: expected `idle` or `normal`")),
-        Err(std::env::VarError::NotUnicode(v)) => Err(format!(
+    let Some(value) = std::env::var_os(LOGGING_PRIORITY_VAR) else {
+        return Ok(LoggingPriority::Idle);
+    };
+    match value.to_str() {
+        Some(v) if v.eq_ignore_ascii_case("idle") => Ok(LoggingPriority::Idle),
+        Some(v) if v.eq_ignore_ascii_case("normal") => Ok(LoggingPriority::Normal),
+        _ => Err(format!(
             "{LOGGING_PRIORITY_VAR}={}: expected `idle` or `normal`",
-            v.to_string_lossy()
+            value.to_string_lossy()
         )),
     }
 }

@@ -371,7 +371,6 @@ impl RerunObserver {
             Err(crossbeam_channel::TrySendError::Full(f)) => f,
             Err(crossbeam_channel::TrySendError::Disconnected(_)) => return self.logging_thread_stopped(),
         };
-        let tx = tx.clone();
         let wait = LoggingWait::begin();
         loop {
             match tx.send_timeout(frame, STARVED_AFTER) {
