@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use sim_core::agent::StrategyRegistry;
 use sim_core::engine::TurnSharing;
-use sim_core::io::{Checkpoint, RunSource, SimConfig};
+use sim_core::io::{Checkpoint, RunOutputs, RunSource, SimConfig};
 
 use crate::rerun_observer::LogOptions;
 use crate::run::{CheckpointPlan, RunConfig, execute};
@@ -147,6 +147,57 @@ impl ViewerArgs {
             Some(ViewerTarget::Rrd(self.rrd.clone().unwrap_or(default_rrd)))
         })
     }
+
+    /// Whether no viewer option was given.
+    fn is_unset(&self) -> bool {
+        self.rrd.is_none() && self.connect.is_none() && self.spawn.is_none() && !self.no_viewer
+    }
+
+    /// The options a resume takes when given none, for a run whose checkpoint names its
+    /// recording `words` ([`recording_words`]): no recording, the same viewer, or a file
+    /// beside the run's (`x.rrd` → `x-from-<round>.rrd`; a resumed run's `x-from-300.rrd` →
+    /// `x-from-<round>.rrd`). `None` for words [`recording_words`] does not write.
+    fn resuming(words: &str, round: u64) -> Option<Self> {
+        let mut args = Self::default();
+        if words == "none" {
+            args.no_viewer = true;
+            return Some(args);
+        }
+        let (kind, value) = words.split_once(':')?;
+        match kind {
+            "connect" => args.connect = Some(value.to_owned()),
+            "spawn" => args.spawn = Some(value.parse().ok()?),
+            "rrd" => {
+                let path = PathBuf::from(value);
+                let stem = path
+                    .file_stem()
+                    .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+                let first = match stem.rsplit_once("-from-") {
+                    Some((first, r)) if !r.is_empty() && r.bytes().all(|b| b.is_ascii_digit()) => first,
+                    _ => &stem,
+                };
+                args.rrd = Some(path.with_file_name(format!("{first}-from-{round}.rrd")));
+            }
+            _ => return None,
+        }
+        Some(args)
+    }
+}
+
+/// How a checkpoint names a run's recording ([`RunOutputs::recording`]): `none`,
+/// `rrd:PATH` (absolute), `connect:URL` or `spawn:PORT`.
+fn recording_words(target: Option<&ViewerTarget>) -> String {
+    match target {
+        None => "none".to_owned(),
+        Some(ViewerTarget::Rrd(path)) => format!("rrd:{}", absolute(path).display()),
+        Some(ViewerTarget::Connect(url)) => format!("connect:{url}"),
+        Some(ViewerTarget::Spawn { port }) => format!("spawn:{port}"),
+    }
+}
+
+/// `path` made absolute against the working directory (as it is, if that cannot be read).
+fn absolute(path: &std::path::Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 /// Arguments of `smartteams view`.
@@ -197,9 +248,11 @@ pub struct ResumeArgs {
     /// that wrote it).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
     pub checkpoint_every: Option<u64>,
-    /// Outputs, viewer and threads, as for `run`. The metrics CSV holds every round, those
-    /// before the checkpoint included; a recording starts at the checkpoint's round (by
-    /// default `<run name>-from-<round>.rrd`).
+    /// Outputs, viewer and threads, as for `run`; outputs not given are those of the run
+    /// that wrote the checkpoint (the same CSV files, the same viewer or none, and a file
+    /// beside its recording, `<its name>-from-<round>.rrd`). The metrics CSV holds every
+    /// round, those before the checkpoint included; a recording starts at the checkpoint's
+    /// round.
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -260,6 +313,14 @@ impl OutputArgs {
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
         let viewer = self.viewer.target(default_rrd)?;
+        let checkpoint = checkpoint.map(|mut plan| {
+            plan.source.outputs = RunOutputs {
+                metrics: metrics.as_deref().map(absolute),
+                robot_stats: robot_stats.as_deref().map(absolute),
+                recording: Some(recording_words(viewer.as_ref())),
+            };
+            plan
+        });
         Ok(RunConfig {
             config,
             threads: self.threads,
@@ -313,9 +374,21 @@ impl RunArgs {
 }
 
 impl ResumeArgs {
-    /// Read and check the checkpoint, and resolve the run that continues it.
-    pub fn resolve(self) -> Result<RunConfig> {
+    /// Read and check the checkpoint, and resolve the run that continues it. Outputs not
+    /// given write what the checkpoint's run wrote ([`RunOutputs`]).
+    pub fn resolve(mut self) -> Result<RunConfig> {
         let checkpoint = Checkpoint::read(&self.checkpoint)?;
+        let outputs = &checkpoint.source().outputs;
+        self.output.metrics = self.output.metrics.or_else(|| outputs.metrics.clone());
+        self.output.robot_stats = self.output.robot_stats.or_else(|| outputs.robot_stats.clone());
+        if self.output.viewer.is_unset()
+            && let Some(viewer) = outputs
+                .recording
+                .as_deref()
+                .and_then(|words| ViewerArgs::resuming(words, checkpoint.round()))
+        {
+            self.output.viewer = viewer;
+        }
         let config = checkpoint
             .source()
             .config()
@@ -455,4 +528,33 @@ fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, wha
     Ok(summary
         .interrupted
         .map_or(ExitCode::SUCCESS, |s| ExitCode::from(s.exit_status())))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A resume records where its run did: the same viewer, none, or a file beside the
+    /// run's, numbered by the round it starts at; words no run writes are not read.
+    #[test]
+    fn a_resume_records_where_its_run_did() {
+        let resuming = |target: Option<ViewerTarget>, round| {
+            let args = ViewerArgs::resuming(&recording_words(target.as_ref()), round).unwrap();
+            args.target(PathBuf::from("default.rrd")).unwrap()
+        };
+        let rrd = |path: &str| Some(ViewerTarget::Rrd(PathBuf::from(path)));
+        assert_eq!(resuming(None, 150), None);
+        assert_eq!(resuming(rrd("/runs/x.rrd"), 150), rrd("/runs/x-from-150.rrd"));
+        assert_eq!(resuming(rrd("/runs/x-from-150.rrd"), 300), rrd("/runs/x-from-300.rrd"));
+        assert_eq!(
+            resuming(rrd("/runs/x-from-.rrd"), 300),
+            rrd("/runs/x-from--from-300.rrd")
+        );
+        let live = Some(ViewerTarget::Connect("rerun+http://10.0.0.2:9000/proxy".to_owned()));
+        assert_eq!(resuming(live.clone(), 150), live);
+        let spawned = Some(ViewerTarget::Spawn { port: 9877 });
+        assert_eq!(resuming(spawned.clone(), 150), spawned);
+        assert!(ViewerArgs::resuming("tape:/dev/st0", 150).is_none());
+        assert!(ViewerArgs::resuming("spawn:port", 150).is_none());
+    }
 }

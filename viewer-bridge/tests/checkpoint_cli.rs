@@ -44,21 +44,16 @@ fn read(dir: &Path, name: &str) -> Vec<u8> {
     std::fs::read(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
-#[test]
-fn a_killed_run_resumes_to_the_same_bytes() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    let config = workspace().join("configs/demo.xml");
-    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
-
-    // The same run, killed (SIGKILL, no clean-up) once it has written a checkpoint.
+/// Run `smartteams ARGS` in `dir` and kill it (SIGKILL, no clean-up) once it has written
+/// `checkpoint`, before the end; the checkpoint's round.
+fn killed_after_a_checkpoint(dir: &Path, args: &[String], checkpoint: &str) -> u64 {
     let mut child = Command::new(env!("CARGO_BIN_EXE_smartteams"))
-        .args(run_args(&config, "cut", "600"))
-        .current_dir(d)
+        .args(args)
+        .current_dir(dir)
         .spawn()
         .unwrap();
     let started = Instant::now();
-    while !d.join("cut.ckpt").exists() {
+    while !dir.join(checkpoint).exists() {
         assert!(started.elapsed() < Duration::from_mins(2), "no checkpoint written");
         assert!(
             child.try_wait().unwrap().is_none(),
@@ -68,9 +63,20 @@ fn a_killed_run_resumes_to_the_same_bytes() {
     }
     child.kill().unwrap();
     child.wait().unwrap();
-    let checkpoint = sim_core::io::Checkpoint::read(&d.join("cut.ckpt")).unwrap();
-    let at = checkpoint.round();
+    let at = sim_core::io::Checkpoint::read(&dir.join(checkpoint)).unwrap().round();
     assert!(at > 0 && at < 600 && at.is_multiple_of(25), "checkpoint at round {at}");
+    at
+}
+
+#[test]
+fn a_killed_run_resumes_to_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let config = workspace().join("configs/demo.xml");
+    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
+
+    // The same run, killed (SIGKILL, no clean-up) once it has written a checkpoint.
+    killed_after_a_checkpoint(d, &run_args(&config, "cut", "600"), "cut.ckpt");
     // The killed run's metrics stop short of the end.
     let cut = String::from_utf8(read(d, "cut.csv")).unwrap_or_default();
     assert!(cut.lines().count() < 601, "the killed run wrote every round");
@@ -95,9 +101,54 @@ fn a_killed_run_resumes_to_the_same_bytes() {
         read(d, "whole-robots.csv"),
         "robot stats differ"
     );
-    // Both wrote a last checkpoint at round 600: the whole final state, the same bytes.
-    assert_eq!(read(d, "cut.ckpt"), read(d, "whole.ckpt"), "final state differs");
+    // Both wrote a last checkpoint at round 600: the whole final state, the same bytes (the
+    // headers name each run's own output files).
+    let last = |name: &str| sim_core::io::Checkpoint::read(&d.join(name)).unwrap();
+    let (cut, whole) = (last("cut.ckpt"), last("whole.ckpt"));
+    assert_eq!((cut.round(), cut.metrics()), (600, whole.metrics()));
+    assert!(cut.state() == whole.state(), "final state differs");
     assert!(!d.join("cut.ckpt.tmp").exists());
+}
+
+/// `resume FILE` alone, typed in another folder, writes what the run wrote: the same CSV
+/// files, whole, and no recording after `--no-viewer`; a recorded run's resume records
+/// beside it.
+#[test]
+fn a_resume_told_nothing_writes_what_its_run_wrote() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let config = workspace().join("configs/demo.xml");
+    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
+    killed_after_a_checkpoint(d, &run_args(&config, "cut", "600"), "cut.ckpt");
+    std::fs::create_dir(d.join("elsewhere")).unwrap();
+    let out = ok(&smartteams(&d.join("elsewhere"), &["resume", "../cut.ckpt"]));
+    assert!(out.contains("600 rounds"), "{out}");
+    assert_eq!(read(d, "cut.csv"), read(d, "whole.csv"), "metrics CSV differs");
+    assert_eq!(
+        read(d, "cut-robots.csv"),
+        read(d, "whole-robots.csv"),
+        "robot stats differ"
+    );
+    assert_eq!(
+        std::fs::read_dir(d.join("elsewhere")).unwrap().count(),
+        0,
+        "the resume wrote a file here"
+    );
+    assert!(!out.contains("recording"), "{out}");
+
+    let mut recorded = run_args(&config, "rec", "600");
+    let no_viewer = recorded.iter().position(|a| a == "--no-viewer").unwrap();
+    recorded[no_viewer] = "--rrd=recordings/first.rrd".to_owned();
+    std::fs::create_dir(d.join("recordings")).unwrap();
+    let at = killed_after_a_checkpoint(d, &recorded, "rec.ckpt");
+    ok(&smartteams(&d.join("elsewhere"), &["resume", "../rec.ckpt", "--quiet"]));
+    let continued = d.join(format!("recordings/first-from-{at}.rrd"));
+    assert!(
+        continued.metadata().is_ok_and(|m| m.len() > 0),
+        "no {}",
+        continued.display()
+    );
+    assert_eq!(read(d, "rec.csv"), read(d, "whole.csv"), "metrics CSV differs");
 }
 
 #[test]

@@ -3,8 +3,9 @@
 //! and the same complete metrics CSV as a run that was never stopped.
 //!
 //! A checkpoint holds how the run was set up (the config text as parsed, the `--map`,
-//! `--seed` and `--rounds` overrides, and a CRC-32 of the map file, which must be unchanged
-//! on resume), the metrics rows so far, and the simulation's state
+//! `--seed` and `--rounds` overrides, a CRC-32 of the map file, which must be unchanged
+//! on resume, and the files the run writes), the metrics rows so far, and the simulation's
+//! state
 //! ([`Simulation::write_state`]). The file:
 //!
 //! | bytes | what |
@@ -57,6 +58,23 @@ pub struct RunSource {
     pub rounds: u64,
     /// CRC-32 of the map file (of its content, before its own checksum).
     pub map_crc32: u32,
+    /// What the run writes besides its checkpoints, so that a resume writes the same
+    /// without being told again (empty for a run that did not say).
+    #[serde(default)]
+    pub outputs: RunOutputs,
+}
+
+/// What a run writes besides its checkpoints, as the command that started it asked. Paths
+/// are absolute, so that a resume from another folder writes to the same files.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunOutputs {
+    /// The per-round metrics CSV.
+    pub metrics: Option<PathBuf>,
+    /// The per-robot statistics CSV.
+    pub robot_stats: Option<PathBuf>,
+    /// Where the recording goes, in the words of the front end that started the run (the
+    /// simulation does not record); `None`: it did not say.
+    pub recording: Option<String>,
 }
 
 impl RunSource {
@@ -69,6 +87,7 @@ impl RunSource {
             seed: config.seed,
             rounds: config.rounds,
             map_crc32: map_crc32(config.map_path())?,
+            outputs: RunOutputs::default(),
         })
     }
 
@@ -210,6 +229,11 @@ impl Checkpoint {
     /// The metrics of every round played so far, in order.
     pub fn metrics(&self) -> &[RoundMetrics] {
         &self.header.metrics
+    }
+    /// The simulation's state as written (CBOR, see [`Simulation::write_state`]): two runs
+    /// that reached the same state hold the same bytes.
+    pub fn state(&self) -> &[u8] {
+        &self.state
     }
 
     /// Set the run up again from `config` (normally [`RunSource::config`]) and continue it

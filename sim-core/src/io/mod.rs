@@ -10,7 +10,7 @@ mod invariants;
 mod observer;
 pub mod sweep;
 
-pub use checkpoint::{CHECKPOINT_FORMAT, Checkpoint, CheckpointWriter, RunSource, write_checkpoint};
+pub use checkpoint::{CHECKPOINT_FORMAT, Checkpoint, CheckpointWriter, RunOutputs, RunSource, write_checkpoint};
 pub use config::{GroupConfig, Outputs, SimConfig};
 pub use csv::{MetricsCsv, ROBOT_STATS_COLUMNS, write_robot_stats};
 pub use invariants::InvariantChecker;
