@@ -6,7 +6,7 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A parameter that makes no sense (negative radius, zero-sized map, unknown strategy, …).
-    #[error("invalid parameter: {0}")]
+    #[error("{0}")]
     InvalidParameter(String),
     /// A problem caused by one group of robots of a scenario (its index lets a config point
     /// at the element that declared it).
