@@ -195,6 +195,25 @@ fn recording_words(target: Option<&ViewerTarget>) -> String {
     }
 }
 
+/// `path`, a file the run of `checkpoint` wrote (its `what`), if its folder still exists;
+/// else an error saying so and that `flag` writes elsewhere.
+fn still_writable(
+    path: Option<PathBuf>,
+    checkpoint: &std::path::Path,
+    what: &str,
+    flag: &str,
+) -> Result<Option<PathBuf>> {
+    match path.as_deref().and_then(std::path::Path::parent) {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => bail!(
+            "the run of checkpoint {} wrote its {what} to {}, but the folder {} no longer exists: {flag} writes elsewhere",
+            checkpoint.display(),
+            path.as_deref().unwrap_or(dir).display(),
+            dir.display()
+        ),
+        _ => Ok(path),
+    }
+}
+
 /// `path` made absolute against the working directory (as it is, if that cannot be read).
 fn absolute(path: &std::path::Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
@@ -379,15 +398,36 @@ impl ResumeArgs {
     pub fn resolve(mut self) -> Result<RunConfig> {
         let checkpoint = Checkpoint::read(&self.checkpoint)?;
         let outputs = &checkpoint.source().outputs;
-        self.output.metrics = self.output.metrics.or_else(|| outputs.metrics.clone());
-        self.output.robot_stats = self.output.robot_stats.or_else(|| outputs.robot_stats.clone());
+        let stored = |given: Option<PathBuf>, path: &Option<PathBuf>, what: &str, flag: &str| match given {
+            Some(p) => Ok(Some(p)),
+            None => still_writable(path.clone(), &self.checkpoint, what, flag),
+        };
+        self.output.metrics = stored(
+            self.output.metrics.take(),
+            &outputs.metrics,
+            "metrics",
+            "--metrics FILE",
+        )?;
+        let robot_stats = stored(
+            self.output.robot_stats.take(),
+            &outputs.robot_stats,
+            "robot statistics",
+            "--robot-stats FILE",
+        )?;
+        self.output.robot_stats = robot_stats;
         if self.output.viewer.is_unset()
             && let Some(viewer) = outputs
                 .recording
                 .as_deref()
                 .and_then(|words| ViewerArgs::resuming(words, checkpoint.round()))
         {
-            self.output.viewer = viewer;
+            let rrd = still_writable(
+                viewer.rrd.clone(),
+                &self.checkpoint,
+                "recording",
+                "--rrd FILE or --no-viewer",
+            )?;
+            self.output.viewer = ViewerArgs { rrd, ..viewer };
         }
         let config = checkpoint
             .source()

@@ -112,7 +112,7 @@ fn a_killed_run_resumes_to_the_same_bytes() {
 
 /// `resume FILE` alone, typed in another folder, writes what the run wrote: the same CSV
 /// files, whole, and no recording after `--no-viewer`; a recorded run's resume records
-/// beside it.
+/// beside it, or says the folder is gone.
 #[test]
 fn a_resume_told_nothing_writes_what_its_run_wrote() {
     let dir = tempfile::tempdir().unwrap();
@@ -149,6 +149,16 @@ fn a_resume_told_nothing_writes_what_its_run_wrote() {
         continued.display()
     );
     assert_eq!(read(d, "rec.csv"), read(d, "whole.csv"), "metrics CSV differs");
+
+    // The recording's folder is gone: the resume says so, and how to write elsewhere.
+    std::fs::rename(d.join("recordings"), d.join("moved")).unwrap();
+    let e = err(&smartteams(d, &["resume", "rec.ckpt", "--quiet"]));
+    assert!(
+        e.contains("wrote its recording to")
+            && e.contains("no longer exists: --rrd FILE or --no-viewer writes elsewhere"),
+        "{e}"
+    );
+    ok(&smartteams(d, &["resume", "rec.ckpt", "--quiet", "--no-viewer"]));
 }
 
 #[test]
