@@ -195,6 +195,20 @@ fn recording_words(target: Option<&ViewerTarget>) -> String {
     }
 }
 
+/// How a checkpoint records what a recording holds ([`RunOutputs::logging`]): the options
+/// as typed, `log-every=K explored-every=K known-every=K max-links=N known-per-robot-max=N`
+/// (`known-every=0`: none).
+fn logging_words(log: &LogOptions) -> String {
+    format!(
+        "log-every={} explored-every={} known-every={} max-links={} known-per-robot-max={}",
+        log.log_every,
+        log.explored_every,
+        log.known_every.unwrap_or(0),
+        log.max_links,
+        log.known_per_robot_max
+    )
+}
+
 /// `path`, a file the run of `checkpoint` wrote (its `what`), if its folder still exists;
 /// else an error saying so and that `flag` writes elsewhere.
 fn still_writable(
@@ -268,8 +282,8 @@ pub struct ResumeArgs {
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
     pub checkpoint_every: Option<u64>,
     /// Outputs, viewer and threads, as for `run`; outputs not given are those of the run
-    /// that wrote the checkpoint (the same CSV files, the same viewer or none, and a file
-    /// beside its recording, `<its name>-from-<round>.rrd`). The metrics CSV holds every
+    /// that wrote the checkpoint (the same CSV files, the same viewer or none, a file beside
+    /// its recording, `<its name>-from-<round>.rrd`, and the same logging options). The metrics CSV holds every
     /// round, those before the checkpoint included; a recording starts at the checkpoint's
     /// round.
     #[command(flatten)]
@@ -304,27 +318,46 @@ pub struct OutputArgs {
     #[command(flatten)]
     pub viewer: ViewerArgs,
     /// Log the world (robots, treasures, links, …) every K rounds only; metrics and events
-    /// are logged every round, and the last round played always (a stopped run's too).
-    #[arg(long, value_name = "K", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
-    pub log_every: u64,
+    /// are logged every round, and the last round played always (a stopped run's too)
+    /// [default: 1].
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+    pub log_every: Option<u64>,
     /// Log each robot's known region (coarse, only robots whose map changed) every K rounds;
-    /// 0 turns it off.
-    #[arg(long, value_name = "K", default_value_t = 20)]
-    pub known_every: u64,
+    /// 0 turns it off [default: 20].
+    #[arg(long, value_name = "K")]
+    pub known_every: Option<u64>,
     /// Swarms of at most N robots get one known-region entity per robot; larger ones one per
-    /// robot type (each box carrying its robot's id).
-    #[arg(long, value_name = "N", default_value_t = crate::rerun_observer::DEFAULT_KNOWN_PER_ROBOT_MAX)]
-    pub known_per_robot_max: usize,
-    /// Re-log the collective explored region every K rounds.
-    #[arg(long, value_name = "K", default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
-    pub explored_every: u64,
+    /// robot type (each box carrying its robot's id) [default: 100].
+    #[arg(long, value_name = "N")]
+    pub known_per_robot_max: Option<usize>,
+    /// Re-log the collective explored region every K rounds [default: 10].
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u64).range(1..))]
+    pub explored_every: Option<u64>,
     /// Draw at most N communication links a round (an even sample of the round's distinct
-    /// sender–receiver pairs; the messages chart keeps the full count); 0 draws none.
-    #[arg(long, value_name = "N", default_value_t = crate::rerun_observer::DEFAULT_MAX_LINKS)]
-    pub max_links: usize,
+    /// sender–receiver pairs; the messages chart keeps the full count); 0 draws none
+    /// [default: 5000].
+    #[arg(long, value_name = "N")]
+    pub max_links: Option<usize>,
 }
 
 impl OutputArgs {
+    /// Take the logging options not given from `words` ([`logging_words`]; words it does
+    /// not write are passed over).
+    fn log_as(&mut self, words: &str) {
+        for (key, value) in words.split_whitespace().filter_map(|w| w.split_once('=')) {
+            let Ok(n) = value.parse::<u64>() else { continue };
+            let count = usize::try_from(n).ok();
+            match key {
+                "log-every" => _ = self.log_every.get_or_insert(n.max(1)),
+                "explored-every" => _ = self.explored_every.get_or_insert(n.max(1)),
+                "known-every" => _ = self.known_every.get_or_insert(n),
+                "max-links" => self.max_links = self.max_links.or(count),
+                "known-per-robot-max" => self.known_per_robot_max = self.known_per_robot_max.or(count),
+                _ => {}
+            }
+        }
+    }
+
     /// The validated run settings for `config`; `default_rrd` names the recording when no
     /// viewer option is given.
     fn resolve(self, config: SimConfig, default_rrd: PathBuf, checkpoint: Option<CheckpointPlan>) -> Result<RunConfig> {
@@ -332,11 +365,20 @@ impl OutputArgs {
         let metrics = self.metrics.or_else(|| config.outputs.metrics.clone());
         let robot_stats = self.robot_stats.or_else(|| config.outputs.robot_stats.clone());
         let viewer = self.viewer.target(default_rrd)?;
+        let d = LogOptions::default();
+        let log = LogOptions {
+            log_every: self.log_every.unwrap_or(d.log_every).max(1),
+            explored_every: self.explored_every.unwrap_or(d.explored_every).max(1),
+            known_every: self.known_every.map_or(d.known_every, |k| (k > 0).then_some(k)),
+            max_links: self.max_links.unwrap_or(d.max_links),
+            known_per_robot_max: self.known_per_robot_max.unwrap_or(d.known_per_robot_max),
+        };
         let checkpoint = checkpoint.map(|mut plan| {
             plan.source.outputs = RunOutputs {
                 metrics: metrics.as_deref().map(absolute),
                 robot_stats: robot_stats.as_deref().map(absolute),
                 recording: Some(recording_words(viewer.as_ref())),
+                logging: Some(logging_words(&log)),
             };
             plan
         });
@@ -348,13 +390,7 @@ impl OutputArgs {
             metrics,
             robot_stats,
             viewer,
-            log: LogOptions {
-                log_every: self.log_every.max(1),
-                explored_every: self.explored_every.max(1),
-                known_every: (self.known_every > 0).then_some(self.known_every),
-                max_links: self.max_links,
-                known_per_robot_max: self.known_per_robot_max,
-            },
+            log,
             progress: !self.quiet && std::io::stderr().is_terminal(),
             checkpoint,
         })
@@ -415,6 +451,9 @@ impl ResumeArgs {
             "--robot-stats FILE",
         )?;
         self.output.robot_stats = robot_stats;
+        if let Some(words) = &outputs.logging {
+            self.output.log_as(words);
+        }
         if self.output.viewer.is_unset()
             && let Some(viewer) = outputs
                 .recording
@@ -596,5 +635,52 @@ mod tests {
         assert_eq!(resuming(spawned.clone(), 150), spawned);
         assert!(ViewerArgs::resuming("tape:/dev/st0", 150).is_none());
         assert!(ViewerArgs::resuming("spawn:port", 150).is_none());
+    }
+
+    /// The logging options a checkpoint keeps come back, unless given again; the defaults
+    /// the help states are those of [`LogOptions::default`].
+    #[test]
+    fn a_resume_logs_as_its_run_did() {
+        let log = LogOptions {
+            log_every: 7,
+            explored_every: 30,
+            known_every: None,
+            max_links: 0,
+            known_per_robot_max: 12,
+        };
+        let config =
+            || SimConfig::parse(include_str!("../../configs/demo.xml"), std::path::Path::new("demo.xml")).unwrap();
+        let resolved = |args: OutputArgs| args.resolve(config(), PathBuf::from("x.rrd"), None).unwrap().log;
+        let mut args = OutputArgs::default();
+        args.log_as(&logging_words(&log));
+        assert_eq!(resolved(args), log);
+        let mut args = OutputArgs {
+            log_every: Some(3),
+            ..OutputArgs::default()
+        };
+        args.log_as(&logging_words(&log));
+        assert_eq!(resolved(args), LogOptions { log_every: 3, ..log });
+        assert_eq!(resolved(OutputArgs::default()), LogOptions::default());
+
+        let help = <Cli as clap::CommandFactory>::command()
+            .find_subcommand_mut("run")
+            .unwrap()
+            .render_long_help()
+            .to_string();
+        let d = LogOptions::default();
+        for (flag, default) in [
+            ("--log-every", d.log_every.to_string()),
+            ("--known-every", d.known_every.unwrap_or(0).to_string()),
+            ("--known-per-robot-max", d.known_per_robot_max.to_string()),
+            ("--explored-every", d.explored_every.to_string()),
+            ("--max-links", d.max_links.to_string()),
+        ] {
+            let text = help
+                .split(flag)
+                .nth(1)
+                .and_then(|t| t.split("\n\n").next())
+                .unwrap_or_default();
+            assert!(text.contains(&format!("[default: {default}]")), "{flag}: {text}");
+        }
     }
 }

@@ -139,14 +139,25 @@ fn a_resume_told_nothing_writes_what_its_run_wrote() {
     let mut recorded = run_args(&config, "rec", "600");
     let no_viewer = recorded.iter().position(|a| a == "--no-viewer").unwrap();
     recorded[no_viewer] = "--rrd=recordings/first.rrd".to_owned();
+    recorded.push("--log-every=7".to_owned());
     std::fs::create_dir(d.join("recordings")).unwrap();
     let at = killed_after_a_checkpoint(d, &recorded, "rec.ckpt");
-    ok(&smartteams(&d.join("elsewhere"), &["resume", "../rec.ckpt", "--quiet"]));
+    let out = ok(&smartteams(&d.join("elsewhere"), &["resume", "../rec.ckpt"]));
     let continued = d.join(format!("recordings/first-from-{at}.rrd"));
     assert!(
         continued.metadata().is_ok_and(|m| m.len() > 0),
         "no {}",
         continued.display()
+    );
+    // Every 7th round of the rest, its first and its last: as the run logged.
+    let logged: u64 = out
+        .split_once(" rounds of world state")
+        .and_then(|(before, _)| before.rsplit('(').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no count of logged rounds: {out}"));
+    assert!(
+        logged <= (600 - at) / 7 + 2,
+        "{logged} rounds logged of {}: {out}",
+        600 - at
     );
     assert_eq!(read(d, "rec.csv"), read(d, "whole.csv"), "metrics CSV differs");
 

@@ -75,6 +75,9 @@ pub struct RunOutputs {
     /// Where the recording goes, in the words of the front end that started the run (the
     /// simulation does not record); `None`: it did not say.
     pub recording: Option<String>,
+    /// How much the recording holds, in the same front end's words; `None`: it did not say.
+    #[serde(default)]
+    pub logging: Option<String>,
 }
 
 impl RunSource {
