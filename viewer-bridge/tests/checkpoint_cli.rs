@@ -68,15 +68,32 @@ fn killed_after_a_checkpoint(dir: &Path, args: &[String], checkpoint: &str) -> u
     at
 }
 
+/// In `dir`, the demo run whole (outputs `whole*`), then killed once it has written a
+/// checkpoint (outputs `cut*`).
+fn whole_and_killed_runs(dir: &Path) {
+    let config = workspace().join("configs/demo.xml");
+    ok(&smartteams(dir, &strs(&run_args(&config, "whole", "600"))));
+    killed_after_a_checkpoint(dir, &run_args(&config, "cut", "600"), "cut.ckpt");
+}
+
+/// The resume of `cut.ckpt` in `dir`, whose summary is `out`, ended where the whole run
+/// did, with the same CSV files, byte for byte.
+fn assert_resumed_as_whole(dir: &Path, out: &str) {
+    assert!(out.contains("600 rounds"), "{out}");
+    assert_eq!(read(dir, "cut.csv"), read(dir, "whole.csv"), "metrics CSV differs");
+    assert_eq!(
+        read(dir, "cut-robots.csv"),
+        read(dir, "whole-robots.csv"),
+        "robot stats differ"
+    );
+}
+
 #[test]
 fn a_killed_run_resumes_to_the_same_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let config = workspace().join("configs/demo.xml");
-    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
-
-    // The same run, killed (SIGKILL, no clean-up) once it has written a checkpoint.
-    killed_after_a_checkpoint(d, &run_args(&config, "cut", "600"), "cut.ckpt");
+    // The demo, and the same run killed (SIGKILL, no clean-up) after a checkpoint.
+    whole_and_killed_runs(d);
     // The killed run's metrics stop short of the end.
     let cut = String::from_utf8(read(d, "cut.csv")).unwrap_or_default();
     assert!(cut.lines().count() < 601, "the killed run wrote every round");
@@ -94,13 +111,7 @@ fn a_killed_run_resumes_to_the_same_bytes() {
             "cut-robots.csv",
         ],
     ));
-    assert!(out.contains("600 rounds"), "{out}");
-    assert_eq!(read(d, "cut.csv"), read(d, "whole.csv"), "metrics CSV differs");
-    assert_eq!(
-        read(d, "cut-robots.csv"),
-        read(d, "whole-robots.csv"),
-        "robot stats differ"
-    );
+    assert_resumed_as_whole(d, &out);
     // Both wrote a last checkpoint at round 600: the whole final state, the same bytes (the
     // headers name each run's own output files).
     let last = |name: &str| sim_core::io::Checkpoint::read(&d.join(name)).unwrap();
@@ -117,18 +128,10 @@ fn a_killed_run_resumes_to_the_same_bytes() {
 fn a_resume_told_nothing_writes_what_its_run_wrote() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let config = workspace().join("configs/demo.xml");
-    ok(&smartteams(d, &strs(&run_args(&config, "whole", "600"))));
-    killed_after_a_checkpoint(d, &run_args(&config, "cut", "600"), "cut.ckpt");
+    whole_and_killed_runs(d);
     std::fs::create_dir(d.join("elsewhere")).unwrap();
     let out = ok(&smartteams(&d.join("elsewhere"), &["resume", "../cut.ckpt"]));
-    assert!(out.contains("600 rounds"), "{out}");
-    assert_eq!(read(d, "cut.csv"), read(d, "whole.csv"), "metrics CSV differs");
-    assert_eq!(
-        read(d, "cut-robots.csv"),
-        read(d, "whole-robots.csv"),
-        "robot stats differ"
-    );
+    assert_resumed_as_whole(d, &out);
     assert_eq!(
         std::fs::read_dir(d.join("elsewhere")).unwrap().count(),
         0,
@@ -136,6 +139,7 @@ fn a_resume_told_nothing_writes_what_its_run_wrote() {
     );
     assert!(!out.contains("recording"), "{out}");
 
+    let config = workspace().join("configs/demo.xml");
     let mut recorded = run_args(&config, "rec", "600");
     let no_viewer = recorded.iter().position(|a| a == "--no-viewer").unwrap();
     recorded[no_viewer] = "--rrd=recordings/first.rrd".to_owned();
