@@ -569,12 +569,12 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Run(args) => {
-            let (quiet, what) = (args.output.quiet, format!("running {}", args.config.display()));
-            run_and_report(&args.resolve()?, registry, quiet, &what)
+            let (quiet, file) = (args.output.quiet, args.config.display().to_string());
+            run_and_report(&args.resolve()?, registry, quiet, ("running", &file))
         }
         Command::Resume(args) => {
-            let (quiet, what) = (args.output.quiet, format!("resuming {}", args.checkpoint.display()));
-            run_and_report(&args.resolve()?, registry, quiet, &what)
+            let (quiet, file) = (args.output.quiet, args.checkpoint.display().to_string());
+            run_and_report(&args.resolve()?, registry, quiet, ("resuming", &file))
         }
     }
 }
@@ -598,8 +598,20 @@ fn stopped_sweep(e: &anyhow::Error) -> Option<ExitCode> {
 
 /// Execute a resolved run and print its summary (unless quiet; a run stopped by a signal
 /// always says where it stopped). Its exit status: 0, or 130 / 143 after a stop signal.
-fn run_and_report(run: &RunConfig, registry: &StrategyRegistry, quiet: bool, what: &str) -> Result<ExitCode> {
-    let summary = execute(run, registry, &mut []).with_context(|| what.to_owned())?;
+fn run_and_report(
+    run: &RunConfig,
+    registry: &StrategyRegistry,
+    quiet: bool,
+    (doing, file): (&str, &str),
+) -> Result<ExitCode> {
+    // "running FILE: …", unless the error names the file already (a config's line and column).
+    let summary = execute(run, registry, &mut []).map_err(|e| {
+        if e.to_string().starts_with(&format!("{file}:")) {
+            e
+        } else {
+            e.context(format!("{doing} {file}"))
+        }
+    })?;
     if !quiet || summary.interrupted.is_some() {
         // A closed pipe (`smartteams run … | head -1`) is not an error of the run.
         let _ = writeln!(std::io::stdout(), "{summary}");

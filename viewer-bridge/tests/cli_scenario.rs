@@ -67,6 +67,8 @@ fn team_with_a_huge_timeout_is_refused_with_its_range() {
         err.contains("team.xml:3:3") && err.contains("timeout_rounds") && err.contains("[0, 1000000000]"),
         "{err}"
     );
+    // Found as the run is set up, the error names the file once, with its place.
+    assert_eq!(err.matches("team.xml").count(), 1, "{err}");
 }
 
 /// The largest timeout the range allows: the run works, through the binary, and the team
