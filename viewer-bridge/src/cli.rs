@@ -283,9 +283,9 @@ pub struct ResumeArgs {
     pub checkpoint_every: Option<u64>,
     /// Outputs, viewer and threads, as for `run`; outputs not given are those of the run
     /// that wrote the checkpoint (the same CSV files, the same viewer or none, a file beside
-    /// its recording, `<its name>-from-<round>.rrd`, and the same logging options). The metrics CSV holds every
-    /// round, those before the checkpoint included; a recording starts at the checkpoint's
-    /// round.
+    /// its recording, `<its name>-from-<round>.rrd`, and the same logging options). The
+    /// metrics CSV holds every round, those before the checkpoint included; a recording
+    /// starts at the checkpoint's round.
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -429,45 +429,35 @@ impl RunArgs {
 }
 
 impl ResumeArgs {
+    /// Take the outputs not given from what the run of `checkpoint` wrote ([`RunOutputs`]);
+    /// fails if the folder of such a file is gone.
+    fn outputs_as_its_run(&mut self, checkpoint: &Checkpoint) -> Result<()> {
+        let (stored, file, out) = (&checkpoint.source().outputs, &self.checkpoint, &mut self.output);
+        if out.metrics.is_none() {
+            out.metrics = still_writable(stored.metrics.clone(), file, "metrics", "--metrics FILE")?;
+        }
+        if out.robot_stats.is_none() {
+            let what = "robot statistics";
+            out.robot_stats = still_writable(stored.robot_stats.clone(), file, what, "--robot-stats FILE")?;
+        }
+        if let Some(words) = &stored.logging {
+            out.log_as(words);
+        }
+        let resumed = |words: &str| ViewerArgs::resuming(words, checkpoint.round());
+        if out.viewer.is_unset()
+            && let Some(viewer) = stored.recording.as_deref().and_then(resumed)
+        {
+            let rrd = still_writable(viewer.rrd.clone(), file, "recording", "--rrd FILE or --no-viewer")?;
+            out.viewer = ViewerArgs { rrd, ..viewer };
+        }
+        Ok(())
+    }
+
     /// Read and check the checkpoint, and resolve the run that continues it. Outputs not
     /// given write what the checkpoint's run wrote ([`RunOutputs`]).
     pub fn resolve(mut self) -> Result<RunConfig> {
         let checkpoint = Checkpoint::read(&self.checkpoint)?;
-        let outputs = &checkpoint.source().outputs;
-        let stored = |given: Option<PathBuf>, path: &Option<PathBuf>, what: &str, flag: &str| match given {
-            Some(p) => Ok(Some(p)),
-            None => still_writable(path.clone(), &self.checkpoint, what, flag),
-        };
-        self.output.metrics = stored(
-            self.output.metrics.take(),
-            &outputs.metrics,
-            "metrics",
-            "--metrics FILE",
-        )?;
-        let robot_stats = stored(
-            self.output.robot_stats.take(),
-            &outputs.robot_stats,
-            "robot statistics",
-            "--robot-stats FILE",
-        )?;
-        self.output.robot_stats = robot_stats;
-        if let Some(words) = &outputs.logging {
-            self.output.log_as(words);
-        }
-        if self.output.viewer.is_unset()
-            && let Some(viewer) = outputs
-                .recording
-                .as_deref()
-                .and_then(|words| ViewerArgs::resuming(words, checkpoint.round()))
-        {
-            let rrd = still_writable(
-                viewer.rrd.clone(),
-                &self.checkpoint,
-                "recording",
-                "--rrd FILE or --no-viewer",
-            )?;
-            self.output.viewer = ViewerArgs { rrd, ..viewer };
-        }
+        self.outputs_as_its_run(&checkpoint)?;
         let config = checkpoint
             .source()
             .config()
