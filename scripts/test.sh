@@ -64,6 +64,8 @@ echo "== cargo fmt --check"
 cargo fmt --all -- --check
 echo "== cargo clippy (ci profile, all targets, -D warnings)"
 cargo clippy --profile ci --workspace --all-targets --locked -- -D warnings
+echo "== cargo doc (ci profile, no dependencies, warnings are errors: every link resolves)"
+RUSTDOCFLAGS="-D warnings" cargo doc --profile ci --workspace --no-deps --locked
 echo "== cargo test (ci profile)"
 cargo test --profile ci --workspace --locked
 echo "== Python package: pip install ./python into target/python-venv, then its pytest suite"

@@ -1,13 +1,13 @@
 //! The native module of the `smartteams` Python package: a thin layer over sim-core's public
 //! API (and viewer-bridge's, for recordings), as the `smartteams` binary is.
 //!
-//! - [`simulation`]: `smartteams.Simulation`, a run driven round by round, its state as
+//! - `simulation`: `smartteams.Simulation`, a run driven round by round, its state as
 //!   numpy arrays, checkpoints and recordings;
-//! - [`strategy`]: strategies written in Python (`register_strategy`), the `Robot` they
+//! - `strategy`: strategies written in Python (`register_strategy`), the `Robot` they
 //!   decide for and the actions they return;
-//! - [`env`]: the core of the learning environments of `smartteams/env.py`: robots moved by
+//! - `env`: the core of the learning environments of `smartteams/env.py`: robots moved by
 //!   the caller, observations and rewards in bulk;
-//! - [`grids`]: windows of known maps and obstacles as cell arrays.
+//! - `grids`: windows of known maps and obstacles as cell arrays.
 
 mod env;
 mod grids;

@@ -191,7 +191,7 @@ impl KnownMap {
     /// [`mark_reporting`](Self::mark_reporting) does with them, by one descent along the
     /// square's coordinates (the square must lie inside the map; whole squares that do not
     /// take the general path). Returns the block's known cells after (Z order) for a set of
-    /// some of a block's cells (see [`BlockMemo`](crate::spatial::BlockMemo)).
+    /// some of a block's cells (see `spatial::BlockMemo`).
     pub fn mark_cells_reporting(&mut self, set: CellSet, mut newly_known: impl FnMut(CellSet)) -> Option<u64> {
         let sq = set.square();
         let square = self.grid().square(sq.x, sq.y, sq.level);

@@ -91,8 +91,8 @@ impl Navigator {
     /// The move towards the next waypoint (skipping those already reached). A route's legs
     /// join pieces of free space, and the robot's disc can catch a corner on one or find no
     /// room at a waypoint by a wall; when a wall held the last step back and the straight way
-    /// on is blocked, it heads for the farthest of the next [`LOOK_AHEAD`] waypoints in
-    /// straight reach, else slides along the wall (see [`slide`]).
+    /// on is blocked, it heads for the farthest of the next `LOOK_AHEAD` waypoints in
+    /// straight reach, else slides along the wall (see `slide`).
     pub fn step(&mut self, ctx: &mut Ctx) -> Option<Action> {
         let p = ctx.position();
         let tol = 0.05;
@@ -187,7 +187,7 @@ impl Navigator {
     /// target, in a straight line, than this robot's route; the frontier of lowest rank
     /// wins, the nearest of those. Targets are ranked by the walk to them, as
     /// [`nearest_frontier_route`](Self::nearest_frontier_route) does with no view charged,
-    /// and a target within [`SAME_FRONTIER_M`] of a nearer one counts as the same frontier.
+    /// and a target within `SAME_FRONTIER_M` of a nearer one counts as the same frontier.
     /// A robot so takes a frontier its mates will not reach first, rather than the nearest,
     /// which a mate may be about to explore. Cost: one search settling the pieces nearer
     /// than the `k`-th target, and `k` × mates distances.
