@@ -217,15 +217,17 @@ fn still_writable(
     what: &str,
     flag: &str,
 ) -> Result<Option<PathBuf>> {
-    match path.as_deref().and_then(std::path::Path::parent) {
-        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => bail!(
+    if let Some(file) = path.as_deref()
+        && let Some(dir) = crate::absent_folder(file)
+    {
+        bail!(
             "the run of checkpoint {} wrote its {what} to {}, but the folder {} no longer exists: {flag} writes elsewhere",
             checkpoint.display(),
-            path.as_deref().unwrap_or(dir).display(),
+            file.display(),
             dir.display()
-        ),
-        _ => Ok(path),
+        );
     }
+    Ok(path)
 }
 
 /// `path` made absolute against the working directory (as it is, if that cannot be read).

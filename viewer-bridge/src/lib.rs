@@ -32,10 +32,15 @@ pub mod viewer;
 /// (`None` when it does, or when the path names no folder). Checked before the work that
 /// would write it, and said plainly rather than as the writer's error.
 pub(crate) fn missing_folder(what: &str, path: &std::path::Path) -> Option<String> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir())?;
+    let dir = absent_folder(path)?;
     Some(format!(
         "cannot write the {what} {}: the folder {} does not exist",
         path.display(),
         dir.display()
     ))
+}
+
+/// The folder of `path`, if it names one that does not exist.
+pub(crate) fn absent_folder(path: &std::path::Path) -> Option<&std::path::Path> {
+    path.parent().filter(|d| !d.as_os_str().is_empty() && !d.is_dir())
 }

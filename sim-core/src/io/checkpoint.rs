@@ -76,7 +76,6 @@ pub struct RunOutputs {
     /// simulation does not record); `None`: it did not say.
     pub recording: Option<String>,
     /// How much the recording holds, in the same front end's words; `None`: it did not say.
-    #[serde(default)]
     pub logging: Option<String>,
 }
 
