@@ -340,12 +340,17 @@ pub fn explore_traced(
     max_rounds: u64,
 ) -> Result<(Exploration, Walks)> {
     let mut positions = Vec::new();
+    let mut explored_at_90 = None;
     let (run, sim) = play(map, strategy, params, robots, max_rounds, |sim| {
         positions.push(sim.robots().iter().map(|r| r.position).collect());
+        if explored_at_90.is_none() && sim.report().metrics.explored_90_round > 0 {
+            explored_at_90 = Some(sim.explored().clone());
+        }
     })?;
     let walks = Walks {
         positions,
         explored: sim.explored().clone(),
+        explored_at_90,
     };
     Ok((run, walks))
 }
@@ -388,6 +393,9 @@ pub struct Walks {
     pub positions: Vec<Vec<DVec2>>,
     /// The union of their views at the end.
     pub explored: KnownMap,
+    /// The union of their views when 90 % of the free area was first explored (`None` if
+    /// it never was): what is explored at the end but not here was seen on the way on.
+    pub explored_at_90: Option<KnownMap>,
 }
 
 /// The built-in strategies and [`GREEDY_REFERENCE`].

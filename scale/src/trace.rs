@@ -1,7 +1,8 @@
 //! Pictures of explorers' walks: where each robot went until 90 % of the free area was
-//! explored, where it went from there to 98 %, and what it left unseen. Side by side, they
-//! show why one explorer walks farther than another (pockets left behind, goals that
-//! switch back and forth).
+//! explored, where it went from there to 98 %, what was still unseen at 90 % (and seen on
+//! the way on), and what it left unseen. Side by side, they show why one explorer walks
+//! farther than another (pockets and strips left behind, goals that switch back and
+//! forth).
 //!
 //! ```
 //! use scale::exploration::{GREEDY_REFERENCE, explore_traced, indoor_maps};
@@ -24,6 +25,8 @@ use crate::exploration::{Exploration, Walks};
 pub const BLOCKED: Rgb<u8> = Rgb([0, 0, 0]);
 /// Free cells the run explored.
 pub const EXPLORED: Rgb<u8> = Rgb([232, 232, 232]);
+/// Free cells the run first saw after 90 % of the free area was explored.
+pub const SEEN_FROM_90: Rgb<u8> = Rgb([255, 220, 140]);
 /// Free cells the run left unseen.
 pub const UNSEEN: Rgb<u8> = Rgb([255, 190, 190]);
 /// The walk until 90 % was explored.
@@ -38,8 +41,8 @@ const GAP: Rgb<u8> = Rgb([255, 255, 255]);
 /// Pixels between panels.
 pub const GAP_PX: u32 = 8;
 
-/// The picture of runs on `map`, one panel each, left to right: the map (blocked, explored,
-/// unseen), each robot's walk from one position to the next ([`TO_90`], then [`FROM_90`])
+/// The picture of runs on `map`, one panel each, left to right: the map (blocked, explored
+/// by 90 %, explored after, unseen), each robot's walk from one position to the next ([`TO_90`], then [`FROM_90`])
 /// and its start. A panel is the map at a whole number of pixels a cell, at least 400 px on
 /// its longer side; a map of more than 1,024 cells a side is sampled, 1,024 px at most.
 pub fn picture(map: &MapData, runs: &[(&Exploration, &Walks)]) -> RgbImage {
@@ -102,10 +105,12 @@ impl Frame {
                 let p = self.point(x, y);
                 let colour = if !map.obstacles.is_point_free(p) {
                     BLOCKED
-                } else if walks.explored.is_known(p) {
-                    EXPLORED
-                } else {
+                } else if !walks.explored.is_known(p) {
                     UNSEEN
+                } else if walks.explored_at_90.as_ref().is_some_and(|k| !k.is_known(p)) {
+                    SEEN_FROM_90
+                } else {
+                    EXPLORED
                 };
                 image.put_pixel(left + x, y, colour);
             }
@@ -149,16 +154,20 @@ mod tests {
     use super::*;
 
     /// A 10 m × 5 m map of 0.5 m cells (20 × 10 cells: 20 px a cell, 400 × 200 px) whose
-    /// left half is blocked; the run explored the free cells of x 5–7.5 m and walked from
-    /// (5.25, 2.5) to (7.25, 2.5) in two rounds, reaching 90 % after the first.
+    /// left half is blocked; the run explored the free cells of x 5–6.5 m by the end of its
+    /// first round, when 90 % was reached, and of x 5–7.5 m by the end, walking from
+    /// (5.25, 2.5) to (7.25, 2.5) in two rounds.
     fn half_blocked() -> (MapData, Exploration, Walks) {
         let grid = Grid::new(DVec2::ZERO, 0.5, 20, 10).unwrap();
         let obstacles = ObstacleMap::from_fn(grid, |x, _| x < 10);
-        let mut explored = KnownMap::new(grid);
-        explored.mark(&sim_core::spatial::Aabb::from_corners(
-            DVec2::new(5.0, 0.0),
-            DVec2::new(7.5, 5.0),
-        ));
+        let known_to = |x_m| {
+            let mut known = KnownMap::new(grid);
+            known.mark(&sim_core::spatial::Aabb::from_corners(
+                DVec2::new(5.0, 0.0),
+                DVec2::new(x_m, 5.0),
+            ));
+            known
+        };
         let map = MapData {
             obstacles,
             home: HomeBase::Disc {
@@ -178,14 +187,16 @@ mod tests {
         let at = |x| vec![DVec2::new(x, 2.5)];
         let walks = Walks {
             positions: vec![at(5.25), at(6.25), at(7.25)],
-            explored,
+            explored: known_to(7.5),
+            explored_at_90: Some(known_to(6.5)),
         };
         (map, run, walks)
     }
 
     /// Pixels whose colours were worked out from the map by hand: blocked left of x = 5 m
-    /// (200 px), explored to 7.5 m (300 px), unseen beyond; the walk's row, 2.5 m up, is
-    /// pixel row 99 (rows counted down from 5 m, the 100th); the start's pixel at x 210.
+    /// (200 px), explored by 90 % to 6.5 m (260 px), after it to 7.5 m (300 px), unseen
+    /// beyond; the walk's row, 2.5 m up, is pixel row 99 (rows counted down from 5 m, the
+    /// 100th); the start's pixel at x 210.
     #[test]
     fn a_panel_draws_the_map_the_walk_by_phase_and_the_start() {
         let (map, run, walks) = half_blocked();
@@ -193,12 +204,28 @@ mod tests {
         assert_eq!(image.dimensions(), (400, 200));
         assert_eq!(*image.get_pixel(100, 20), BLOCKED);
         assert_eq!(*image.get_pixel(250, 20), EXPLORED);
+        assert_eq!(*image.get_pixel(259, 20), EXPLORED);
+        assert_eq!(*image.get_pixel(260, 20), SEEN_FROM_90);
+        assert_eq!(*image.get_pixel(299, 20), SEEN_FROM_90);
         assert_eq!(*image.get_pixel(350, 20), UNSEEN);
         assert_eq!(*image.get_pixel(210, 99), START);
         assert_eq!(*image.get_pixel(230, 99), TO_90, "round 1: 5.25 to 6.25 m");
         assert_eq!(*image.get_pixel(270, 99), FROM_90, "round 2: 6.25 to 7.25 m");
-        assert_eq!(*image.get_pixel(295, 99), EXPLORED, "past the walk's end");
+        assert_eq!(*image.get_pixel(295, 99), SEEN_FROM_90, "past the walk's end");
         assert_eq!(*image.get_pixel(230, 150), EXPLORED, "off the walk's row");
+    }
+
+    /// A run that never reached 90 % shows everything it explored alike.
+    #[test]
+    fn a_run_short_of_90_percent_draws_no_cells_seen_after_it() {
+        let (map, run, walks) = half_blocked();
+        let short = Walks {
+            explored_at_90: None,
+            ..walks
+        };
+        let image = picture(&map, &[(&run, &short)]);
+        assert_eq!(*image.get_pixel(280, 20), EXPLORED);
+        assert_eq!(*image.get_pixel(350, 20), UNSEEN);
     }
 
     /// Panels stand side by side, [`GAP_PX`] apart, each drawing its own run.

@@ -219,12 +219,13 @@ fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
 
 /// `exploration --trace DIR` plays the same runs as without it (the same table line) and
 /// draws both walks on the loop into `DIR/indoor-loop.png`: two panels of 400 px (200 cells
-/// of 0.1 m, 2 px a cell) with the start, the walk to 90 % and the walk on to 98 % in each;
-/// and one robot's and two robots' walks into `DIR/indoor-loop-teams.png`. It cannot be
-/// asked for with `--starts`, and a folder it cannot make is named.
+/// of 0.1 m, 2 px a cell) with the start, the walk to 90 %, the walk on to 98 % and what it
+/// first saw on the way in each; and one robot's and two robots' walks into
+/// `DIR/indoor-loop-teams.png`. It cannot be asked for with `--starts`, and a folder it
+/// cannot make is named.
 #[test]
 fn exploration_traces_draw_both_walks_without_changing_the_runs() {
-    use scale::trace::{FROM_90, GAP_PX, START, TO_90};
+    use scale::trace::{FROM_90, GAP_PX, SEEN_FROM_90, START, TO_90};
     let dir = tempfile::tempdir().unwrap();
     let args = [
         "--rounds",
@@ -252,7 +253,10 @@ fn exploration_traces_draw_both_walks_without_changing_the_runs() {
                 .clone()
                 .any(|x| (0..400).any(|y| *picture.get_pixel(x, y) == colour))
         };
-        assert!(has(START) && has(TO_90) && has(FROM_90), "panel {panel:?}");
+        assert!(
+            has(START) && has(TO_90) && has(FROM_90) && has(SEEN_FROM_90),
+            "panel {panel:?}"
+        );
     }
     let teams = image::open(dir.path().join("indoor-loop-teams.png")).unwrap();
     assert_eq!((teams.width(), teams.height()), (2 * 400 + GAP_PX, 400));
