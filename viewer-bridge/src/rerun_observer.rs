@@ -972,22 +972,14 @@ impl RobotColumns {
     }
 }
 
+/// Log a round's robots: points with their detail columns in 2D, points in 3D; class ids
+/// and labels only when they changed since `last`.
 fn log_robots(
     rec: &rerun::RecordingStream,
     robots: &[RobotRow],
     type_names: &[String],
     last: &mut RobotColumns,
 ) -> rerun::RecordingStreamResult<()> {
-    use rerun::external::arrow::array::{ArrayRef, BooleanArray, Float64Array, StringArray, UInt32Array};
-    use std::sync::Arc;
-
-    let outcome = |o: Outcome| match o {
-        Outcome::Done => "done",
-        Outcome::Trimmed => "trimmed",
-        Outcome::Refused => "refused",
-    };
-    let f64s = |values: &mut dyn Iterator<Item = Option<f64>>| Arc::new(values.collect::<Float64Array>()) as ArrayRef;
-    let dense = |values: &mut dyn Iterator<Item = f64>| Arc::new(Float64Array::from_iter_values(values)) as ArrayRef;
     let classes_changed = RobotColumns::update(&mut last.classes, robots.iter().map(|r| r.class));
     let loads_changed = RobotColumns::update(&mut last.loads, robots.iter().map(|r| r.load));
     if loads_changed {
@@ -999,6 +991,43 @@ fn log_robots(
             })
             .collect();
     }
+    let detail = robot_detail(robots, type_names, last, loads_changed);
+    let (positions, positions3d) = robot_positions(robots);
+    let mut points = rerun::Points2D::update_fields();
+    let mut points3d = rerun::Points3D::update_fields();
+    if classes_changed {
+        points = points.with_class_ids(last.classes.iter().copied());
+        points3d = points3d.with_class_ids(last.classes.iter().copied());
+    }
+    if loads_changed {
+        points = points.with_labels(last.labels.iter().map(String::as_str));
+    }
+    rec.log(
+        "world/robots",
+        &[&positions as &dyn rerun::AsComponents, &points, &detail],
+    )?;
+    rec.log("world3d/robots", &[&positions3d as &dyn rerun::AsComponents, &points3d])
+}
+
+/// The robots' detail columns: energy and position every round; type, life, load, goal,
+/// outcome and action only when they changed since `last` (which they update), the load
+/// when `loads_changed` says so.
+fn robot_detail(
+    robots: &[RobotRow],
+    type_names: &[String],
+    last: &mut RobotColumns,
+    loads_changed: bool,
+) -> rerun::AnyValues {
+    use rerun::external::arrow::array::{ArrayRef, BooleanArray, Float64Array, StringArray, UInt32Array};
+    use std::sync::Arc;
+
+    let outcome = |o: Outcome| match o {
+        Outcome::Done => "done",
+        Outcome::Trimmed => "trimmed",
+        Outcome::Refused => "refused",
+    };
+    let f64s = |values: &mut dyn Iterator<Item = Option<f64>>| Arc::new(values.collect::<Float64Array>()) as ArrayRef;
+    let dense = |values: &mut dyn Iterator<Item = f64>| Arc::new(Float64Array::from_iter_values(values)) as ArrayRef;
     // Numbers and static strings only: formatting every robot's values each round would cost
     // more than the rest of this function.
     let mut detail = rerun::AnyValues::default();
@@ -1039,10 +1068,17 @@ fn log_robots(
             Arc::new(StringArray::from_iter_values(robots.iter().map(|r| r.action))),
         );
     }
-    let detail = detail
+    detail
         .with_component_from_data("energy", dense(&mut robots.iter().map(|r| r.energy)))
         .with_component_from_data("x", dense(&mut robots.iter().map(|r| r.position.x)))
-        .with_component_from_data("y", dense(&mut robots.iter().map(|r| r.position.y)));
+        .with_component_from_data("y", dense(&mut robots.iter().map(|r| r.position.y)))
+}
+
+/// The robots' 2D and 3D positions, as component batches of their points.
+fn robot_positions(robots: &[RobotRow]) -> (rerun::SerializedComponentBatch, rerun::SerializedComponentBatch) {
+    use rerun::external::arrow::array::ArrayRef;
+    use std::sync::Arc;
+
     let positions: Vec<[f32; 2]> = robots.iter().map(|r| to_2d(r.position)).collect();
     let positions = rerun::SerializedComponentBatch::new(
         Arc::new(vectors::<rerun::components::Position2D>(positions.into_flattened())) as ArrayRef,
@@ -1056,20 +1092,7 @@ fn log_robots(
         Arc::new(vectors::<rerun::components::Position3D>(positions3d.into_flattened())) as ArrayRef,
         rerun::Points3D::descriptor_positions(),
     );
-    let mut points = rerun::Points2D::update_fields();
-    let mut points3d = rerun::Points3D::update_fields();
-    if classes_changed {
-        points = points.with_class_ids(last.classes.iter().copied());
-        points3d = points3d.with_class_ids(last.classes.iter().copied());
-    }
-    if loads_changed {
-        points = points.with_labels(last.labels.iter().map(String::as_str));
-    }
-    rec.log(
-        "world/robots",
-        &[&positions as &dyn rerun::AsComponents, &points, &detail],
-    )?;
-    rec.log("world3d/robots", &[&positions3d as &dyn rerun::AsComponents, &points3d])
+    (positions, positions3d)
 }
 
 /// The arrow array of a column of fixed-size float vectors `C` (`Vec2D`, `Position2D`,

@@ -108,7 +108,6 @@ pub struct RecordingSummary {
 
 impl std::fmt::Display for Summary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let m = &self.metrics;
         let secs = self.elapsed.as_secs_f64();
         let played = self.rounds - self.resumed_at.unwrap_or(0);
         let resumed = self.resumed_at.map_or(String::new(), |k| {
@@ -132,6 +131,16 @@ impl std::fmt::Display for Summary {
                 signal.name()
             )?;
         }
+        self.write_world(f)?;
+        self.write_run_notes(f)
+    }
+}
+
+impl Summary {
+    /// The lines of what the robots did: exploration, treasures, robots, distance and the
+    /// digest (the last without a line break).
+    fn write_world(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = &self.metrics;
         writeln!(
             f,
             "  explored          {:.1} % of the free area; {}",
@@ -155,7 +164,13 @@ impl std::fmt::Display for Summary {
             m.overlap_m,
             100.0 * m.overlap_m / m.distance_m.max(1e-9)
         )?;
-        write!(f, "  digest            {:016x} (final positions)", self.digest)?;
+        write!(f, "  digest            {:016x} (final positions)", self.digest)
+    }
+
+    /// The lines only some runs have, each after a line break: failed strategies, slow
+    /// decisions, files written and the recording.
+    fn write_run_notes(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let m = &self.metrics;
         if m.strategies_failed > 0 {
             write!(
                 f,

@@ -347,6 +347,66 @@ impl Frontier {
         nearer_mate
     }
 
+    /// A sharing robot's round with its team: share its known map as `share` says, take in
+    /// the goals its mates announced (see [`Claims`]), count the mates heard, and in a small
+    /// team yield a clashing target to a lower id ([`Frontier::yield_to_lower_ids`]).
+    fn hear_team(&mut self, ctx: &mut Ctx, share: Sharing) {
+        share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
+        let radius = share.avoid_radius_m;
+        let home = ctx.home().center();
+        // In a crowd only claims near enough to matter are kept, so crowds stay cheap. A
+        // small team keeps every mate's goal, however far: heard from a mate about to
+        // leave radio range, it keeps the two apart after they part.
+        let near = if self.crowd {
+            (4.0 * radius).max(20.0)
+        } else {
+            f64::INFINITY
+        };
+        let p = ctx.position();
+        let round = ctx.round;
+        // This round's announcements, and the merge, in buffers of the worker thread, not
+        // of the robot: spare copies per robot would cost megabytes in a crowd, and fresh
+        // ones each round would keep the allocator busy.
+        SCRATCH.with_borrow_mut(|(updates, merged)| {
+            updates.clear();
+            let counting = !self.crowd || self.spoke.is_some();
+            let mut mates = counting.then_some(&mut self.mates);
+            updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
+                Payload::Position { goal, .. } => {
+                    if let Some(mates) = mates.as_deref_mut() {
+                        mates.heard(m.from);
+                    }
+                    Some((
+                        m.from.get(),
+                        goal.filter(|g| g.distance(p) <= near).map(|g| stored_goal(g, home)),
+                    ))
+                }
+                _ => None,
+            }));
+            if !updates.is_empty() {
+                // Inboxes come in sender order; sort (stably: a sender's last word wins)
+                // if not.
+                if !updates.is_sorted_by_key(|u| u.0) {
+                    updates.sort_by_key(|u| u.0);
+                }
+                // Every round but each tenth the merged claims are cut at once; each
+                // tenth, old and far ones are forgotten before the cut (below). The
+                // announcements' goals are all within `near` of `p`, as that asks.
+                let cut_now = !round.is_multiple_of(10);
+                hear_claims(&mut self.claims, updates, round, share.max_claims, cut_now, merged);
+            }
+        });
+        if round.is_multiple_of(10) {
+            self.claims
+                .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && goal_of(*g, home).distance(p) <= near);
+        }
+        keep_newest(&mut self.claims, share.max_claims, round);
+        self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
+        if !self.crowd {
+            self.yield_to_lower_ids(ctx, radius);
+        }
+    }
+
     /// Announce the goal to team mates, only when it changed: claims stay cheap in crowds.
     fn announce_goal(&mut self, ctx: &mut Ctx) {
         if self.sharing.is_some() && ctx.goal() != self.announced {
@@ -375,65 +435,15 @@ impl Strategy for Frontier {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        let mut radius = 0.0;
         let max_detour_m = self.sharing.and_then(|s| s.max_detour_m).unwrap_or(f64::INFINITY);
         // Claims keep their goals from here (see [`Claims`]).
         let home = ctx.home().center();
-        if let Some(share) = self.sharing {
-            share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
-            radius = share.avoid_radius_m;
-            // In a crowd only claims near enough to matter are kept, so crowds stay cheap. A
-            // small team keeps every mate's goal, however far: heard from a mate about to
-            // leave radio range, it keeps the two apart after they part.
-            let near = if self.crowd {
-                (4.0 * radius).max(20.0)
-            } else {
-                f64::INFINITY
-            };
-            let p = ctx.position();
-            let round = ctx.round;
-            // This round's announcements, and the merge, in buffers of the worker thread, not
-            // of the robot: spare copies per robot would cost megabytes in a crowd, and fresh
-            // ones each round would keep the allocator busy.
-            SCRATCH.with_borrow_mut(|(updates, merged)| {
-                updates.clear();
-                let counting = !self.crowd || self.spoke.is_some();
-                let mut mates = counting.then_some(&mut self.mates);
-                updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
-                    Payload::Position { goal, .. } => {
-                        if let Some(mates) = mates.as_deref_mut() {
-                            mates.heard(m.from);
-                        }
-                        Some((
-                            m.from.get(),
-                            goal.filter(|g| g.distance(p) <= near).map(|g| stored_goal(g, home)),
-                        ))
-                    }
-                    _ => None,
-                }));
-                if !updates.is_empty() {
-                    // Inboxes come in sender order; sort (stably: a sender's last word wins)
-                    // if not.
-                    if !updates.is_sorted_by_key(|u| u.0) {
-                        updates.sort_by_key(|u| u.0);
-                    }
-                    // Every round but each tenth the merged claims are cut at once; each
-                    // tenth, old and far ones are forgotten before the cut (below). The
-                    // announcements' goals are all within `near` of `p`, as that asks.
-                    let cut_now = !round.is_multiple_of(10);
-                    hear_claims(&mut self.claims, updates, round, share.max_claims, cut_now, merged);
-                }
-            });
-            if round.is_multiple_of(10) {
-                self.claims
-                    .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && goal_of(*g, home).distance(p) <= near);
-            }
-            keep_newest(&mut self.claims, share.max_claims, round);
-            self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
-            if !self.crowd {
-                self.yield_to_lower_ids(ctx, radius);
-            }
-        }
+        let radius = if let Some(share) = self.sharing {
+            self.hear_team(ctx, share);
+            share.avoid_radius_m
+        } else {
+            0.0
+        };
         if let Some(a) = self.core.reflexes(ctx) {
             if let Some(spoke) = &mut self.spoke {
                 spoke.interrupt();
