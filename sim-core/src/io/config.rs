@@ -395,28 +395,8 @@ impl SimConfig {
         let sim_at = scan.position(text, "simulation", 0);
         config.seed = config.whole(xml.seed.as_deref(), "seed", sim_at)?.unwrap_or(0);
         config.rounds = config.whole(xml.rounds.as_deref(), "rounds", sim_at)?.unwrap_or(1000);
-        for (i, attributes) in scan.robot_types.iter().enumerate() {
-            let kind = config.robot_type(attributes, scan.position(text, "robot-type", i))?;
-            match config.types.iter_mut().find(|k| k.name == kind.name) {
-                Some(slot) => *slot = kind,
-                None => config.types.push(kind),
-            }
-        }
-        for (i, g) in xml.groups.iter().enumerate() {
-            let group = config.group(i, g, scan.position(text, "group", i))?;
-            // Sweeps, metrics and events name groups: two of one name could not be told apart.
-            if let Some(first) = config.groups.iter().find(|f| f.name == group.name) {
-                let (line, column) = first.at;
-                return Err(config.error(
-                    group.at,
-                    format!(
-                        "a second group named '{}' (the first is at {line}:{column})",
-                        group.name
-                    ),
-                ));
-            }
-            config.groups.push(group);
-        }
+        config.read_robot_types(&scan, text)?;
+        config.read_groups(&xml.groups, &scan, text)?;
         if let Some(o) = &xml.outputs {
             config.outputs = Outputs {
                 metrics: o.metrics.as_deref().map(resolve),
@@ -428,6 +408,39 @@ impl SimConfig {
             return Err(config.error(sim_at, "no <group> of robots"));
         }
         Ok(config)
+    }
+
+    /// The `<robot-type>` elements, each replacing the built-in type of its name or added
+    /// after them.
+    fn read_robot_types(&mut self, scan: &Scan, text: &str) -> Result<()> {
+        for (i, attributes) in scan.robot_types.iter().enumerate() {
+            let kind = self.robot_type(attributes, scan.position(text, "robot-type", i))?;
+            match self.types.iter_mut().find(|k| k.name == kind.name) {
+                Some(slot) => *slot = kind,
+                None => self.types.push(kind),
+            }
+        }
+        Ok(())
+    }
+
+    /// The `<group>` elements, in order; a second group of a name is an error.
+    fn read_groups(&mut self, groups: &[XmlGroup], scan: &Scan, text: &str) -> Result<()> {
+        for (i, g) in groups.iter().enumerate() {
+            let group = self.group(i, g, scan.position(text, "group", i))?;
+            // Sweeps, metrics and events name groups: two of one name could not be told apart.
+            if let Some(first) = self.groups.iter().find(|f| f.name == group.name) {
+                let (line, column) = first.at;
+                return Err(self.error(
+                    group.at,
+                    format!(
+                        "a second group named '{}' (the first is at {line}:{column})",
+                        group.name
+                    ),
+                ));
+            }
+            self.groups.push(group);
+        }
+        Ok(())
     }
 
     /// A whole number attribute, if present.
