@@ -223,48 +223,73 @@ impl Simulation {
     /// Everything `read_state` relies on: counts, ids and indices in range, known maps
     /// well formed and over this map's grid, positions on the map.
     fn check_state(&self, s: &State) -> Result<()> {
-        let bad = |m: String| Error::Malformed(format!("the saved state does not fit this scenario: {m}"));
+        self.check_counts(s)?;
+        self.check_robots_and_treasures(s)?;
+        self.check_known_maps(s)?;
+        check_inboxes(s, self.robots.len())
+    }
+
+    /// As many robots, agents, inboxes, views and treasures as this scenario, at a round
+    /// within its run.
+    fn check_counts(&self, s: &State) -> Result<()> {
         let n = self.robots.len();
         if s.robots.len() != n || s.agents.len() != n || s.inboxes.len() != n || s.explored_views.len() != n {
-            return Err(bad(format!("{} robots saved, the scenario has {n}", s.robots.len())));
+            return Err(unfit(format!("{} robots saved, the scenario has {n}", s.robots.len())));
         }
         if s.treasures.len() != self.treasures.len() {
-            return Err(bad(format!(
+            return Err(unfit(format!(
                 "{} treasures saved, the map has {}",
                 s.treasures.len(),
                 self.treasures.len()
             )));
         }
         if s.round > self.rounds {
-            return Err(bad(format!(
+            return Err(unfit(format!(
                 "round {} is past the run's {} rounds",
                 s.round, self.rounds
             )));
         }
+        Ok(())
+    }
+
+    /// Each robot and treasure the one of this scenario, robots on the map with finite
+    /// energy, carrying treasures that exist.
+    fn check_robots_and_treasures(&self, s: &State) -> Result<()> {
         let extent = self.map.obstacles.grid().extent();
         for (i, (r, here)) in s.robots.iter().zip(&self.robots).enumerate() {
             if r.id != here.id || r.type_index != here.type_index || r.group != here.group {
-                return Err(bad(format!("robot {i} is another robot (id, type or group differ)")));
+                return Err(unfit(format!("robot {i} is another robot (id, type or group differ)")));
             }
             let on_map = r.position.is_finite() && extent.distance_squared_to(r.position) == 0.0;
             if !(on_map && r.energy.is_finite()) {
-                return Err(bad(format!("robot {i} is at {} with energy {}", r.position, r.energy)));
+                return Err(unfit(format!(
+                    "robot {i} is at {} with energy {}",
+                    r.position, r.energy
+                )));
             }
             if let Some((t, _)) = r.cargo.iter().find(|(t, _)| t.index() >= s.treasures.len()) {
-                return Err(bad(format!("robot {i} carries unknown treasure {t}")));
+                return Err(unfit(format!("robot {i} carries unknown treasure {t}")));
             }
         }
         for (i, (t, here)) in s.treasures.iter().zip(&self.treasures).enumerate() {
             if t.id != here.id || t.position != here.position || t.initial != here.initial {
-                return Err(bad(format!("treasure {i} is another treasure")));
+                return Err(unfit(format!("treasure {i} is another treasure")));
             }
         }
+        Ok(())
+    }
+
+    /// The explored map, the known maps in flight and the robots' own well formed and over
+    /// this map's grid; a known map kept exactly by the strategies that keep one here; maps
+    /// merged from robots that exist.
+    fn check_known_maps(&self, s: &State) -> Result<()> {
+        let n = self.robots.len();
         let grid = *self.map.obstacles.grid();
         let check_map = |k: &KnownMap, what: &str| {
             if *k.grid() != grid {
-                return Err(bad(format!("{what} is over another grid")));
+                return Err(unfit(format!("{what} is over another grid")));
             }
-            k.validate().map_err(|e| bad(format!("{what}: {e}")))
+            k.validate().map_err(|e| unfit(format!("{what}: {e}")))
         };
         check_map(&s.explored, "the explored map")?;
         for p in &s.payloads {
@@ -274,7 +299,7 @@ impl Simulation {
         }
         for (i, (agent, saved)) in self.agents.iter().zip(&s.agents).enumerate() {
             if saved.data.known.is_some() != agent.mind.data.known.is_some() {
-                return Err(bad(format!(
+                return Err(unfit(format!(
                     "robot {i}'s strategy keeps a known map in one run and not the other"
                 )));
             }
@@ -282,22 +307,32 @@ impl Simulation {
                 check_map(k, &format!("robot {i}'s known map"))?;
             }
             if let Some((id, _)) = saved.merged_from.iter().find(|(id, _)| id.index() >= n) {
-                return Err(bad(format!("robot {i} merged a map from unknown robot {id}")));
-            }
-        }
-        for (i, inbox) in s.inboxes.iter().enumerate() {
-            for m in inbox {
-                let to_ok = match m.to {
-                    Recipient::Broadcast => true,
-                    Recipient::Direct(id) => id.index() < n,
-                };
-                if m.from.index() >= n || !to_ok || m.payload as usize >= s.payloads.len() {
-                    return Err(bad(format!(
-                        "a message to robot {i} names a robot or payload that does not exist"
-                    )));
-                }
+                return Err(unfit(format!("robot {i} merged a map from unknown robot {id}")));
             }
         }
         Ok(())
     }
+}
+
+/// Every message in the inboxes from, and to, one of the `n` robots, with a payload saved.
+fn check_inboxes(s: &State, n: usize) -> Result<()> {
+    for (i, inbox) in s.inboxes.iter().enumerate() {
+        for m in inbox {
+            let to_ok = match m.to {
+                Recipient::Broadcast => true,
+                Recipient::Direct(id) => id.index() < n,
+            };
+            if m.from.index() >= n || !to_ok || m.payload as usize >= s.payloads.len() {
+                return Err(unfit(format!(
+                    "a message to robot {i} names a robot or payload that does not exist"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The error of a saved state that does not fit the scenario, saying why.
+fn unfit(why: impl std::fmt::Display) -> Error {
+    Error::Malformed(format!("the saved state does not fit this scenario: {why}"))
 }
