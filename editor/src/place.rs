@@ -158,8 +158,16 @@ fn check_radius(r: f64) -> Result<()> {
     }
 }
 
+/// What [`place`] found, for its caller to report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Placement {
+    /// The free cells reachable from the home base, where new treasures went (`None` when
+    /// no treasure was asked for). More treasures than cells share cells' centres.
+    pub reachable_cells: Option<u64>,
+}
+
 /// Apply `opts` to `map`: set the home base, then scatter treasures reachable from it.
-pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
+pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<Placement> {
     check_radius(opts.home_radius_m)?;
     check_quantity(opts.quantity)?;
     set_home(map, opts)?;
@@ -167,7 +175,7 @@ pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
         map.treasures.clear();
     }
     if opts.treasures == 0 {
-        return Ok(());
+        return Ok(Placement::default());
     }
     let area = Reachable::around(&map.obstacles, &map.home)?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
@@ -177,7 +185,9 @@ pub fn place(map: &mut MapData, opts: &PlaceOptions) -> Result<()> {
             scatter_clustered(&mut map.treasures, opts, &area, clusters, sigma_m, &mut rng)?;
         }
     }
-    Ok(())
+    Ok(Placement {
+        reachable_cells: Some(area.total),
+    })
 }
 
 /// Check the treasure quantity range `(min, max)`: non-empty, and from at least 1.

@@ -373,3 +373,78 @@ fn path_prints_the_shortest_route_and_exits_1_without_one() {
         "{err}"
     );
 }
+
+/// The free cells 4-connected to the home base's cell, counted by a breadth-first walk over
+/// the grid's cells.
+fn reachable_free_cells(map: &MapData) -> u64 {
+    let grid = *map.obstacles.grid();
+    let free = |x: u32, y: u32| map.obstacles.is_point_free(grid.cell_center(x, y));
+    let start = grid.cell_of(map.home.center()).unwrap();
+    let mut seen = std::collections::HashSet::from([start]);
+    let mut queue = std::collections::VecDeque::from([start]);
+    while let Some((x, y)) = queue.pop_front() {
+        let next = [
+            x.checked_sub(1).map(|x| (x, y)),
+            (x + 1 < grid.width_cells()).then_some((x + 1, y)),
+            y.checked_sub(1).map(|y| (x, y)),
+            (y + 1 < grid.height_cells()).then_some((x, y + 1)),
+        ];
+        for c in next.into_iter().flatten() {
+            if free(c.0, c.1) && seen.insert(c) {
+                queue.push_back(c);
+            }
+        }
+    }
+    seen.len() as u64
+}
+
+/// Asking for more treasures than there are free cells reachable from the home base is
+/// allowed (they share cells' centres) and warned about, naming both counts; as many as
+/// there are cells is not.
+#[test]
+fn more_treasures_than_reachable_cells_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("small.stmap");
+    let out = editor()
+        .args([
+            "generate",
+            "rooms",
+            "--width-m",
+            "8",
+            "--height-m",
+            "8",
+            "--quiet",
+            "--treasures",
+            "1",
+            "-o",
+        ])
+        .arg(&map)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let cells = reachable_free_cells(&MapData::load(&map).unwrap());
+    assert!(cells > 1, "{cells}");
+    let place = |treasures: u64| {
+        let out = editor()
+            .arg("place")
+            .arg(&map)
+            .args(["--treasures", &treasures.to_string(), "-o"])
+            .arg(dir.path().join("placed.stmap"))
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    assert!(!place(cells).contains("warning"));
+    let err = place(cells + 1);
+    assert!(
+        err.contains(&format!(
+            "warning: {} treasures on {cells} free cells reachable from the home base",
+            cells + 1
+        )),
+        "{err}"
+    );
+    let placed = MapData::load(&dir.path().join("placed.stmap")).unwrap();
+    assert_eq!(placed.treasures.len() as u64, cells + 1);
+}

@@ -283,8 +283,19 @@ fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) 
         home,
         treasures: Vec::new(),
     };
-    editor::place::place(&mut map, &place.options(false))?;
+    let placed = editor::place::place(&mut map, &place.options(false))?;
+    warn_if_crowded(placed, place.treasures);
     Ok(map)
+}
+
+/// Say so when more treasures were asked for than there are free cells reachable from the
+/// home base: several then share each cell's centre.
+fn warn_if_crowded(placed: editor::place::Placement, treasures: u32) {
+    if let Some(cells) = placed.reachable_cells.filter(|&c| u64::from(treasures) > c) {
+        eprintln!(
+            "warning: {treasures} treasures on {cells} free cells reachable from the home base: several share each cell's centre"
+        );
+    }
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
@@ -352,7 +363,8 @@ fn compose_map(scene: &Path, output: &Path) -> Result<ExitCode> {
 /// `place`: set the home base and treasures of the map at `path` and save it to `output`.
 fn place_on_map(path: &Path, place: &PlaceArgs, output: &Path) -> Result<ExitCode> {
     let mut map = load(path)?;
-    editor::place::place(&mut map, &place.options(false))?;
+    let placed = editor::place::place(&mut map, &place.options(false))?;
+    warn_if_crowded(placed, place.treasures);
     save(&map, output)?;
     Ok(ExitCode::SUCCESS)
 }
