@@ -494,72 +494,17 @@ pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
 fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
     match cli.command {
         Command::Strategies => {
-            for (name, description) in registry.describe() {
-                println!("{name:14} {description}");
-            }
+            list_strategies(registry);
             Ok(ExitCode::SUCCESS)
         }
         Command::Tactics => {
-            println!(
-                "compose with strategy=\"tactics\" and <param name=\"tactics\" value=\"NAME,NAME,...\"/> (priority order);"
-            );
-            println!("a tactic's parameters are NAME.PARAM, the goal of boundary and shortest_path is goal=\"X,Y\"\n");
-            for (name, description) in registry.tactics().describe() {
-                println!("{name:14} {description}");
-            }
+            list_tactics(registry);
             Ok(ExitCode::SUCCESS)
         }
-        Command::View(args) => {
-            let stem = args
-                .map
-                .file_stem()
-                .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
-            // `-map`: a run's recording is named after its config, often the map's name too.
-            let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}-map.rrd")))? else {
-                bail!("--no-viewer leaves nothing to show");
-            };
-            crate::run::view_map(&args.map, &target)?;
-            println!("{}: shown in {target}", args.map.display());
-            Ok(ExitCode::SUCCESS)
-        }
-        Command::Sweep(args) => {
-            let summary = match crate::sweep::sweep(&args, registry, !args.quiet && std::io::stderr().is_terminal()) {
-                Ok(summary) => summary,
-                Err(e) => return stopped_sweep(&e).ok_or(e),
-            };
-            if !args.quiet {
-                println!(
-                    "{}: {} runs of {} ({} resumed), {} rows; manifest {}",
-                    summary.output.display(),
-                    summary.runs,
-                    summary.runs_total,
-                    summary.resumed,
-                    summary.rows,
-                    summary.manifest.display()
-                );
-            }
-            if let Some(fig) = &args.plot {
-                plot(
-                    std::slice::from_ref(&summary.output),
-                    fig,
-                    (1400, 900),
-                    crate::plot::XAxis::Round,
-                )?;
-            }
-            Ok(ExitCode::SUCCESS)
-        }
+        Command::View(args) => view(&args),
+        Command::Sweep(args) => sweep(&args, registry),
         Command::Plot(args) => plot(&args.inputs, &args.output, args.size, args.x).map(|()| ExitCode::SUCCESS),
-        Command::Merge(args) => {
-            let summary = crate::sweep::merge_parts(&args)?;
-            let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));
-            println!(
-                "{}: {} runs{total}, {} rows",
-                args.output.display(),
-                summary.runs,
-                summary.rows
-            );
-            Ok(ExitCode::SUCCESS)
-        }
+        Command::Merge(args) => merge(&args),
         Command::Run(args) => {
             let (quiet, file) = (args.output.quiet, args.config.display().to_string());
             run_and_report(&args.resolve()?, registry, quiet, ("running", &file))
@@ -569,6 +514,80 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
             run_and_report(&args.resolve()?, registry, quiet, ("resuming", &file))
         }
     }
+}
+
+/// `strategies`: each registered strategy and what it does.
+fn list_strategies(registry: &StrategyRegistry) {
+    for (name, description) in registry.describe() {
+        println!("{name:14} {description}");
+    }
+}
+
+/// `tactics`: how to compose tactics, then each registered tactic and what it does.
+fn list_tactics(registry: &StrategyRegistry) {
+    println!(
+        "compose with strategy=\"tactics\" and <param name=\"tactics\" value=\"NAME,NAME,...\"/> (priority order);"
+    );
+    println!("a tactic's parameters are NAME.PARAM, the goal of boundary and shortest_path is goal=\"X,Y\"\n");
+    for (name, description) in registry.tactics().describe() {
+        println!("{name:14} {description}");
+    }
+}
+
+/// `view`: show a map in the viewer (or a recording of it).
+fn view(args: &ViewArgs) -> Result<ExitCode> {
+    let stem = args
+        .map
+        .file_stem()
+        .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
+    // `-map`: a run's recording is named after its config, often the map's name too.
+    let Some(target) = args.viewer.target(PathBuf::from(format!("{stem}-map.rrd")))? else {
+        bail!("--no-viewer leaves nothing to show");
+    };
+    crate::run::view_map(&args.map, &target)?;
+    println!("{}: shown in {target}", args.map.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `sweep`: run the sweep, say what it wrote, and plot it if asked.
+fn sweep(args: &crate::sweep::SweepArgs, registry: &StrategyRegistry) -> Result<ExitCode> {
+    let summary = match crate::sweep::sweep(args, registry, !args.quiet && std::io::stderr().is_terminal()) {
+        Ok(summary) => summary,
+        Err(e) => return stopped_sweep(&e).ok_or(e),
+    };
+    if !args.quiet {
+        println!(
+            "{}: {} runs of {} ({} resumed), {} rows; manifest {}",
+            summary.output.display(),
+            summary.runs,
+            summary.runs_total,
+            summary.resumed,
+            summary.rows,
+            summary.manifest.display()
+        );
+    }
+    if let Some(fig) = &args.plot {
+        plot(
+            std::slice::from_ref(&summary.output),
+            fig,
+            (1400, 900),
+            crate::plot::XAxis::Round,
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `merge`: merge a sharded sweep's parts and say what it wrote.
+fn merge(args: &crate::sweep::MergeArgs) -> Result<ExitCode> {
+    let summary = crate::sweep::merge_parts(args)?;
+    let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));
+    println!(
+        "{}: {} runs{total}, {} rows",
+        args.output.display(),
+        summary.runs,
+        summary.rows
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 /// The exit status of a sweep that `e` says a stop signal ended (the finished runs are
