@@ -209,8 +209,8 @@ enum Scenario {
         /// Draw each map's two walks into this folder, `MAP.png`: the reference's on the
         /// left, `--strategy`'s on the right, blue to 90 % explored, red from there on, the
         /// start green, what was first seen after 90 % amber, what stayed unseen pink; and
-        /// the teams', one robot first, into
-        /// `MAP-teams.png` (from home; not with `--starts`).
+        /// the teams', one robot first, into `MAP-teams.png` (from home; not with
+        /// `--starts`).
         #[arg(long, value_name = "DIR", conflicts_with = "starts")]
         trace: Option<std::path::PathBuf>,
     },

@@ -23,7 +23,7 @@ use crate::exploration::{Exploration, Walks};
 
 /// Blocked cells.
 pub const BLOCKED: Rgb<u8> = Rgb([0, 0, 0]);
-/// Free cells the run explored.
+/// Free cells the run explored (by the round it reached 90 %, if it did).
 pub const EXPLORED: Rgb<u8> = Rgb([232, 232, 232]);
 /// Free cells the run first saw after 90 % of the free area was explored.
 pub const SEEN_FROM_90: Rgb<u8> = Rgb([255, 220, 140]);
