@@ -344,15 +344,15 @@ pub struct OutputArgs {
 
 impl OutputArgs {
     /// Take the logging options not given from `words` ([`logging_words`]; words it does
-    /// not write are passed over).
+    /// not write are passed over). [`resolve`](Self::resolve) bounds them as typed ones.
     fn log_as(&mut self, words: &str) {
         for (key, value) in words.split_whitespace().filter_map(|w| w.split_once('=')) {
             let Ok(n) = value.parse::<u64>() else { continue };
             let count = usize::try_from(n).ok();
             match key {
-                "log-every" => _ = self.log_every.get_or_insert(n.max(1)),
-                "explored-every" => _ = self.explored_every.get_or_insert(n.max(1)),
-                "known-every" => _ = self.known_every.get_or_insert(n),
+                "log-every" => self.log_every = self.log_every.or(Some(n)),
+                "explored-every" => self.explored_every = self.explored_every.or(Some(n)),
+                "known-every" => self.known_every = self.known_every.or(Some(n)),
                 "max-links" => self.max_links = self.max_links.or(count),
                 "known-per-robot-max" => self.known_per_robot_max = self.known_per_robot_max.or(count),
                 _ => {}
