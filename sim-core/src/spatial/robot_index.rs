@@ -436,7 +436,8 @@ impl RobotIndex {
         let reach = radius_m + self.query_slack(p, radius_m);
         let (x0, y0) = self.cell_of(p - DVec2::splat(reach));
         let (x1, y1) = self.cell_of(p + DVec2::splat(reach));
-        let cells = (i64::from(x1) - i64::from(x0) + 1) * (i64::from(y1) - i64::from(y0) + 1);
+        // Saturating: a radius far beyond the map (1e12 m) spans more cells than an i64 counts.
+        let cells = (i64::from(x1) - i64::from(x0) + 1).saturating_mul(i64::from(y1) - i64::from(y0) + 1);
         if cells > self.entries.len() as i64 {
             // A disc wider than the swarm's spread: a scan is cheaper than the cells.
             return visit(0, &self.entries, None);
@@ -662,6 +663,25 @@ mod tests {
                 got.sort();
                 want.sort();
                 prop_assert_eq!(got, want);
+            }
+        }
+    }
+
+    /// A disc far wider than the map (a radio range of 1e12 m) spans more cells than an
+    /// i64 counts; its runs are every robot, in both layouts.
+    #[test]
+    fn a_disc_wider_than_any_cell_count_holds_every_robot() {
+        let robots = with_crowd(&[(-3.0, 7.0), (12.0, -40.0)], 50, 10, 0.5);
+        for mut index in [RobotIndex::new(), RobotIndex::dense_when_compact()] {
+            index.rebuild(robots.iter().copied(), 0.5);
+            for r in [1e12, 1e300] {
+                let mut seen = Vec::new();
+                index.for_each_run_near(DVec2::new(1.0, 2.0), r, |_, run, _| {
+                    seen.extend(run.iter().map(|e| e.id))
+                });
+                seen.sort();
+                let all: Vec<RobotId> = robots.iter().map(|(id, _)| *id).collect();
+                assert_eq!(seen, all);
             }
         }
     }
