@@ -76,6 +76,12 @@ impl Run {
 
     /// Record the rest of the run to the `.rrd` file `path`.
     fn record_to(&mut self, path: PathBuf) -> PyResult<()> {
+        let config = self.source.config().map_err(to_py)?;
+        viewer_bridge::run::refuse_overwriting(
+            &[("recording", &path)],
+            &[("config", &config.path), ("map", config.map_path())],
+        )
+        .map_err(|e| to_py(format!("{e:#}")))?;
         let rec = viewer_bridge::viewer::open(
             self.sim.name(),
             &ViewerTarget::Rrd(path),

@@ -2,7 +2,7 @@
 
 use std::fs::File;
 use std::io::BufWriter;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -251,6 +251,7 @@ pub fn execute(
     registry: &StrategyRegistry,
     extra: &mut [&mut (dyn Observer + Send)],
 ) -> Result<Summary> {
+    check_outputs_apart(run)?;
     let started = Instant::now();
     let resumed = run.checkpoint.as_ref().and_then(|c| c.resume_from.as_deref());
     let mut sim = build_simulation(run, registry, resumed)?;
@@ -281,6 +282,67 @@ pub fn execute(
     let mut summary = outputs.summary(run, &sim, resumed, setup, elapsed);
     summary.interrupted = interrupted;
     Ok(summary)
+}
+
+/// Refuse a run whose output files name one file twice, or a file the run reads (its config
+/// or its map): see [`refuse_overwriting`].
+fn check_outputs_apart(run: &RunConfig) -> Result<()> {
+    let mut outputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(p) = &run.metrics {
+        outputs.push(("metrics file", p));
+    }
+    if let Some(p) = &run.robot_stats {
+        outputs.push(("robot stats file", p));
+    }
+    if let Some(ViewerTarget::Rrd(p)) = &run.viewer {
+        outputs.push(("recording", p));
+    }
+    if let Some(c) = &run.checkpoint {
+        outputs.push(("checkpoint", &c.path));
+    }
+    refuse_overwriting(
+        &outputs,
+        &[("config", &run.config.path), ("map", run.config.map_path())],
+    )
+}
+
+/// Refuse `outputs` (what each is, its path) that name one file twice or a file of `inputs`:
+/// one would overwrite the other, and swapped arguments would destroy an input. Paths to
+/// one file through links or `..` count as one.
+pub fn refuse_overwriting(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -> Result<()> {
+    let keys: Vec<PathBuf> = outputs.iter().map(|(_, p)| file_identity(p)).collect();
+    for (k, &(what, path)) in outputs.iter().enumerate() {
+        if let Some(j) = keys[..k].iter().position(|key| *key == keys[k]) {
+            bail!(
+                "the {} and the {what} are both {}: one would overwrite the other",
+                outputs[j].0,
+                path.display()
+            );
+        }
+        if let Some((input, _)) = inputs.iter().find(|(_, p)| file_identity(p) == keys[k]) {
+            bail!(
+                "the {what} {} is the run's {input}: writing it would destroy it",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// What names a file, whether it exists or not, for telling two paths to one file apart
+/// from paths to two: the file with links resolved if it exists, else its folder's.
+fn file_identity(path: &Path) -> PathBuf {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return p;
+    }
+    let folder = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    match (std::fs::canonicalize(folder), path.file_name()) {
+        (Ok(folder), Some(name)) => folder.join(name),
+        _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
 }
 
 /// The simulation of a run: continued from the checkpoint `resumed`, or set up from the config.

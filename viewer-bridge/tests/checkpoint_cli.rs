@@ -257,3 +257,15 @@ fn resuming_a_finished_run_reports_its_outcome() {
     assert!(outcome(&run).contains("50 % at round"), "{run}");
     assert_eq!(outcome(&resumed), outcome(&run));
 }
+
+/// A run started with its config named relative to the folder it ran in resumes from any
+/// other folder: the checkpoint holds where the config, and so its map, are.
+#[test]
+fn a_run_resumes_from_another_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let tag = dir.path().join("cut").display().to_string();
+    let args = run_args(Path::new("configs/demo.xml"), &tag, "600");
+    killed_after_a_checkpoint(&workspace(), &args, &format!("{tag}.ckpt"));
+    let out = ok(&smartteams(dir.path(), &["resume", "cut.ckpt", "--no-viewer"]));
+    assert!(out.contains("600 rounds"), "{out}");
+}

@@ -330,3 +330,45 @@ fn negative_numbers_are_bad_values_of_their_option() {
     assert!(!ok);
     assert!(err.contains("invalid value '-5' for '--rounds"), "{err}");
 }
+
+/// Outputs that name one file twice, or the run's config or map, are refused before
+/// anything is written: the other output is not lost, and the config and the map keep
+/// their bytes.
+#[test]
+fn outputs_that_would_overwrite_each_other_or_an_input_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for file in ["configs/demo.xml", "maps/demo.stmap"] {
+        std::fs::create_dir_all(d.join(file).parent().unwrap()).unwrap();
+        std::fs::copy(workspace().join(file), d.join(file)).unwrap();
+    }
+    let before = |file: &str| std::fs::read(d.join(file)).unwrap();
+    let (config, map) = (before("configs/demo.xml"), before("maps/demo.stmap"));
+    let cases: [(&[&str], &str); 3] = [
+        (
+            &["--no-viewer", "--metrics", "same.csv", "--robot-stats", "./same.csv"],
+            "the metrics file and the robot stats file are both ./same.csv",
+        ),
+        (
+            &["--rrd", "configs/demo.xml"],
+            "the recording configs/demo.xml is the run's config",
+        ),
+        (
+            &["--no-viewer", "--metrics", "configs/../maps/demo.stmap"],
+            "the metrics file configs/../maps/demo.stmap is the run's map",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+            .args(["run", "configs/demo.xml", "--rounds", "3", "-q"])
+            .args(args)
+            .current_dir(d)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(expected), "{args:?}: {err}");
+    }
+    assert!(!d.join("same.csv").exists(), "an output was written");
+    assert_eq!(before("configs/demo.xml"), config, "the config changed");
+    assert_eq!(before("maps/demo.stmap"), map, "the map changed");
+}

@@ -46,11 +46,13 @@ const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// How a run was set up: what a resume needs to set it up again.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RunSource {
-    /// The config file (relative paths inside it resolve against its folder).
+    /// The config file, absolute (relative paths inside it resolve against its folder), so
+    /// that a resume from another folder finds the map. Checkpoints of earlier versions may
+    /// hold a path relative to the folder the run started in.
     pub config_path: PathBuf,
     /// The config text as the run parsed it.
     pub config_text: String,
-    /// The `--map` argument, if the map did not come from the config.
+    /// The `--map` argument, absolute, if the map did not come from the config.
     pub map_argument: Option<PathBuf>,
     /// Seed (after overrides).
     pub seed: u64,
@@ -83,9 +85,9 @@ impl RunSource {
     /// The set-up of a run of `config` (reads the map file for its checksum).
     pub fn of(config: &SimConfig) -> Result<Self> {
         Ok(Self {
-            config_path: config.path.clone(),
+            config_path: absolute(&config.path),
             config_text: config.text().to_owned(),
-            map_argument: config.map_argument().map(Path::to_path_buf),
+            map_argument: config.map_argument().map(absolute),
             seed: config.seed,
             rounds: config.rounds,
             map_crc32: map_crc32(config.map_path())?,
@@ -103,6 +105,11 @@ impl RunSource {
         config.rounds = self.rounds;
         Ok(config)
     }
+}
+
+/// `path` made absolute against the working folder (as given if that cannot be known).
+fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 /// CRC-32 of a map file's bytes before its last four. Not of the whole file: a map file
