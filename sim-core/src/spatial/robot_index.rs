@@ -677,7 +677,7 @@ mod tests {
             for r in [1e12, 1e300] {
                 let mut seen = Vec::new();
                 index.for_each_run_near(DVec2::new(1.0, 2.0), r, |_, run, _| {
-                    seen.extend(run.iter().map(|e| e.id))
+                    seen.extend(run.iter().map(|e| e.id));
                 });
                 seen.sort();
                 let all: Vec<RobotId> = robots.iter().map(|(id, _)| *id).collect();
