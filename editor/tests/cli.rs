@@ -448,3 +448,49 @@ fn more_treasures_than_reachable_cells_are_warned_about() {
     let placed = MapData::load(&dir.path().join("placed.stmap")).unwrap();
     assert_eq!(placed.treasures.len() as u64, cells + 1);
 }
+
+/// Negative coordinates are values, as ROS maps' origins and homes often are: a bitmap
+/// imported at `--origin -10,-10` has its lower-left corner there, and `--home -0.5,-0.5`
+/// sets the home base's centre; a negative count is a bad value of its option.
+#[test]
+fn negative_coordinates_are_values_of_their_option() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2 m × 2 m of free cells from (-1, -1).
+    let yaml = write_ros_5cm(dir.path(), 40, 40, |_, _| false);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    std::fs::write(
+        &yaml,
+        text.replace("origin: [0.0, 0.0, 0.0]", "origin: [-1.0, -1.0, 0.0]"),
+    )
+    .unwrap();
+    let pgm = dir.path().join("img.pgm");
+    let (ros, bitmap) = (dir.path().join("ros.stmap"), dir.path().join("bitmap.stmap"));
+    run_ok(editor().arg("import").arg(&yaml).arg("-o").arg(&ros).args([
+        "--home",
+        "-0.5,-0.5",
+        "--home-radius-m",
+        "0.2",
+    ]));
+    run_ok(
+        editor()
+            .arg("import")
+            .arg(&pgm)
+            .arg("-o")
+            .arg(&bitmap)
+            .args(["--origin", "-10,-10"]),
+    );
+    let home = MapData::load(&ros).unwrap().home;
+    assert_eq!(home.center(), glam::DVec2::new(-0.5, -0.5), "{home:?}");
+    let origin = MapData::load(&bitmap).unwrap().obstacles.grid().origin();
+    assert_eq!(origin, glam::DVec2::new(-10.0, -10.0));
+    let out = editor()
+        .args(["generate", "noise", "--treasures", "-3", "-o"])
+        .arg(dir.path().join("n.stmap"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("invalid value '-3' for '--treasures"),
+        "{err}"
+    );
+}

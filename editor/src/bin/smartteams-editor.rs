@@ -26,8 +26,10 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Generate a map.
+    #[command(allow_negative_numbers = true)]
     Generate(GenerateArgs),
     /// Import a bitmap (PNG/PGM/JPEG/BMP), a ROS map server YAML or a Moving AI .map.
+    #[command(allow_negative_numbers = true)]
     Import(ImportArgs),
     /// Build a map from an XML scene of shapes.
     Compose {
@@ -38,6 +40,7 @@ enum Command {
         output: PathBuf,
     },
     /// Set the home base and scatter treasures reachable from it.
+    #[command(allow_negative_numbers = true)]
     Place {
         /// The map file.
         map: PathBuf,
@@ -62,6 +65,7 @@ enum Command {
     },
     /// The shortest any-angle path between two points: its length in metres and waypoints
     /// in world coordinates. Exit status 1 when there is none.
+    #[command(allow_negative_numbers = true)]
     Path {
         /// The map file.
         map: PathBuf,
@@ -80,6 +84,7 @@ enum Command {
         json: bool,
     },
     /// Draw a map as PNG.
+    #[command(allow_negative_numbers = true)]
     Preview {
         /// The map file.
         map: PathBuf,
@@ -98,7 +103,7 @@ enum Command {
 #[derive(Args, Clone)]
 struct PlaceArgs {
     /// Home base centre `X,Y` in metres (must be free).
-    #[arg(long, value_parser = parse_point)]
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     home: Option<DVec2>,
     /// Home base radius in metres.
     #[arg(long, default_value_t = 2.0)]
@@ -170,7 +175,7 @@ struct ImportArgs {
     #[arg(long, value_enum, default_value_t = UnknownArg::Blocked)]
     unknown: UnknownArg,
     /// World position `X,Y` of the map's lower-left corner (bitmaps, Moving AI).
-    #[arg(long, value_parser = parse_point, default_value = "0,0")]
+    #[arg(long, value_parser = parse_point, default_value = "0,0", allow_hyphen_values = true)]
     origin: DVec2,
     #[command(flatten)]
     place: PlaceArgs,
