@@ -309,7 +309,7 @@ pub struct OutputArgs {
     /// Write per-robot statistics to this CSV file at the end.
     #[arg(long)]
     pub robot_stats: Option<PathBuf>,
-    /// No progress bar and no summary.
+    /// No progress bar and no summary (a run stopped by a signal says in one line where).
     #[arg(long, short)]
     pub quiet: bool,
     /// Report a strategy that takes longer than this to decide one round (milliseconds, timed
@@ -607,8 +607,8 @@ fn stopped_sweep(e: &anyhow::Error) -> Option<ExitCode> {
     Some(ExitCode::from(signal.exit_status()))
 }
 
-/// Execute a resolved run and print its summary (unless quiet; a run stopped by a signal
-/// always says where it stopped). Its exit status: 0, or 130 / 143 after a stop signal.
+/// Execute a resolved run and print its summary (unless quiet; a quiet run stopped by a
+/// signal says in one line where it stopped). Its exit status: 0, or 130 / 143 after a stop signal.
 fn run_and_report(
     run: &RunConfig,
     registry: &StrategyRegistry,
@@ -623,9 +623,11 @@ fn run_and_report(
             e.context(format!("{doing} {file}"))
         }
     })?;
-    if !quiet || summary.interrupted.is_some() {
-        // A closed pipe (`smartteams run … | head -1`) is not an error of the run.
+    // A closed pipe (`smartteams run … | head -1`) is not an error of the run.
+    if !quiet {
         let _ = writeln!(std::io::stdout(), "{summary}");
+    } else if let Some(stop) = summary.stop_note() {
+        let _ = writeln!(std::io::stdout(), "{}: {stop}", summary.name);
     }
     Ok(summary
         .interrupted

@@ -123,13 +123,8 @@ impl std::fmt::Display for Summary {
             played as f64 / secs.max(1e-9),
             self.setup.as_secs_f64()
         )?;
-        if let Some(signal) = self.interrupted {
-            writeln!(
-                f,
-                "  interrupted at round {} by {} (what was played is kept)",
-                self.rounds,
-                signal.name()
-            )?;
+        if let Some(stop) = self.stop_note() {
+            writeln!(f, "  {stop}")?;
         }
         self.write_world(f)?;
         self.write_run_notes(f)
@@ -137,6 +132,17 @@ impl std::fmt::Display for Summary {
 }
 
 impl Summary {
+    /// Where a run stopped by a signal stopped (`None` for a run that played to its end).
+    pub fn stop_note(&self) -> Option<String> {
+        self.interrupted.map(|signal| {
+            format!(
+                "interrupted at round {} by {} (what was played is kept)",
+                self.rounds,
+                signal.name()
+            )
+        })
+    }
+
     /// The lines of what the robots did: exploration, treasures, robots, distance and the
     /// digest (the last without a line break).
     fn write_world(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

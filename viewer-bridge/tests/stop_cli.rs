@@ -136,6 +136,7 @@ fn sigterm_writes_a_checkpoint_that_resumes_to_the_uninterrupted_bytes() {
             "--rounds",
             "3000",
             "--no-viewer",
+            "-q",
             "--metrics",
             "cut.csv",
         ])
@@ -147,7 +148,10 @@ fn sigterm_writes_a_checkpoint_that_resumes_to_the_uninterrupted_bytes() {
     signal(&run, "-TERM");
     let out = run.wait_with_output().unwrap();
     assert_eq!(out.status.code(), Some(143));
-    let round = interrupted_round(&String::from_utf8_lossy(&out.stdout));
+    // Quiet: one line, where it stopped.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    let round = interrupted_round(&stdout);
     assert!(round < 3000, "stopped at {round}");
     let checkpoint = sim_core::io::Checkpoint::read(&d.join("cut.ckpt")).unwrap();
     assert_eq!(checkpoint.round(), round, "the checkpoint holds the last round played");
