@@ -33,8 +33,16 @@ pub enum Command {
     Run(RunArgs),
     /// Continue a run from its checkpoint (`run --checkpoint`) to the end it would have had.
     #[command(allow_negative_numbers = true)]
+    #[command(mut_arg("rrd", |a| a.help(RESUME_RRD_HELP)))]
+    #[command(mut_arg("log_every", defaults_as_the_run))]
+    #[command(mut_arg("known_every", defaults_as_the_run))]
+    #[command(mut_arg("known_per_robot_max", defaults_as_the_run))]
+    #[command(mut_arg("explored_every", defaults_as_the_run))]
+    #[command(mut_arg("max_links", defaults_as_the_run))]
     Resume(ResumeArgs),
     /// Show a map alone in Rerun (obstacles, home, treasures; 2D and 3D).
+    #[command(mut_arg("rrd", |a| a.help(VIEW_RRD_HELP)))]
+    #[command(mut_arg("no_viewer", |a| a.hide(true)))]
     View(ViewArgs),
     /// List the strategies this build knows.
     Strategies,
@@ -49,6 +57,26 @@ pub enum Command {
     /// rounds (or distance walked, `--x distance`) from metrics or sweep CSVs (PNG or SVG):
     /// mean and spread over seeds.
     Plot(PlotArgs),
+}
+
+/// `resume --rrd`: where a resumed run records when no viewer option is given.
+const RESUME_RRD_HELP: &str = "Write the recording to this `.rrd` file. The default when no other viewer option is \
+     given: where the run that wrote the checkpoint recorded, a file beside its recording \
+     (`x.rrd` → `x-from-<round>.rrd`) or the same viewer; none if it recorded nothing";
+
+/// `view --rrd`: where `view` records when no viewer option is given.
+const VIEW_RRD_HELP: &str = "Write the recording to this `.rrd` file. The default when no other viewer option is \
+     given: `<map stem>-map.rrd` in the working directory";
+
+/// A logging option of `resume`: its default is the run's, not `run`'s.
+fn defaults_as_the_run(arg: clap::Arg) -> clap::Arg {
+    let help = arg.get_help().map(ToString::to_string).unwrap_or_default();
+    let body = help
+        .split(" [default:")
+        .next()
+        .unwrap_or_default()
+        .trim_end_matches('.');
+    arg.help(format!("{body} [default: as the run that wrote the checkpoint]"))
 }
 
 /// Arguments of `smartteams plot`.
@@ -707,5 +735,41 @@ mod tests {
                 .unwrap_or_default();
             assert!(text.contains(&format!("[default: {default}]")), "{flag}: {text}");
         }
+    }
+
+    /// `resume` and `view` say their own defaults: a resume's logging options and
+    /// recording are the run's, `view` records `<map>-map.rrd` and has no `--no-viewer`.
+    #[test]
+    fn resume_and_view_help_say_their_own_defaults() {
+        let help = |command: &str| {
+            <Cli as clap::CommandFactory>::command()
+                .find_subcommand_mut(command)
+                .unwrap()
+                .render_help()
+                .to_string()
+        };
+        let resume = help("resume");
+        for flag in [
+            "--log-every",
+            "--known-every",
+            "--known-per-robot-max",
+            "--explored-every",
+            "--max-links",
+        ] {
+            let line = resume.lines().find(|l| l.trim_start().starts_with(flag)).unwrap();
+            assert!(
+                line.ends_with("[default: as the run that wrote the checkpoint]"),
+                "{line}"
+            );
+        }
+        assert!(
+            resume.contains("x-from-<round>.rrd") && !resume.contains("<run name>.rrd"),
+            "{resume}"
+        );
+        let view = help("view");
+        assert!(
+            view.contains("<map stem>-map.rrd") && !view.contains("--no-viewer"),
+            "{view}"
+        );
     }
 }
