@@ -83,3 +83,16 @@ def test_observations_rewards_and_truncation_mean_what_they_say():
     # first to see, so positive, and whole cells of 1 m² each.
     assert total > 0 and total == int(total)
     assert env.metrics()["round"][-1] == 25
+
+
+def test_the_random_policy_example_prints_the_same_every_run():
+    import subprocess
+    import sys
+
+    example = REPO / "examples" / "python" / "pettingzoo_random.py"
+    outputs = [
+        subprocess.run([sys.executable, str(example)], capture_output=True, text=True, check=True).stdout
+        for _ in range(2)
+    ]
+    assert "rounds; mean return" in outputs[0]
+    assert outputs[0] == outputs[1]
