@@ -149,25 +149,160 @@ fn line_col(text: &str, offset: u64) -> (usize, usize) {
     (line, col)
 }
 
-/// Check well-formedness first, so syntax errors carry a line and column.
+/// What a scene's elements may hold: each element's name, its required and optional
+/// attributes (all numbers; `quantity` a count), and the elements it may contain.
+struct ElementForm {
+    name: &'static str,
+    required: &'static [&'static str],
+    optional: &'static [&'static str],
+    children: &'static [&'static str],
+}
+
+const SHAPES: &[&str] = &["home", "treasure", "disc", "rect", "capsule", "polygon"];
+
+const FORMS: &[ElementForm] = &[
+    ElementForm {
+        name: "scene",
+        required: &["width-m", "height-m"],
+        optional: &["cell-m", "origin-x", "origin-y"],
+        children: SHAPES,
+    },
+    ElementForm {
+        name: "home",
+        required: &["x", "y"],
+        optional: &["radius"],
+        children: &[],
+    },
+    ElementForm {
+        name: "treasure",
+        required: &["x", "y"],
+        optional: &["quantity"],
+        children: &[],
+    },
+    ElementForm {
+        name: "disc",
+        required: &["x", "y", "radius"],
+        optional: &[],
+        children: &[],
+    },
+    ElementForm {
+        name: "rect",
+        required: &["x", "y", "width", "height"],
+        optional: &["rotation-deg"],
+        children: &[],
+    },
+    ElementForm {
+        name: "capsule",
+        required: &["x1", "y1", "x2", "y2", "radius"],
+        optional: &[],
+        children: &[],
+    },
+    ElementForm {
+        name: "polygon",
+        required: &[],
+        optional: &["x", "y", "rotation-deg"],
+        children: &["point"],
+    },
+    ElementForm {
+        name: "point",
+        required: &["x", "y"],
+        optional: &[],
+        children: &[],
+    },
+];
+
+/// Check the scene's text before reading it, so that each fault carries a line and column:
+/// well-formed XML, known elements where they stand, each element's attributes known,
+/// present when required and numbers. A misspelt attribute would otherwise be ignored.
 fn check_xml(text: &str, path: &Path) -> Result<()> {
     let mut reader = quick_xml::Reader::from_str(text);
     reader.config_mut().check_end_names = true;
+    let mut open: Vec<&ElementForm> = Vec::new();
+    let at = |offset: u64, problem: String| {
+        let (line, column) = line_col(text, offset);
+        EditorError::Xml {
+            path: path.to_path_buf(),
+            line,
+            column,
+            problem,
+        }
+    };
     loop {
+        let before = reader.buffer_position();
+        // An element's fault is placed at its `<` (what precedes it may be white space).
+        let lt = |before: u64| {
+            let from = usize::try_from(before).unwrap_or(usize::MAX).min(text.len());
+            (from + text[from..].find('<').unwrap_or(0)) as u64
+        };
         match reader.read_event() {
             Ok(Event::Eof) => return Ok(()),
-            Ok(_) => {}
-            Err(e) => {
-                let (line, column) = line_col(text, reader.error_position());
-                return Err(EditorError::Xml {
-                    path: path.to_path_buf(),
-                    line,
-                    column,
-                    problem: e.to_string(),
-                });
+            Ok(Event::Start(e)) => {
+                let form = check_element(&e, open.last().copied()).map_err(|p| at(lt(before), p))?;
+                open.push(form);
             }
+            Ok(Event::Empty(e)) => {
+                check_element(&e, open.last().copied()).map_err(|p| at(lt(before), p))?;
+            }
+            Ok(Event::End(_)) => {
+                open.pop();
+            }
+            Ok(_) => {}
+            Err(e) => return Err(at(reader.error_position(), e.to_string())),
         }
     }
+}
+
+/// Check one element against its form where it stands (inside `parent`, or at the top);
+/// returns its form, or what is wrong.
+fn check_element(
+    e: &quick_xml::events::BytesStart<'_>,
+    parent: Option<&ElementForm>,
+) -> std::result::Result<&'static ElementForm, String> {
+    let name = e.name().as_ref().to_owned();
+    let allowed: &[&str] = parent.map_or(&["scene"], |p| p.children);
+    let form = FORMS
+        .iter()
+        .find(|f| f.name == name && allowed.contains(&f.name))
+        .ok_or_else(|| {
+            let listed: Vec<String> = allowed.iter().map(|a| format!("<{a}>")).collect();
+            match parent {
+                Some(p) if allowed.is_empty() => format!("<{}> holds no elements, found <{name}>", p.name),
+                _ => format!("unknown element <{name}> (expected here: {})", listed.join(", ")),
+            }
+        })?;
+    let mut seen = Vec::new();
+    for attribute in e.attributes() {
+        let attribute = attribute.map_err(|err| err.to_string())?;
+        let key = attribute.key.as_ref().to_owned();
+        let Some(&known) = form.required.iter().chain(form.optional).find(|&&k| k == key) else {
+            let all: Vec<&str> = form.required.iter().chain(form.optional).copied().collect();
+            return Err(format!(
+                "<{name}> has no attribute `{key}` (its attributes: {})",
+                all.join(", ")
+            ));
+        };
+        let value = attribute
+            .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+            .map_err(|err| err.to_string())?;
+        let number = if known == "quantity" {
+            value.trim().parse::<u32>().is_ok()
+        } else {
+            value.trim().parse::<f64>().is_ok_and(f64::is_finite)
+        };
+        if !number {
+            let kind = if known == "quantity" {
+                "a whole number"
+            } else {
+                "a number"
+            };
+            return Err(format!("<{name}> {known} must be {kind}, got '{value}'"));
+        }
+        seen.push(known);
+    }
+    if let Some(missing) = form.required.iter().find(|r| !seen.contains(r)) {
+        return Err(format!("<{name}> needs the attribute `{missing}`"));
+    }
+    Ok(form)
 }
 
 /// Parse scene XML text; `path` names the file in errors.

@@ -121,3 +121,41 @@ fn scene_errors_name_the_file_and_place() {
     let e = parse_scene(treasure, Path::new("t.xml")).unwrap_err().to_string();
     assert!(e.contains("t.xml") && e.contains("treasure"), "{e}");
 }
+
+/// A misspelt attribute or element, a value that is no number and a missing attribute are
+/// refused at their element's line and column, with what the element may hold (a misspelt
+/// optional attribute was ignored: the shape was built without it).
+#[test]
+fn scene_faults_are_placed_at_their_element() {
+    let scene = |body: &str| format!("<scene width-m=\"10\" height-m=\"10\">\n  {body}\n</scene>\n");
+    let cases = [
+        (
+            r#"<rect x="5" y="5" width="2" height="1" rotaton-deg="30"/>"#,
+            "s.xml:2:3: <rect> has no attribute `rotaton-deg` (its attributes: x, y, width, height, rotation-deg)",
+        ),
+        (
+            r#"<dsc x="5" y="5" radius="1"/>"#,
+            "s.xml:2:3: unknown element <dsc> (expected here: <home>, <treasure>, <disc>, <rect>, <capsule>, <polygon>)",
+        ),
+        (
+            r#"<home x="1O" y="5"/>"#,
+            "s.xml:2:3: <home> x must be a number, got '1O'",
+        ),
+        (
+            r#"<disc x="5" y="5"/>"#,
+            "s.xml:2:3: <disc> needs the attribute `radius`",
+        ),
+        (
+            r#"<treasure x="5" y="5" quantity="-2"/>"#,
+            "s.xml:2:3: <treasure> quantity must be a whole number, got '-2'",
+        ),
+        (
+            r#"<polygon><point x="1" y="1"/><disc x="5" y="5" radius="1"/></polygon>"#,
+            "s.xml:2:32: unknown element <disc> (expected here: <point>)",
+        ),
+    ];
+    for (body, expected) in cases {
+        let e = parse_scene(&scene(body), Path::new("s.xml")).unwrap_err().to_string();
+        assert_eq!(e, expected);
+    }
+}
