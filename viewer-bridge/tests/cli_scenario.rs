@@ -300,8 +300,8 @@ fn the_summary_names_the_files_written() {
     );
 }
 
-/// Tactics that only follow a goal, with no goal given and none to set one, are refused:
-/// the robots would stand still.
+/// Tactics that only follow a goal, with no goal given and none to set one (alone or with
+/// tactics that only react), are refused: the robots would stand still.
 #[test]
 fn goal_following_tactics_without_a_goal_are_refused() {
     let config = |params: &str| {
@@ -316,6 +316,14 @@ fn goal_following_tactics_without_a_goal_are_refused() {
     assert!(!ok, "accepted");
     assert!(
         err.contains("t.xml:3:3") && err.contains("tactics boundary go to a goal and none sets one"),
+        "{err}"
+    );
+    // Tactics that only react (to mates too near, to a low battery) set no goal either.
+    let reacting = r#"<param name="tactics" value="collision,shortest_path,energy,boundary"/>"#;
+    let (ok, err) = run_config("t.xml", &config(reacting), &[]);
+    assert!(!ok, "accepted");
+    assert!(
+        err.contains("tactics collision, shortest_path, energy, boundary go to a goal and none sets one"),
         "{err}"
     );
     let with_goal = r#"<param name="tactics" value="boundary"/><param name="goal" value="70,70"/>"#;

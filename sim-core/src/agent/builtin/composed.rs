@@ -36,10 +36,15 @@ impl Composed {
             )));
         }
         let goal = p.point("goal")?;
-        // Built-in tactics that only follow a goal: made of them alone, with no goal given,
-        // nothing would ever set one and the robots would stand still.
+        // Built-in tactics that only follow a goal, and those that only react (to mates too
+        // near, to a low battery): made of them alone, with no goal given, nothing would
+        // ever set one and the robots would stand still.
         let followers = ["boundary", "shortest_path"];
-        if goal.is_none() && names.iter().all(|n| followers.contains(n)) {
+        let reacting = ["collision", "energy"];
+        if goal.is_none()
+            && names.iter().any(|n| followers.contains(n))
+            && names.iter().all(|n| followers.contains(n) || reacting.contains(n))
+        {
             return Err(crate::Error::InvalidParameter(format!(
                 "tactics {} go to a goal and none sets one: give goal=\"X,Y\" or add a tactic that sets goals (frontier, team)",
                 names.join(", ")
