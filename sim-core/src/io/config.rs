@@ -495,6 +495,11 @@ impl SimConfig {
                 }
             }
         };
+        let twice = (0..g.params.len()).find(|&k| g.params[..k].iter().any(|q| q.name == g.params[k].name));
+        if let Some(k) = twice {
+            let param = &g.params[k].name;
+            return Err(self.error(at, format!("the group gives the parameter '{param}' twice")));
+        }
         Ok(GroupConfig {
             name: g.name.clone().unwrap_or_else(|| format!("group{index}")),
             count,
@@ -680,6 +685,16 @@ mod tests {
             group("a")
         ));
         assert_eq!(err, "c.xml:5:3: a second group named 'a' (the first is at 3:3)");
+    }
+
+    /// A parameter given twice in a group is refused at the group (the last one won).
+    #[test]
+    fn a_parameter_given_twice_is_refused() {
+        let err = parse_error(
+            "<simulation>\n  <map file=\"x.stmap\"/>\n  <group count=\"1\" type=\"explorer\" strategy=\"tactics\">\n    \
+             <param name=\"goal\" value=\"1,1\"/><param name=\"goal\" value=\"2,2\"/>\n  </group>\n</simulation>\n",
+        );
+        assert_eq!(err, "c.xml:3:3: the group gives the parameter 'goal' twice");
     }
 
     /// Unknown attributes and elements, and a missing <map>, are placed and named.
