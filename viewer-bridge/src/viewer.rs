@@ -58,7 +58,22 @@ pub fn connect_url(arg: &str) -> Result<String> {
     if !scheme_ok || authority(&url).is_none_or(str::is_empty) {
         bail!("--connect={arg}: not a Rerun viewer address (expected HOST, HOST:PORT or rerun+http://HOST:PORT/proxy)");
     }
+    if let Some(port) = authority(&url).and_then(port_of)
+        && port.parse::<u16>().is_err()
+    {
+        bail!("--connect={arg}: '{port}' is not a port (expected HOST:PORT, PORT from 0 to 65535)");
+    }
     Ok(url)
+}
+
+/// The port part of `host:port` (`[v6]:port` too), if it has one.
+fn port_of(authority: &str) -> Option<&str> {
+    let host_end = if authority.starts_with('[') {
+        authority.find(']')?
+    } else {
+        0
+    };
+    authority[host_end..].rsplit_once(':').map(|(_, port)| port)
 }
 
 /// `host:port` of a proxy URL.
@@ -252,6 +267,11 @@ mod tests {
             assert!(err.contains(bad) && err.contains("expected"), "{bad}: {err}");
         }
         assert_eq!(authority(DEFAULT_CONNECT_URL), Some("127.0.0.1:9876"));
+        assert_eq!(connect_url("[::1]:9000").unwrap(), "rerun+http://[::1]:9000/proxy");
+        for (bad, port) in [("notahost:xyz", "xyz"), ("host:70000", "70000"), ("[::1]:p", "p")] {
+            let err = connect_url(bad).unwrap_err().to_string();
+            assert!(err.contains(&format!("'{port}' is not a port")), "{bad}: {err}");
+        }
     }
 
     #[test]
