@@ -21,7 +21,7 @@ use sim_core::spatial::{KnownMap, RobotId};
 use sim_core::world::{Action, Retention};
 
 use crate::simulation::Run;
-use crate::to_py;
+use crate::{to_py, whole, whole_or_none};
 
 /// The strategy name controlled groups get (not a name a config can use).
 const CONTROLLED: &str = "smartteams.env.controlled";
@@ -59,9 +59,11 @@ impl EnvCore {
         config: std::path::PathBuf,
         groups: Option<Vec<String>>,
         robots: Option<Vec<u32>>,
-        patch_cells: u32,
-        threads: Option<usize>,
+        patch_cells: i128,
+        threads: Option<i128>,
     ) -> PyResult<Self> {
+        let threads = whole_or_none("threads", threads)?;
+        let patch_cells: u32 = whole("patch_cells", patch_cells)?;
         if patch_cells == 0 || patch_cells.is_multiple_of(2) || patch_cells > 101 {
             return Err(to_py(format!(
                 "patch_cells must be odd, from 1 to 101; got {patch_cells}"
@@ -112,7 +114,8 @@ impl EnvCore {
     /// Start a new episode with `seed` (and at most `rounds` rounds, or the config's);
     /// returns the observations `(patches, states)`.
     #[pyo3(signature = (seed, rounds=None))]
-    fn reset<'py>(&mut self, py: Python<'py>, seed: u64, rounds: Option<u64>) -> PyResult<Observation<'py>> {
+    fn reset<'py>(&mut self, py: Python<'py>, seed: i128, rounds: Option<i128>) -> PyResult<Observation<'py>> {
+        let (seed, rounds): (u64, Option<u64>) = (whole("seed", seed)?, whole_or_none("max_rounds", rounds)?);
         let mut config = self.config.clone();
         config.seed = seed;
         if let Some(r) = rounds {

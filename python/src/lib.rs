@@ -36,6 +36,24 @@ pub(crate) fn to_py(e: impl std::fmt::Display) -> PyErr {
     SmartTeamsError::new_err(e.to_string())
 }
 
+/// A whole number from Python as `T`, `name` what it is: out of `T`'s range (a negative
+/// count, a seed past 2⁶⁴ − 1) is a `SmartTeamsError` naming it, where `PyO3`'s own
+/// conversion would raise `OverflowError`.
+pub(crate) fn whole<T: TryFrom<i128>>(name: &str, value: i128) -> PyResult<T> {
+    T::try_from(value).map_err(|_| {
+        if value < 0 {
+            to_py(format!("{name} must not be negative, got {value}"))
+        } else {
+            to_py(format!("{name} {value} is too large"))
+        }
+    })
+}
+
+/// [`whole`] of an optional argument.
+pub(crate) fn whole_or_none<T: TryFrom<i128>>(name: &str, value: Option<i128>) -> PyResult<Option<T>> {
+    value.map(|v| whole(name, v)).transpose()
+}
+
 /// The `smartteams._native` module.
 #[pymodule(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -14,7 +14,7 @@ use viewer_bridge::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
 use viewer_bridge::viewer::ViewerTarget;
 
 use crate::grids::{self, Window};
-use crate::to_py;
+use crate::{to_py, whole_or_none};
 
 /// Rounds between checkpoints that a checkpoint written from Python records, for a
 /// `smartteams resume` of it (the command line's default).
@@ -194,11 +194,14 @@ impl Simulation {
     #[pyo3(signature = (config, *, seed=None, rounds=None, threads=None, rrd=None))]
     fn new(
         config: PathBuf,
-        seed: Option<u64>,
-        rounds: Option<u64>,
-        threads: Option<usize>,
+        seed: Option<i128>,
+        rounds: Option<i128>,
+        threads: Option<i128>,
         rrd: Option<PathBuf>,
     ) -> PyResult<Self> {
+        let (seed, rounds): (Option<u64>, Option<u64>) =
+            (whole_or_none("seed", seed)?, whole_or_none("rounds", rounds)?);
+        let threads = whole_or_none("threads", threads)?;
         let mut config = SimConfig::load(&config).map_err(to_py)?;
         if let Some(s) = seed {
             config.seed = s;
@@ -216,7 +219,8 @@ impl Simulation {
     /// [`checkpoint`](Self::checkpoint)), to the end it would have had.
     #[staticmethod]
     #[pyo3(signature = (path, *, threads=None, rrd=None))]
-    fn resume(path: PathBuf, threads: Option<usize>, rrd: Option<PathBuf>) -> PyResult<Self> {
+    fn resume(path: PathBuf, threads: Option<i128>, rrd: Option<PathBuf>) -> PyResult<Self> {
+        let threads = whole_or_none("threads", threads)?;
         let checkpoint = Checkpoint::read(&path).map_err(to_py)?;
         let config = checkpoint.source().config().map_err(to_py)?;
         let registry = crate::strategy::registry();

@@ -13,6 +13,7 @@ pytest.importorskip("pettingzoo", reason="the rl extra (pip install 'smartteams[
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 from pettingzoo.test import parallel_api_test, parallel_seed_test  # noqa: E402
 
+import smartteams  # noqa: E402
 from smartteams.env import gym_env, parallel_env  # noqa: E402
 
 DEMO = REPO / "configs" / "demo.xml"
@@ -96,3 +97,11 @@ def test_the_random_policy_example_prints_the_same_every_run():
     ]
     assert "rounds; mean return" in outputs[0]
     assert outputs[0] == outputs[1]
+
+
+def test_out_of_range_arguments_raise_saying_which():
+    with pytest.raises(smartteams.SmartTeamsError, match="patch_cells must not be negative, got -3"):
+        parallel_env(DEMO, patch_cells=-3)
+    env = parallel_env(DEMO, max_rounds=-1)
+    with pytest.raises(smartteams.SmartTeamsError, match="max_rounds must not be negative, got -1"):
+        env.reset(seed=1)

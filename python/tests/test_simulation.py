@@ -144,6 +144,15 @@ def test_bad_arguments_raise_saying_what_is_allowed(demo_config):
         with pytest.raises(smartteams.SmartTeamsError, match=f"no robot {robot}: the run has 20 robots, ids 0 to 19"):
             sim.known_map(robot)
     assert sim.round == 0
+    # Counts and seeds out of range raise SmartTeamsError naming them, not OverflowError.
+    for kwargs, said in [
+        ({"rounds": -1}, "rounds must not be negative, got -1"),
+        ({"seed": -5}, "seed must not be negative, got -5"),
+        ({"seed": 2**64}, f"seed {2**64} is too large"),
+        ({"threads": -2}, "threads must not be negative, got -2"),
+    ]:
+        with pytest.raises(smartteams.SmartTeamsError, match=said):
+            smartteams.Simulation(str(demo_config), **kwargs)
 
 
 def test_recording_verifies_with_the_rerun_cli(tmp_path, demo_config):
