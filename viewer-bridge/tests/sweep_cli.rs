@@ -229,6 +229,14 @@ fn bad_sweep_files_are_refused_with_file_line_and_column() {
             "s.xml:2:3: unknown strategy 'teleport'",
         ),
         (
+            "<sweep config=\"CONFIG\">\n  <param group=\"scouts\" name=\"share_evry\" values=\"5\"/>\n</sweep>",
+            "s.xml:2:3: scouts.share_evry=5: strategy 'cooperative': unknown parameter 'share_evry'",
+        ),
+        (
+            "<sweep config=\"CONFIG\">\n  <strategy group=\"scouts\" values=\"cooperative,random_walk\"/>\n  <param group=\"scouts\" name=\"share_every\" values=\"5\"/>\n</sweep>",
+            "s.xml:3:3: scouts.share_every=5: strategy 'random_walk': unknown parameter",
+        ),
+        (
             "<sweep config=\"CONFIG\">\n  <map values=\"nowhere.stmap\"/>\n</sweep>",
             "s.xml:2:3: map file",
         ),

@@ -573,7 +573,8 @@ impl Sweep {
         }
     }
 
-    /// Check what needs the strategies: every strategy named exists.
+    /// Check what needs the strategies: every strategy named exists, and takes the values
+    /// of every parameter axis.
     pub fn check(&self, registry: &StrategyRegistry) -> Result<()> {
         for axis in &self.axes {
             if let Vary::Strategy(_) = axis.vary
@@ -581,6 +582,34 @@ impl Sweep {
             {
                 let known: Vec<_> = registry.names().collect();
                 return Err(self.error_at(axis.at, format!("unknown strategy '{v}' (known: {})", known.join(", "))));
+            }
+        }
+        for axis in &self.axes {
+            if let Vary::Param(g, name) = &axis.vary {
+                self.check_param(registry, *g, name, axis)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Each value of a parameter `axis` of group `g` as each strategy the group may run
+    /// takes it (its own, or those a strategy axis gives it): a misspelt name or a bad
+    /// value is placed at the axis, before any run starts.
+    fn check_param(&self, registry: &StrategyRegistry, g: usize, name: &str, axis: &Axis) -> Result<()> {
+        let group = &self.base.groups[g];
+        let mut strategies = vec![group.strategy.as_str()];
+        for other in &self.axes {
+            if matches!(other.vary, Vary::Strategy(h) if h == g) {
+                strategies.extend(other.values.iter().map(String::as_str));
+            }
+        }
+        for strategy in strategies {
+            for value in &axis.values {
+                let params = group.params.clone().with(name, value.as_str());
+                if let Err(e) = registry.create(strategy, &params) {
+                    let message = format!("{}={value}: {e}", axis.column);
+                    return Err(self.error_at(axis.at, message));
+                }
             }
         }
         Ok(())
