@@ -234,7 +234,7 @@ fn bad_sweep_files_are_refused_with_file_line_and_column() {
         ),
         (
             "<sweep config=\"CONFIG\">\n  <strategy group=\"scouts\" values=\"cooperative,random_walk\"/>\n  <param group=\"scouts\" name=\"share_every\" values=\"5\"/>\n</sweep>",
-            "s.xml:3:3: scouts.share_every=5: strategy 'random_walk': unknown parameter",
+            "s.xml:2:3: scouts.strategy=random_walk: strategy 'random_walk': unknown parameter",
         ),
         (
             "<sweep config=\"CONFIG\">\n  <map values=\"nowhere.stmap\"/>\n</sweep>",

@@ -5,14 +5,14 @@
 //! <sweep name="demo-sweep" config="demo.xml" rounds="200">  <!-- config: relative to this file -->
 //!   <seed from="1" to="3"/>                         <!-- or values="1,2,3" -->
 //!   <count group="scouts" values="4,8"/>
-//!   <strategy group="scouts" values="cooperative,frontier"/>
+//!   <strategy group="diggers" values="excavator,random_walk"/>
 //!   <param group="scouts" name="share_every" values="5,20"/>
 //!   <map values="../maps/demo.stmap,../maps/rooms.stmap"/>
 //!   <rounds values="100,200"/>
 //! </sweep>
 //! ```
 //!
-//! Each element is an axis and adds a column (`seed`, `scouts.count`, `scouts.strategy`,
+//! Each element is an axis and adds a column (`seed`, `scouts.count`, `diggers.strategy`,
 //! `scouts.share_every`, `map`, `rounds`); the runs are every combination of the axes'
 //! values, the last axis varying fastest, numbered from 0 in that order. The CSV has one row
 //! per run and round: `run`, the axes' columns, then the metrics columns.
@@ -573,8 +573,8 @@ impl Sweep {
         }
     }
 
-    /// Check what needs the strategies: every strategy named exists, and takes the values
-    /// of every parameter axis.
+    /// Check what needs the strategies: every strategy named exists, and takes its group's
+    /// parameters and the values of every parameter axis.
     pub fn check(&self, registry: &StrategyRegistry) -> Result<()> {
         for axis in &self.axes {
             if let Vary::Strategy(_) = axis.vary
@@ -582,6 +582,20 @@ impl Sweep {
             {
                 let known: Vec<_> = registry.names().collect();
                 return Err(self.error_at(axis.at, format!("unknown strategy '{v}' (known: {})", known.join(", "))));
+            }
+        }
+        // The group's parameters in the base config go to every strategy it runs.
+        for axis in &self.axes {
+            if let Vary::Strategy(g) = axis.vary {
+                for strategy in &axis.values {
+                    if let Err(e) = registry.create(strategy, &self.base.groups[g].params) {
+                        let message = format!(
+                            "{}={strategy}: {e} (the group's parameters in the base config go to every strategy it runs)",
+                            axis.column
+                        );
+                        return Err(self.error_at(axis.at, message));
+                    }
+                }
             }
         }
         for axis in &self.axes {
