@@ -7,7 +7,7 @@ use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sim_core::agent::StrategyRegistry;
-use sim_core::io::{Checkpoint, Observer, RunSource, SimConfig, write_checkpoint};
+use sim_core::io::{Checkpoint, Observer, RunOutputs, RunSource, SimConfig, write_checkpoint};
 use sim_core::spatial::RobotId;
 use sim_core::world::{METRICS_COLUMNS, RoundMetrics};
 use viewer_bridge::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
@@ -56,6 +56,13 @@ impl Run {
         rrd: Option<PathBuf>,
     ) -> PyResult<Self> {
         sim_core::engine::check_threads(threads).map_err(|e| to_py(format!("threads {e}")))?;
+        let mut source = source;
+        // What its checkpoints say it writes: no CSV and none of the config's outputs, and
+        // no recording until `record_to`.
+        source.outputs = RunOutputs {
+            recording: Some(viewer_bridge::cli::recording_words(None)),
+            ..RunOutputs::default()
+        };
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.unwrap_or(0))
             .build()
@@ -82,15 +89,14 @@ impl Run {
             &[("config", &config.path), ("map", config.map_path())],
         )
         .map_err(|e| to_py(format!("{e:#}")))?;
-        let rec = viewer_bridge::viewer::open(
-            self.sim.name(),
-            &ViewerTarget::Rrd(path),
-            viewer_bridge::blueprint::simulation(),
-        )
-        .map_err(|e| to_py(format!("{e:#}")))?;
+        let target = ViewerTarget::Rrd(path);
+        let rec = viewer_bridge::viewer::open(self.sim.name(), &target, viewer_bridge::blueprint::simulation())
+            .map_err(|e| to_py(format!("{e:#}")))?;
         let mut observer = RerunObserver::new(rec, LogOptions::default()).with_when_behind(WhenBehind::Wait);
         observer.on_start(&self.sim).map_err(to_py)?;
         self.recording = Some(observer);
+        self.source.outputs.recording = Some(viewer_bridge::cli::recording_words(Some(&target)));
+        self.source.outputs.logging = Some(viewer_bridge::cli::logging_words(&LogOptions::default()));
         Ok(())
     }
 

@@ -105,6 +105,23 @@ def test_python_checkpoint_resumes_with_the_cli(tmp_path, smartteams_bin, demo_c
     assert digest == [sim.digest]
 
 
+def test_the_cli_resumes_a_python_run_writing_what_it_wrote(tmp_path, smartteams_bin):
+    # The demo in a folder of its own, so that its <outputs> (which a Python run does not
+    # write) would show there.
+    cfg, work = tmp_path / "cfg", tmp_path / "work"
+    cfg.mkdir()
+    work.mkdir()
+    config = cfg / "demo.xml"
+    config.write_text((REPO / "configs" / "demo.xml").read_text().replace('"../maps/', f'"{REPO / "maps"}/'))
+    with smartteams.Simulation(str(config), rounds=20, rrd=str(work / "py.rrd")) as sim:
+        sim.step(5)
+        sim.checkpoint(str(work / "py.ckpt"))
+    out = run_cli(smartteams_bin, "resume", "py.ckpt", cwd=work)
+    assert out.returncode == 0, out.stderr
+    assert sorted(p.name for p in cfg.iterdir()) == ["demo.xml"]
+    assert (work / "py-from-5.rrd").stat().st_size > 0
+
+
 def test_same_results_on_one_and_two_threads(demo_config):
     runs = []
     for threads in (1, 2):

@@ -214,7 +214,7 @@ impl ViewerArgs {
 
 /// How a checkpoint names a run's recording ([`RunOutputs::recording`]): `none`,
 /// `rrd:PATH` (absolute), `connect:URL` or `spawn:PORT`.
-fn recording_words(target: Option<&ViewerTarget>) -> String {
+pub fn recording_words(target: Option<&ViewerTarget>) -> String {
     match target {
         None => "none".to_owned(),
         Some(ViewerTarget::Rrd(path)) => format!("rrd:{}", absolute(path).display()),
@@ -226,7 +226,7 @@ fn recording_words(target: Option<&ViewerTarget>) -> String {
 /// How a checkpoint records what a recording holds ([`RunOutputs::logging`]): the options
 /// as typed, `log-every=K explored-every=K known-every=K max-links=N known-per-robot-max=N`
 /// (`known-every=0`: none).
-fn logging_words(log: &LogOptions) -> String {
+pub fn logging_words(log: &LogOptions) -> String {
     format!(
         "log-every={} explored-every={} known-every={} max-links={} known-per-robot-max={}",
         log.log_every,
@@ -409,6 +409,7 @@ impl OutputArgs {
                 robot_stats: robot_stats.as_deref().map(absolute),
                 recording: Some(recording_words(viewer.as_ref())),
                 logging: Some(logging_words(&log)),
+                config_outputs: true,
             };
             plan
         });
@@ -488,10 +489,14 @@ impl ResumeArgs {
     pub fn resolve(mut self) -> Result<RunConfig> {
         let checkpoint = Checkpoint::read(&self.checkpoint)?;
         self.outputs_as_its_run(&checkpoint)?;
-        let config = checkpoint
+        let mut config = checkpoint
             .source()
             .config()
             .with_context(|| format!("setting up the run of checkpoint {}", self.checkpoint.display()))?;
+        if !checkpoint.source().outputs.config_outputs {
+            // Its run wrote none of them (a Python run): neither does the resume.
+            config.outputs = sim_core::io::Outputs::default();
+        }
         let default_rrd = PathBuf::from(format!("{}-from-{}.rrd", config.name, checkpoint.round()));
         let plan = CheckpointPlan {
             path: self.checkpoint,

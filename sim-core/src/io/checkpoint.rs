@@ -79,6 +79,16 @@ pub struct RunOutputs {
     pub recording: Option<String>,
     /// How much the recording holds, in the same front end's words; `None`: it did not say.
     pub logging: Option<String>,
+    /// Whether the run wrote the config's `<outputs>` where it was asked for nothing else
+    /// (`smartteams run` does; a Python run does not); a resume does as its run did.
+    /// Checkpoints of earlier versions do not say: as `smartteams run`.
+    #[serde(default = "wrote_config_outputs")]
+    pub config_outputs: bool,
+}
+
+/// [`RunOutputs::config_outputs`] of checkpoints that do not say.
+fn wrote_config_outputs() -> bool {
+    true
 }
 
 impl RunSource {
