@@ -766,6 +766,10 @@ impl Move {
     fn __repr__(&self) -> String {
         format!("Move({}, {})", self.dx, self.dy)
     }
+    /// What `pickle` makes it again from (strategies that keep actions checkpoint).
+    fn __getnewargs__(&self) -> (f64, f64) {
+        (self.dx, self.dy)
+    }
 }
 
 /// Move in a straight line towards `(x, y)`, as far as speed, energy, obstacles and other
@@ -788,6 +792,10 @@ impl MoveTo {
     }
     fn __repr__(&self) -> String {
         format!("MoveTo({}, {})", self.x, self.y)
+    }
+    /// What `pickle` makes it again from.
+    fn __getnewargs__(&self) -> (f64, f64) {
+        (self.x, self.y)
     }
 }
 
@@ -824,6 +832,10 @@ impl Excavate {
     fn __repr__(&self) -> String {
         format!("Excavate({})", self.treasure)
     }
+    /// What `pickle` makes it again from.
+    fn __getnewargs__(&self) -> (u32,) {
+        (self.treasure,)
+    }
 }
 
 /// Load dug units of treasure `treasure` (within reach; as many as fit and lie there).
@@ -842,6 +854,10 @@ impl Load {
     }
     fn __repr__(&self) -> String {
         format!("Load({})", self.treasure)
+    }
+    /// What `pickle` makes it again from.
+    fn __getnewargs__(&self) -> (u32,) {
+        (self.treasure,)
     }
 }
 
@@ -887,6 +903,10 @@ impl Broadcast {
     fn __repr__(&self) -> String {
         format!("Broadcast({:?}, <{} bytes>)", self.kind, self.data.len())
     }
+    /// What `pickle` makes it again from.
+    fn __getnewargs__<'py>(&self, py: Python<'py>) -> (String, Bound<'py, PyBytes>) {
+        (self.kind.clone(), PyBytes::new(py, &self.data))
+    }
 }
 
 /// A message to robot `to` if it is in range: `data` (bytes) under `kind`.
@@ -916,5 +936,9 @@ impl SendTo {
     }
     fn __repr__(&self) -> String {
         format!("Send({}, {:?}, <{} bytes>)", self.to, self.kind, self.data.len())
+    }
+    /// What `pickle` makes it again from.
+    fn __getnewargs__<'py>(&self, py: Python<'py>) -> (u32, String, Bound<'py, PyBytes>) {
+        (self.to, self.kind.clone(), PyBytes::new(py, &self.data))
     }
 }

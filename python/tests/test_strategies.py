@@ -246,6 +246,31 @@ def test_a_run_with_python_strategies_checkpoints_and_resumes(tmp_path):
     assert resumed.digest == whole.digest
 
 
+class ActionKeeper(Walker):
+    """A walker that keeps its last actions, of every kind, in its state."""
+
+    def decide(self, robot):
+        move = super().decide(robot)
+        self.last = [move, smartteams.MoveTo(1.0, 2.0), smartteams.Excavate(3), smartteams.Load(4)]
+        self.last += [smartteams.Broadcast("k", b"\x00a"), smartteams.Send(1, "s", b"b"), smartteams.Idle()]
+        return move
+
+
+smartteams.register_strategy("py_action_keeper", ActionKeeper)
+
+
+def test_a_strategy_that_keeps_actions_checkpoints_and_resumes(tmp_path):
+    config = str(walkers(tmp_path, rounds=40, strategy="py_action_keeper"))
+    whole = smartteams.Simulation(config)
+    whole.run()
+    part = smartteams.Simulation(config)
+    part.step(15)
+    part.checkpoint(str(tmp_path / "a.ckpt"))
+    resumed = smartteams.Simulation.resume(str(tmp_path / "a.ckpt"))
+    resumed.run()
+    assert resumed.digest == whole.digest
+
+
 def test_register_strategy_refuses_builtin_names_and_non_callables():
     with pytest.raises(smartteams.SmartTeamsError, match="built-in"):
         smartteams.register_strategy("frontier", Walker)
