@@ -8,7 +8,7 @@
 //! state vector; its reward is the free area it was first to explore this round plus the
 //! units it delivered.
 
-use std::sync::{Arc, PoisonError, RwLock};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, RwLock};
 
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2};
@@ -35,16 +35,25 @@ pub(crate) const STATE_LEN: usize = 5;
 type Moves = Arc<RwLock<Vec<Option<DVec2>>>>;
 
 /// A run with robots moved by the caller.
-#[pyclass(module = "smartteams", unsendable)]
+#[pyclass(module = "smartteams")]
 pub struct EnvCore {
     config: SimConfig,
     threads: Option<usize>,
     controlled: Vec<u32>,
     patch_cells: u32,
     moves: Moves,
-    run: Option<Run>,
+    /// In a mutex only for `Sync`: Python may drop the object, or read it, on any thread.
+    run: Mutex<Option<Run>>,
     /// Per controlled robot: explored area and units delivered at the last observation.
     credited: Vec<(f64, u64)>,
+}
+
+impl EnvCore {
+    /// The episode's run, if `reset` started one (never contended: every method that
+    /// changes it borrows the object mutably).
+    fn lock(&self) -> MutexGuard<'_, Option<Run>> {
+        self.run.lock().unwrap_or_else(PoisonError::into_inner)
+    }
 }
 
 // Arguments converted from Python arrive owned.
@@ -87,7 +96,7 @@ impl EnvCore {
             controlled,
             patch_cells,
             moves: Arc::default(),
-            run: None,
+            run: Mutex::new(None),
             credited: Vec::new(),
         })
     }
@@ -129,7 +138,7 @@ impl EnvCore {
         }
         *self.moves.write().unwrap_or_else(PoisonError::into_inner) = vec![None; robots];
         self.credited = self.controlled.iter().map(|&id| credit(&run, id)).collect();
-        self.run = Some(run);
+        *self.run.get_mut().unwrap_or_else(PoisonError::into_inner) = Some(run);
         self.observe(py)
     }
 
@@ -156,16 +165,17 @@ impl EnvCore {
                 });
             }
         }
-        let run = self.run.as_mut().ok_or_else(|| to_py("call reset() before step()"))?;
+        let run = self.run.get_mut().unwrap_or_else(PoisonError::into_inner);
+        let run = run.as_mut().ok_or_else(|| to_py("call reset() before step()"))?;
         run.play(py, 1)?;
+        let (alive, done): (Vec<bool>, bool) = (
+            self.controlled
+                .iter()
+                .map(|&id| run.sim.robots()[id as usize].alive)
+                .collect(),
+            run.done(),
+        );
         let rewards = self.rewards();
-        let run = self.run.as_ref().ok_or_else(|| to_py("call reset() before step()"))?;
-        let alive: Vec<bool> = self
-            .controlled
-            .iter()
-            .map(|&id| run.sim.robots()[id as usize].alive)
-            .collect();
-        let done = run.done();
         let (patches, states) = self.observe(py)?;
         Ok((
             patches,
@@ -179,7 +189,7 @@ impl EnvCore {
     /// Rounds played in this episode.
     #[getter]
     fn round(&self) -> u64 {
-        self.run.as_ref().map_or(0, |r| r.sim.round())
+        self.lock().as_ref().map_or(0, |r| r.sim.round())
     }
 
     /// The speed of each controlled robot, metres per round.
@@ -200,7 +210,8 @@ impl EnvCore {
 
     /// The run's metrics so far, as `Simulation.metrics()` gives them.
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let run = self.run.as_ref().ok_or_else(|| to_py("call reset() first"))?;
+        let run = self.lock();
+        let run = run.as_ref().ok_or_else(|| to_py("call reset() first"))?;
         crate::simulation::metrics_dict(py, run.metrics())
     }
 }
@@ -236,7 +247,9 @@ impl EnvCore {
     /// Each controlled robot's reward since the last call: area first explored plus units
     /// delivered.
     fn rewards(&mut self) -> Vec<f64> {
-        let Some(run) = &self.run else { return Vec::new() };
+        let Some(run) = self.run.get_mut().unwrap_or_else(PoisonError::into_inner).as_ref() else {
+            return Vec::new();
+        };
         self.controlled
             .iter()
             .zip(&mut self.credited)
@@ -251,7 +264,8 @@ impl EnvCore {
 
     /// Patches and states of the controlled robots, worked out in parallel.
     fn observe<'py>(&self, py: Python<'py>) -> PyResult<Observation<'py>> {
-        let run = self.run.as_ref().ok_or_else(|| to_py("call reset() first"))?;
+        let run = self.lock();
+        let run = run.as_ref().ok_or_else(|| to_py("call reset() first"))?;
         let (k, n) = (self.patch_cells as usize, self.controlled.len());
         let mut patches = vec![0u8; n * k * k];
         let mut states = vec![0f32; n * STATE_LEN];

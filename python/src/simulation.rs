@@ -187,9 +187,19 @@ impl Drop for Run {
 /// `--rounds` do); `threads` is the number of worker threads (one per core by default);
 /// `rrd` a recording to write, as the command line's `--rrd`. Strategies registered with
 /// `smartteams.register_strategy` can be named in the config.
-#[pyclass(module = "smartteams", unsendable)]
+#[pyclass(module = "smartteams")]
 pub struct Simulation {
-    run: Run,
+    /// In a mutex only for `Sync`: Python may drop the object, or read it, on any thread
+    /// (its garbage collector runs where objects are allocated, a strategy's worker too).
+    run: std::sync::Mutex<Run>,
+}
+
+impl Simulation {
+    /// The run (never contended: every method that changes it borrows the object
+    /// mutably).
+    fn lock(&self) -> std::sync::MutexGuard<'_, Run> {
+        self.run.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
 }
 
 // Arguments converted from Python arrive owned.
@@ -217,7 +227,7 @@ impl Simulation {
         }
         let registry = crate::strategy::registry();
         Ok(Self {
-            run: Run::new(&config, &registry, threads, rrd)?,
+            run: std::sync::Mutex::new(Run::new(&config, &registry, threads, rrd)?),
         })
     }
 
@@ -233,7 +243,7 @@ impl Simulation {
         let sim = checkpoint.resume(&config, &registry).map_err(to_py)?;
         let source = checkpoint.source().clone();
         Ok(Self {
-            run: Run::around(sim, source, checkpoint.metrics().to_vec(), threads, rrd)?,
+            run: std::sync::Mutex::new(Run::around(sim, source, checkpoint.metrics().to_vec(), threads, rrd)?),
         })
     }
 
@@ -241,89 +251,91 @@ impl Simulation {
     #[pyo3(signature = (n=1))]
     fn step(&mut self, py: Python<'_>, n: i64) -> PyResult<u64> {
         let n = u64::try_from(n).map_err(|_| to_py(format!("step(n): n is the rounds to play, ≥ 0; got {n}")))?;
-        self.run.play(py, n)?;
-        Ok(self.run.sim.round())
+        let mut run = self.lock();
+        run.play(py, n)?;
+        Ok(run.sim.round())
     }
 
     /// Play every remaining round; returns the last round.
     fn run(&mut self, py: Python<'_>) -> PyResult<u64> {
-        let left = self.run.sim.total_rounds().saturating_sub(self.run.sim.round());
-        self.run.play(py, left)?;
-        Ok(self.run.sim.round())
+        let mut run = self.lock();
+        let left = run.sim.total_rounds().saturating_sub(run.sim.round());
+        run.play(py, left)?;
+        Ok(run.sim.round())
     }
 
     /// Rounds played so far.
     #[getter]
     fn round(&self) -> u64 {
-        self.run.sim.round()
+        self.lock().sim.round()
     }
 
     /// Whether every round has been played.
     #[getter]
     fn done(&self) -> bool {
-        self.run.done()
+        self.lock().done()
     }
 
     /// Rounds the run plays in all.
     #[getter]
     fn total_rounds(&self) -> u64 {
-        self.run.sim.total_rounds()
+        self.lock().sim.total_rounds()
     }
 
     /// The run's name.
     #[getter]
     fn name(&self) -> String {
-        self.run.sim.name().to_owned()
+        self.lock().sim.name().to_owned()
     }
 
     /// The run's seed.
     #[getter]
     fn seed(&self) -> u64 {
-        self.run.sim.seed()
+        self.lock().sim.seed()
     }
 
     /// A digest of every robot's position: equal digests, identical positions (the
     /// `digest` line of `smartteams run`).
     #[getter]
     fn digest(&self) -> String {
-        format!("{:016x}", self.run.sim.positions_digest())
+        format!("{:016x}", self.lock().sim.positions_digest())
     }
 
     /// The robot types' names, indexed by the `type` column of [`robots`](Self::robots).
     #[getter]
     fn type_names(&self) -> Vec<String> {
-        self.run.sim.types().iter().map(|t| t.name.clone()).collect()
+        self.lock().sim.types().iter().map(|t| t.name.clone()).collect()
     }
 
     /// The groups' names, indexed by the `group` column of [`robots`](Self::robots).
     #[getter]
     fn group_names(&self) -> Vec<String> {
-        self.run.sim.groups().iter().map(|g| g.name.clone()).collect()
+        self.lock().sim.groups().iter().map(|g| g.name.clone()).collect()
     }
 
     /// The metrics of every round played: a dict of 1-D arrays, one element per round,
     /// with the columns and values of the metrics CSV of `smartteams run --metrics`.
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        metrics_dict(py, &self.run.metrics)
+        metrics_dict(py, &self.lock().metrics)
     }
 
     /// The robots now: a dict of 1-D arrays, one element per robot in id order: `id`,
     /// `group`, `type`, `x`, `y`, `energy`, `load`, `alive`, `known_area_m2`,
     /// `distance_m`, `explored_m2`, `overlap_m`, `units_dug`, `units_delivered`.
     fn robots<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        robots_dict(py, &self.run.sim)
+        robots_dict(py, &self.lock().sim)
     }
 
     /// The treasures now: a dict of 1-D arrays, one element per treasure in id order: `id`,
     /// `x`, `y`, `quantity` (units at the start), `buried`, `loose`, `delivered`, `found`.
     fn treasures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        treasures_dict(py, &self.run.sim)
+        treasures_dict(py, &self.lock().sim)
     }
 
     /// Every event of the rounds played (robots disabled, treasures found, groups formed,
     /// notes): a list of `(round, text)`, as the event log of a recording shows them.
     fn events(&self) -> Vec<(u64, String)> {
-        self.run.events.clone()
+        self.lock().events.clone()
     }
 
     /// What robot `robot_id` knows of the window `x0, y0, width_m, height_m` (metres; the
@@ -339,7 +351,8 @@ impl Simulation {
         width_m: Option<f64>,
         height_m: Option<f64>,
     ) -> PyResult<Bound<'py, numpy::PyArray2<u8>>> {
-        let sim = &self.run.sim;
+        let run = self.lock();
+        let sim = &run.sim;
         let known = robot_known_map(sim, robot_id)?;
         let w = Window::of(sim.obstacles().grid(), x0, y0, width_m, height_m)?;
         let mut cells = Vec::new();
@@ -358,7 +371,8 @@ impl Simulation {
         width_m: Option<f64>,
         height_m: Option<f64>,
     ) -> PyResult<Bound<'py, numpy::PyArray2<u8>>> {
-        let obstacles = self.run.sim.obstacles();
+        let run = self.lock();
+        let obstacles = run.sim.obstacles();
         let w = Window::of(obstacles.grid(), x0, y0, width_m, height_m)?;
         let mut cells = Vec::new();
         grids::obstacle_cells(obstacles, w, &mut cells);
@@ -368,7 +382,8 @@ impl Simulation {
     /// The map's cell size and extent: `(cell_m, x0, y0, width_m, height_m)`.
     #[getter]
     fn map_extent(&self) -> (f64, f64, f64, f64, f64) {
-        let grid = self.run.sim.obstacles().grid();
+        let run = self.lock();
+        let grid = run.sim.obstacles().grid();
         let ext = grid.extent();
         (
             grid.cell_m(),
@@ -383,20 +398,15 @@ impl Simulation {
     /// --checkpoint` does; [`resume`](Self::resume) or `smartteams resume` continue it.
     fn checkpoint(&self, path: PathBuf) -> PyResult<()> {
         crate::strategy::PICKLE_FAILURE.take();
-        write_checkpoint(
-            &path,
-            &self.run.source,
-            CHECKPOINT_EVERY,
-            &self.run.metrics,
-            &self.run.sim,
-        )
-        .map_err(crate::strategy::with_pickle_failure)
+        let run = self.lock();
+        write_checkpoint(&path, &run.source, CHECKPOINT_EVERY, &run.metrics, &run.sim)
+            .map_err(crate::strategy::with_pickle_failure)
     }
 
     /// Close the recording now (it is closed at the end of the run, or when the simulation
     /// is dropped, anyway).
     fn close(&mut self) -> PyResult<()> {
-        self.run.finish_recording()
+        self.lock().finish_recording()
     }
 
     fn __enter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
@@ -405,12 +415,13 @@ impl Simulation {
 
     #[pyo3(signature = (*_args))]
     fn __exit__(&mut self, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
-        self.run.finish_recording()?;
+        self.lock().finish_recording()?;
         Ok(false)
     }
 
     fn __repr__(&self) -> String {
-        let sim = &self.run.sim;
+        let run = self.lock();
+        let sim = &run.sim;
         format!(
             "<smartteams.Simulation '{}': {} robots, round {} of {}>",
             sim.name(),

@@ -38,12 +38,18 @@ scoped_tls::scoped_thread_local!(static CALLS: RefCell<Calls>);
 
 /// What a `decide` call asks of its context, applied to it when the call returns.
 struct Calls {
+    /// Which call of `decide` this is (see [`DECIDE_CALLS`]): a [`Robot`] acts only in its own.
+    serial: u64,
     rng: RobotRng,
     out: Vec<Out>,
     /// The goal `decide` published, if it published one (`None` inside: no goal).
     goal: Option<Published>,
     radius_m: f64,
 }
+
+/// Calls of a Python `decide` so far, in the whole process: each call's number, given to its
+/// [`Calls`] and its [`Robot`], tells a robot kept from an earlier call from the current one.
+static DECIDE_CALLS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
 
 /// A goal a strategy published: a point, or none.
 type Published = Option<DVec2>;
@@ -212,8 +218,10 @@ impl Strategy for PyStrategy {
     }
 
     fn decide(&mut self, ctx: &mut Ctx) -> Action {
-        let robot = Robot::of(ctx);
+        let serial = DECIDE_CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let robot = Robot::of(ctx, serial);
         let calls = RefCell::new(Calls {
+            serial,
             rng: std::mem::replace(&mut ctx.rng, rand::SeedableRng::seed_from_u64(0)),
             out: Vec::new(),
             goal: None,
@@ -393,24 +401,26 @@ fn queue_message(a: &Bound<'_, PyAny>) -> Result<bool, String> {
     } else {
         return Ok(false);
     };
-    with_calls(|c| c.out.push(Out::Message(to, Payload::Custom { kind, data }))).map_err(|e| e.to_string())?;
+    with_calls(None, |c| c.out.push(Out::Message(to, Payload::Custom { kind, data }))).map_err(|e| e.to_string())?;
     Ok(true)
 }
 
-/// Run `f` on the calls of the `decide` running on this thread.
-fn with_calls<R>(f: impl FnOnce(&mut Calls) -> R) -> PyResult<R> {
-    if !CALLS.is_set() {
-        return Err(to_py("a Robot's methods work only while its strategy's decide runs"));
+/// Run `f` on the calls of the `decide` running on this thread, if it is the call `serial`
+/// (that of the [`Robot`] asking; `None`: any).
+fn with_calls<R>(serial: Option<u64>, f: impl FnOnce(&mut Calls) -> R) -> PyResult<R> {
+    let current = CALLS.is_set() && serial.is_none_or(|s| CALLS.with(|c| c.borrow().serial) == s);
+    if !current {
+        return Err(to_py(
+            "a Robot's methods work only while its strategy's decide runs, in the call that gave it",
+        ));
     }
     Ok(CALLS.with(|c| f(&mut c.borrow_mut())))
 }
 
-/// Run `f` on the known map and obstacles of the `decide` running on this thread (`None` if
-/// its strategy keeps no known map).
-fn with_terrain<R>(f: impl FnOnce(&KnownMap, &ObstacleMap) -> R) -> PyResult<Option<R>> {
-    if !CALLS.is_set() {
-        return Err(to_py("a Robot's methods work only while its strategy's decide runs"));
-    }
+/// Run `f` on the known map and obstacles of the `decide` call `serial` running on this
+/// thread (`None` if its strategy keeps no known map).
+fn with_terrain<R>(serial: u64, f: impl FnOnce(&KnownMap, &ObstacleMap) -> R) -> PyResult<Option<R>> {
+    with_calls(Some(serial), |_| ())?;
     if !KNOWN.is_set() {
         return Ok(None);
     }
@@ -421,6 +431,8 @@ fn with_terrain<R>(f: impl FnOnce(&KnownMap, &ObstacleMap) -> R) -> PyResult<Opt
 /// and methods that act through its context while `decide` runs.
 #[pyclass(module = "smartteams", frozen)]
 pub struct Robot {
+    /// The `decide` call it was made for (see [`DECIDE_CALLS`]).
+    serial: u64,
     /// Its id.
     #[pyo3(get)]
     id: u32,
@@ -446,10 +458,11 @@ pub struct Robot {
 }
 
 impl Robot {
-    /// The copy of `ctx` a Python strategy gets.
-    fn of(ctx: &Ctx) -> Self {
+    /// The copy of `ctx` a Python strategy gets in `decide` call `serial`.
+    fn of(ctx: &Ctx, serial: u64) -> Self {
         let types = ctx.types();
         Self {
+            serial,
             id: ctx.me.id.get(),
             round: ctx.round,
             position: ctx.position(),
@@ -609,49 +622,49 @@ impl Robot {
     /// A uniform random number in [0, 1) from this robot's generator (seeded by run seed,
     /// robot and round: the same in every run of the same seed).
     fn random(&self) -> PyResult<f64> {
-        with_calls(|c| c.rng.random::<f64>())
+        with_calls(Some(self.serial), |c| c.rng.random::<f64>())
     }
     /// A uniform random number in [a, b).
     fn uniform(&self, a: f64, b: f64) -> PyResult<f64> {
         if !(a < b && a.is_finite() && b.is_finite()) {
             return Err(to_py(format!("uniform({a}, {b}): needs finite a < b")));
         }
-        with_calls(|c| c.rng.random_range(a..b))
+        with_calls(Some(self.serial), |c| c.rng.random_range(a..b))
     }
     /// A uniform random integer in [a, b], both included.
     fn randint(&self, a: i64, b: i64) -> PyResult<i64> {
         if a > b {
             return Err(to_py(format!("randint({a}, {b}): needs a ≤ b")));
         }
-        with_calls(|c| c.rng.random_range(a..=b))
+        with_calls(Some(self.serial), |c| c.rng.random_range(a..=b))
     }
     /// True with probability `p`.
     fn random_bool(&self, p: f64) -> PyResult<bool> {
         if !(0.0..=1.0).contains(&p) {
             return Err(to_py(format!("random_bool({p}): needs 0 ≤ p ≤ 1")));
         }
-        with_calls(|c| c.rng.random_bool(p))
+        with_calls(Some(self.serial), |c| c.rng.random_bool(p))
     }
 
     /// Whether the point is in the robot's known map (False without one).
     fn is_known(&self, x: f64, y: f64) -> PyResult<bool> {
-        Ok(with_terrain(|k, _| k.is_known(DVec2::new(x, y)))?.unwrap_or(false))
+        Ok(with_terrain(self.serial, |k, _| k.is_known(DVec2::new(x, y)))?.unwrap_or(false))
     }
     /// Whether a robot of this size fits at the point: `None` where it is not known.
     fn is_free(&self, x: f64, y: f64) -> PyResult<Option<bool>> {
-        let radius = with_calls(|c| c.radius_m)?;
+        let radius = with_calls(Some(self.serial), |c| c.radius_m)?;
         let p = DVec2::new(x, y);
-        Ok(with_terrain(|k, o| k.is_known(p).then(|| o.is_disc_free(p, radius)))?.flatten())
+        Ok(with_terrain(self.serial, |k, o| k.is_known(p).then(|| o.is_disc_free(p, radius)))?.flatten())
     }
     /// Whether it could move in a straight line from where it is to `(x, y)`: `None` unless
     /// both ends are known.
     fn can_move(&self, x: f64, y: f64) -> PyResult<Option<bool>> {
-        let radius = with_calls(|c| c.radius_m)?;
+        let radius = with_calls(Some(self.serial), |c| c.radius_m)?;
         let (a, b) = (self.position, DVec2::new(x, y));
-        Ok(
-            with_terrain(|k, o| (k.is_known(a) && k.is_known(b)).then(|| o.is_swept_disc_free(a, b, radius)))?
-                .flatten(),
-        )
+        Ok(with_terrain(self.serial, |k, o| {
+            (k.is_known(a) && k.is_known(b)).then(|| o.is_swept_disc_free(a, b, radius))
+        })?
+        .flatten())
     }
     /// The `cells × cells` window of its known map centred on it: `uint8`, 0 unknown, 1
     /// free, 2 blocked (and beyond the map's edge); row 0 the southern row. All 0 without a
@@ -663,7 +676,11 @@ impl Robot {
         }
         let n = cells as usize;
         let mut out = Vec::with_capacity(n * n);
-        if with_terrain(|k, o| crate::grids::patch(k, o, self.position, cells, &mut out))?.is_none() {
+        if with_terrain(self.serial, |k, o| {
+            crate::grids::patch(k, o, self.position, cells, &mut out)
+        })?
+        .is_none()
+        {
             out.resize(n * n, crate::grids::UNKNOWN);
         }
         Ok(Array2::from_shape_vec((n, n), out).map_err(to_py)?.into_pyarray(py))
@@ -671,14 +688,14 @@ impl Robot {
 
     /// Send `data` under `kind` to every robot in range (delivered next round).
     fn broadcast(&self, kind: String, data: Vec<u8>) -> PyResult<()> {
-        with_calls(|c| {
+        with_calls(Some(self.serial), |c| {
             c.out
                 .push(Out::Message(Recipient::Broadcast, Payload::Custom { kind, data }));
         })
     }
     /// Send `data` under `kind` to robot `to`, if it is in range.
     fn send(&self, to: u32, kind: String, data: Vec<u8>) -> PyResult<()> {
-        with_calls(|c| {
+        with_calls(Some(self.serial), |c| {
             c.out.push(Out::Message(
                 Recipient::Direct(RobotId::new(to)),
                 Payload::Custom { kind, data },
@@ -687,17 +704,17 @@ impl Robot {
     }
     /// Share its known map with every robot in range (merged into theirs on receipt).
     fn share_known_map(&self) -> PyResult<()> {
-        with_calls(|c| c.out.push(Out::KnownMap))
+        with_calls(Some(self.serial), |c| c.out.push(Out::KnownMap))
     }
     /// Publish a goal (drawn by viewers; kept until changed), or none.
     #[pyo3(signature = (x=None, y=None))]
     fn set_goal(&self, x: Option<f64>, y: Option<f64>) -> PyResult<()> {
         let goal = x.zip(y).map(|(x, y)| DVec2::new(x, y));
-        with_calls(|c| c.goal = Some(goal))
+        with_calls(Some(self.serial), |c| c.goal = Some(goal))
     }
     /// Write `text` to the event log.
     fn note(&self, text: String) -> PyResult<()> {
-        with_calls(|c| c.out.push(Out::Note(text)))
+        with_calls(Some(self.serial), |c| c.out.push(Out::Note(text)))
     }
 
     fn __repr__(&self) -> String {

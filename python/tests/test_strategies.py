@@ -234,6 +234,60 @@ def test_robot_methods_work_only_inside_decide(tmp_path):
         robot.broadcast("x", b"")
 
 
+class Driver:
+    """Steps the simulation it runs in from its own decide."""
+
+    sim = None
+
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        Driver.sim.step(1)
+        return smartteams.Idle()
+
+
+def test_a_strategy_that_steps_its_own_simulation_is_disabled_not_a_panic(tmp_path):
+    sim = one_robot(tmp_path, "py_driver", Driver)
+    Driver.sim = sim
+    with pytest.warns(RuntimeWarning, match="robot 0 is disabled"):
+        sim.run()
+    Driver.sim = None
+    (text,) = [t for _, t in sim.events() if "disabled" in t]
+    assert "RuntimeError: Already borrowed" in text and "Panic" not in text, text
+    # The simulation is whole: it played its rounds and reads as before.
+    assert sim.round == 2 and sim.metrics()["round"].tolist() == [1, 2]
+
+
+class StaleUser:
+    """Keeps the robot of its first round and acts through it in the next."""
+
+    kept = None
+    errors = []
+
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        if StaleUser.kept is None:
+            StaleUser.kept = robot
+        else:
+            for act in (lambda r: r.set_goal(3.0, 3.0), lambda r: r.broadcast("x", b""), lambda r: r.random()):
+                try:
+                    act(StaleUser.kept)
+                except smartteams.SmartTeamsError as e:
+                    StaleUser.errors.append(str(e))
+        return smartteams.Idle()
+
+
+def test_a_robot_kept_from_an_earlier_round_does_not_act_in_a_later_one(tmp_path):
+    StaleUser.kept, StaleUser.errors = None, []
+    sim = one_robot(tmp_path, "py_stale_user", StaleUser, rounds=2)
+    sim.run()
+    assert len(StaleUser.errors) == 3, StaleUser.errors
+    assert all("in the call that gave it" in e for e in StaleUser.errors)
+
+
 def test_a_run_with_python_strategies_checkpoints_and_resumes(tmp_path):
     config = str(walkers(tmp_path, rounds=60))
     whole = smartteams.Simulation(config)
