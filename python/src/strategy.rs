@@ -677,7 +677,7 @@ impl Robot {
         let n = cells as usize;
         let mut out = Vec::with_capacity(n * n);
         if with_terrain(self.serial, |k, o| {
-            crate::grids::patch(k, o, self.position, cells, &mut out)
+            crate::grids::patch(k, o, self.position, cells, &mut out);
         })?
         .is_none()
         {
