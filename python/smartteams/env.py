@@ -120,6 +120,11 @@ class SmartTeamsParallelEnv(ParallelEnv):
         """The episode's metrics so far, as ``Simulation.metrics()`` gives them."""
         return self._core.metrics()
 
+    def events(self):
+        """The episode's events so far, as ``Simulation.events()`` gives them: ``(round,
+        text)``, a disabled robot's whole reason included."""
+        return self._core.events()
+
     def close(self):
         pass
 
@@ -157,6 +162,11 @@ class SmartTeamsGymEnv(gymnasium.Env):
     def metrics(self):
         """The episode's metrics so far, as ``Simulation.metrics()`` gives them."""
         return self._core.metrics()
+
+    def events(self):
+        """The episode's events so far, as ``Simulation.events()`` gives them: ``(round,
+        text)``, a disabled robot's whole reason included."""
+        return self._core.events()
 
 
 def parallel_env(config, *, groups=None, max_rounds=None, patch_cells=11, seed=None, threads=None):

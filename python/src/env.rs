@@ -208,6 +208,12 @@ impl EnvCore {
             .collect()
     }
 
+    /// The episode's events so far, as `Simulation.events()` gives them: `(round, text)`,
+    /// a disabled robot's whole reason included.
+    fn events(&self) -> Vec<(u64, String)> {
+        self.lock().as_ref().map_or_else(Vec::new, |r| r.events.clone())
+    }
+
     /// The run's metrics so far, as `Simulation.metrics()` gives them.
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let run = self.lock();

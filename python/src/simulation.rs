@@ -28,7 +28,7 @@ pub(crate) struct Run {
     source: RunSource,
     metrics: Vec<RoundMetrics>,
     /// Every event of the rounds played here: (round, what happened).
-    events: Vec<(u64, String)>,
+    pub events: Vec<(u64, String)>,
     recording: Option<RerunObserver>,
 }
 
@@ -162,7 +162,7 @@ fn warn_of_failed_strategies(py: Python<'_>, report: &sim_core::world::RoundRepo
         if let sim_core::world::Event::StrategyFailed { robot, reason } = e {
             let first_line = reason.lines().next().unwrap_or_default();
             let text = format!(
-                "round {}: robot {robot} is disabled: {first_line} (sim.events() has the whole reason)",
+                "round {}: robot {robot} is disabled: {first_line} (events() has the whole reason)",
                 report.round
             );
             let text = std::ffi::CString::new(text.replace('\0', " ")).unwrap_or_default();

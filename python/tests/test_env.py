@@ -6,10 +6,11 @@ import warnings
 import numpy as np
 import pytest
 
-from conftest import REPO
+from conftest import REPO, write_config
 
 pytest.importorskip("pettingzoo", reason="the rl extra (pip install 'smartteams[rl]')")
 
+import gymnasium  # noqa: E402
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 from pettingzoo.test import parallel_api_test, parallel_seed_test  # noqa: E402
 
@@ -105,3 +106,30 @@ def test_out_of_range_arguments_raise_saying_which():
     env = parallel_env(DEMO, max_rounds=-1)
     with pytest.raises(smartteams.SmartTeamsError, match="max_rounds must not be negative, got -1"):
         env.reset(seed=1)
+
+
+class _Failing:
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        return 1 / 0
+
+
+def test_the_environments_give_the_whole_reason_a_mate_was_disabled(tmp_path):
+    smartteams.register_strategy("py_failing_mate", _Failing)
+    config = write_config(
+        tmp_path,
+        '<simulation seed="1" rounds="5"><map file="MAP"/>'
+        '<group name="learners" count="1" type="explorer" strategy="random_walk" start="home"/>'
+        '<group name="mates" count="1" type="explorer" strategy="py_failing_mate" start="home"/></simulation>',
+    )
+    for env in (parallel_env(config, groups=["learners"]), gym_env(config, robot=0)):
+        env.reset(seed=1)
+        with pytest.warns(RuntimeWarning, match="robot 1 is disabled.*events\\(\\) has the whole reason"):
+            if isinstance(env, gymnasium.Env):
+                env.step(np.zeros(2, dtype=np.float32))
+            else:
+                env.step({a: np.zeros(2, dtype=np.float32) for a in env.agents})
+        (text,) = [t for _, t in env.events() if "disabled" in t]
+        assert "ZeroDivisionError" in text, text
