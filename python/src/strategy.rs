@@ -84,6 +84,12 @@ pub(crate) fn add_to(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// `"robots"`, `"treasures"`, `"messages"`; all by default).
 #[pyfunction]
 fn register_strategy(name: &str, factory: Bound<'_, PyAny>) -> PyResult<()> {
+    let word = |c: char| c.is_alphanumeric() || c == '_' || c == '-';
+    if name.is_empty() || !name.chars().all(word) {
+        return Err(to_py(format!(
+            "register_strategy('{name}', …): a strategy's name is a word of letters, digits, '_' and '-', as configs name it"
+        )));
+    }
     if !factory.is_callable() {
         return Err(to_py(format!(
             "register_strategy('{name}', …): the factory is not callable"
@@ -706,10 +712,21 @@ impl Robot {
     fn share_known_map(&self) -> PyResult<()> {
         with_calls(Some(self.serial), |c| c.out.push(Out::KnownMap))
     }
-    /// Publish a goal (drawn by viewers; kept until changed), or none.
+    /// Publish a goal (drawn by viewers; kept until changed), or none (no arguments).
     #[pyo3(signature = (x=None, y=None))]
     fn set_goal(&self, x: Option<f64>, y: Option<f64>) -> PyResult<()> {
-        let goal = x.zip(y).map(|(x, y)| DVec2::new(x, y));
+        let goal = match (x, y) {
+            (None, None) => None,
+            (Some(x), Some(y)) if x.is_finite() && y.is_finite() => Some(DVec2::new(x, y)),
+            _ => {
+                let shown = |v: Option<f64>| v.map_or_else(|| "None".to_owned(), |v| v.to_string());
+                return Err(to_py(format!(
+                    "set_goal(x, y) takes two finite numbers, or none to clear the goal; got ({}, {})",
+                    shown(x),
+                    shown(y)
+                )));
+            }
+        };
         with_calls(Some(self.serial), |c| c.goal = Some(goal))
     }
     /// Write `text` to the event log.

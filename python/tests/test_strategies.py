@@ -259,6 +259,35 @@ def test_a_strategy_that_steps_its_own_simulation_is_disabled_not_a_panic(tmp_pa
     assert sim.round == 2 and sim.metrics()["round"].tolist() == [1, 2]
 
 
+class GoalSetter:
+    """Sets goals wrongly, then rightly."""
+
+    errors = []
+
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        for args in ((1.0,), (math.nan, 1.0), (math.inf, 6.0)):
+            try:
+                robot.set_goal(*args)
+            except smartteams.SmartTeamsError as e:
+                GoalSetter.errors.append(str(e))
+        robot.set_goal(3.0, 4.0)
+        return smartteams.Idle()
+
+
+def test_a_goal_needs_two_finite_numbers(tmp_path):
+    GoalSetter.errors = []
+    sim = one_robot(tmp_path, "py_goal_setter", GoalSetter, rounds=1)
+    sim.run()
+    assert GoalSetter.errors == [
+        "set_goal(x, y) takes two finite numbers, or none to clear the goal; got (1, None)",
+        "set_goal(x, y) takes two finite numbers, or none to clear the goal; got (NaN, 1)",
+        "set_goal(x, y) takes two finite numbers, or none to clear the goal; got (inf, 6)",
+    ]
+
+
 class StaleUser:
     """Keeps the robot of its first round and acts through it in the next."""
 
@@ -325,11 +354,14 @@ def test_a_strategy_that_keeps_actions_checkpoints_and_resumes(tmp_path):
     assert resumed.digest == whole.digest
 
 
-def test_register_strategy_refuses_builtin_names_and_non_callables():
+def test_register_strategy_refuses_builtin_names_non_words_and_non_callables():
     with pytest.raises(smartteams.SmartTeamsError, match="built-in"):
         smartteams.register_strategy("frontier", Walker)
     with pytest.raises(smartteams.SmartTeamsError, match="not callable"):
         smartteams.register_strategy("py_bad", 3)
+    for name in ("", "two words", "a/b"):
+        with pytest.raises(smartteams.SmartTeamsError, match="a strategy's name is a word"):
+            smartteams.register_strategy(name, Walker)
 
 
 def test_the_readme_python_example_runs_its_strategy(tmp_path):
