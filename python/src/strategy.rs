@@ -367,7 +367,10 @@ fn one_action(a: &Bound<'_, PyAny>, position: DVec2, speed_m: f64) -> Option<Act
     if let Ok(m) = a.cast::<Move>() {
         let m = m.get();
         let d = DVec2::new(m.dx, m.dy);
-        let len = d.length();
+        // `hypot` where the squares overflow (past about 1.3e154 m), as `length` would.
+        let len = Some(d.length())
+            .filter(|l| l.is_finite())
+            .unwrap_or_else(|| m.dx.hypot(m.dy));
         let step = if len > speed_m { d * (speed_m / len) } else { d };
         return Some(Action::MoveTo { to: position + step });
     }

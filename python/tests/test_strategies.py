@@ -67,12 +67,13 @@ def test_python_strategies_give_the_same_run_whatever_the_thread_count(tmp_path)
 
 class East:
     needs = []
+    dx = 10.0
 
     def __init__(self, params):
         pass
 
     def decide(self, robot):
-        return smartteams.Move(10.0, 0.0)
+        return smartteams.Move(East.dx, 0.0)
 
 
 def one_robot(tmp_path, name, strategy, rounds=2):
@@ -94,6 +95,18 @@ def test_a_move_longer_than_the_speed_is_one_speed_long(tmp_path):
     # An explorer moves 1 m a round; home is clear, so two rounds take it 2 m east.
     assert after["x"][0] - before["x"][0] == pytest.approx(2.0, abs=1e-12)
     assert after["y"][0] == before["y"][0]
+
+
+def test_a_move_too_long_to_square_is_one_speed_long(tmp_path):
+    # 1e200 squared overflows a float; the move is still one speed long.
+    East.dx = 1e200
+    try:
+        sim = one_robot(tmp_path, "py_far_east", East)
+        before = sim.robots()
+        sim.run()
+    finally:
+        East.dx = 10.0
+    assert sim.robots()["x"][0] - before["x"][0] == pytest.approx(2.0, abs=1e-12)
 
 
 class Talker:
