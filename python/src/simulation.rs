@@ -30,6 +30,8 @@ pub(crate) struct Run {
     /// Every event of the rounds played here: (round, what happened).
     pub events: Vec<(u64, String)>,
     recording: Option<RerunObserver>,
+    /// Slow decisions warned of so far (see [`warn_of_slow_decisions`]).
+    slow_warned: u64,
 }
 
 impl Run {
@@ -74,6 +76,7 @@ impl Run {
             metrics,
             events: Vec::new(),
             recording: None,
+            slow_warned: 0,
         };
         if let Some(path) = rrd {
             run.record_to(path)?;
@@ -133,6 +136,7 @@ impl Run {
             self.events
                 .extend(report.events.iter().map(|e| (report.round, e.to_string())));
             warn_of_failed_strategies(py, report)?;
+            self.slow_warned = warn_of_slow_decisions(py, report, self.slow_warned)?;
             if let Some(r) = &mut self.recording {
                 r.on_round(&self.sim, self.sim.report()).map_err(to_py)?;
             }
@@ -151,6 +155,36 @@ impl Run {
             None => Ok(()),
         }
     }
+}
+
+/// Slow decisions a run warns of, at most (the command line reports as many on stderr).
+const SLOW_WARNINGS: u64 = 5;
+
+/// A `RuntimeWarning` for each decision of the round of `report` slower than the limit
+/// (100 ms), the first [`SLOW_WARNINGS`] of the run (`warned` so far; returns the new
+/// count), the last saying that no more will be.
+fn warn_of_slow_decisions(py: Python<'_>, report: &sim_core::world::RoundReport, warned: u64) -> PyResult<u64> {
+    let mut warned = warned;
+    for &(robot, took) in &report.slow_decisions {
+        if warned >= SLOW_WARNINGS {
+            break;
+        }
+        warned += 1;
+        let more = if warned == SLOW_WARNINGS {
+            "; no more slow decisions are warned of"
+        } else {
+            ""
+        };
+        let limit = sim_core::engine::DEFAULT_DECIDE_LIMIT.as_millis();
+        let text = format!(
+            "round {}: robot {robot} took {} ms to decide, more than {limit} ms{more}",
+            report.round,
+            took.as_millis()
+        );
+        let text = std::ffi::CString::new(text).unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<pyo3::exceptions::PyRuntimeWarning>(), &text, 1)?;
+    }
+    Ok(warned)
 }
 
 /// A `RuntimeWarning` for each robot a failing strategy disabled in the round of `report`:

@@ -2,8 +2,10 @@
 fail, checkpointed."""
 
 import math
+import re
 import subprocess
 import sys
+import time
 
 import pytest
 import smartteams
@@ -299,6 +301,25 @@ def test_a_goal_needs_two_finite_numbers(tmp_path):
         "set_goal(x, y) takes two finite numbers, or none to clear the goal; got (NaN, 1)",
         "set_goal(x, y) takes two finite numbers, or none to clear the goal; got (inf, 6)",
     ]
+
+
+class Sleeper:
+    def __init__(self, params):
+        pass
+
+    def decide(self, robot):
+        time.sleep(0.15)
+        return smartteams.Idle()
+
+
+def test_a_slow_decision_is_warned_of_with_its_robot_and_round(tmp_path):
+    sim = one_robot(tmp_path, "py_sleeper", Sleeper, rounds=2)
+    with pytest.warns(RuntimeWarning) as caught:
+        sim.run()
+    texts = [str(w.message) for w in caught]
+    assert len(texts) == 2, texts
+    for round, text in zip((1, 2), texts):
+        assert re.fullmatch(rf"round {round}: robot 0 took \d+ ms to decide, more than 100 ms", text), text
 
 
 class StaleUser:
