@@ -141,6 +141,9 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             if let Some(message) = crate::missing_folder("recording", path) {
                 bail!(message);
             }
+            if path.is_dir() {
+                bail!("cannot write the recording {}: it is a folder", path.display());
+            }
             builder
                 .batcher_config(file_batching())
                 .save(path)

@@ -339,8 +339,8 @@ fn negative_numbers_are_bad_values_of_their_option() {
     assert!(err.contains("invalid value '-5' for '--rounds"), "{err}");
 }
 
-/// Outputs that name one file twice, or the run's config or map, are refused before
-/// anything is written: the other output is not lost, and the config and the map keep
+/// Outputs that name one file twice, or the run's config or map, or a recording that names
+/// a folder, are refused before anything is written: the other output is not lost, and the config and the map keep
 /// their bytes.
 #[test]
 fn outputs_that_would_overwrite_each_other_or_an_input_are_refused() {
@@ -352,7 +352,8 @@ fn outputs_that_would_overwrite_each_other_or_an_input_are_refused() {
     }
     let before = |file: &str| std::fs::read(d.join(file)).unwrap();
     let (config, map) = (before("configs/demo.xml"), before("maps/demo.stmap"));
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
+        (&["--rrd", "maps"], "cannot write the recording maps: it is a folder"),
         (
             &["--no-viewer", "--metrics", "same.csv", "--robot-stats", "./same.csv"],
             "the metrics file and the robot stats file are both ./same.csv",
