@@ -351,16 +351,21 @@ def test_a_robot_kept_from_an_earlier_round_does_not_act_in_a_later_one(tmp_path
     assert all("in the call that gave it" in e for e in StaleUser.errors)
 
 
-def test_a_run_with_python_strategies_checkpoints_and_resumes(tmp_path):
-    config = str(walkers(tmp_path, rounds=60))
+def assert_resumes_as_whole(config, checkpoint, at):
+    """`config` run whole, and checkpointed at round `at` into `checkpoint` and resumed,
+    ends the same."""
     whole = smartteams.Simulation(config)
     whole.run()
     part = smartteams.Simulation(config)
-    part.step(25)
-    part.checkpoint(str(tmp_path / "w.ckpt"))
-    resumed = smartteams.Simulation.resume(str(tmp_path / "w.ckpt"))
+    part.step(at)
+    part.checkpoint(str(checkpoint))
+    resumed = smartteams.Simulation.resume(str(checkpoint))
     resumed.run()
     assert resumed.digest == whole.digest
+
+
+def test_a_run_with_python_strategies_checkpoints_and_resumes(tmp_path):
+    assert_resumes_as_whole(str(walkers(tmp_path, rounds=60)), tmp_path / "w.ckpt", 25)
 
 
 class ActionKeeper(Walker):
@@ -378,14 +383,7 @@ smartteams.register_strategy("py_action_keeper", ActionKeeper)
 
 def test_a_strategy_that_keeps_actions_checkpoints_and_resumes(tmp_path):
     config = str(walkers(tmp_path, rounds=40, strategy="py_action_keeper"))
-    whole = smartteams.Simulation(config)
-    whole.run()
-    part = smartteams.Simulation(config)
-    part.step(15)
-    part.checkpoint(str(tmp_path / "a.ckpt"))
-    resumed = smartteams.Simulation.resume(str(tmp_path / "a.ckpt"))
-    resumed.run()
-    assert resumed.digest == whole.digest
+    assert_resumes_as_whole(config, tmp_path / "a.ckpt", 15)
 
 
 def test_register_strategy_refuses_builtin_names_non_words_and_non_callables():
