@@ -95,7 +95,11 @@ fn draw_chart<DB: DrawingBackend>(
         builder.caption(title, ("sans-serif", 22));
     }
     let mut chart = builder
-        .build_cartesian_2d(0.0..x_max.max(1.0) * 1.02, 0.0..y_max.max(1e-9) * 1.08)
+        // A chart of zeros spans 0 to 1: a span of nothing labels every tick 0.
+        .build_cartesian_2d(
+            0.0..x_max.max(1.0) * 1.02,
+            0.0..if y_max > 0.0 { y_max * 1.08 } else { 1.0 },
+        )
         .map_err(|x| e(&x))?;
     let mut mesh = chart.configure_mesh();
     if text {
@@ -298,6 +302,14 @@ pub fn metrics_figure(
 ) -> Result<FigureSummary> {
     if inputs.is_empty() {
         return Err(PlotError("no CSV to plot".into()));
+    }
+    // One file twice would count its runs twice, as more seeds, and narrow the band.
+    let same = |a: &PathBuf, b: &PathBuf| {
+        a == b || matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
+    };
+    if let Some(k) = (0..inputs.len()).find(|&k| inputs[..k].iter().any(|q| same(&inputs[k], q))) {
+        let twice = inputs[k].display();
+        return Err(PlotError(format!("{twice} is given twice: its runs would count twice")));
     }
     if let Some(message) = crate::missing_folder("figure", output) {
         return Err(PlotError(message));

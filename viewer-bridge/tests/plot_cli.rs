@@ -95,7 +95,11 @@ fn plot_refuses_bad_input_naming_the_file_and_line() {
         SWEEP.replace("1,1,8,2,0.6,2,9,3000", "1,1,8,2,lots,2,9,3000"),
     )
     .unwrap();
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["sweep.csv", "./sweep.csv", "-o", "f.png"],
+            "./sweep.csv is given twice: its runs would count twice",
+        ),
         (
             &["sweep.csv", "-o", "no/such/f.png"],
             "cannot write the figure no/such/f.png: the folder no/such does not exist",
@@ -197,4 +201,44 @@ fn plot_lines_are_the_means_of_each_group() {
             "chart {chart}: rises {rise_p} and {rise_q}, want ratio {want}"
         );
     }
+}
+
+/// A chart whose values are all 0 spans 0 to 1, so its ticks read apart (a span of nothing
+/// labelled every tick 0.0).
+#[test]
+fn a_chart_of_zeros_has_ticks_that_read_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let csv =
+        "round,explored_fraction,treasures_delivered,mean_energy,known_map_bytes\n1,0.1,0,10,1000\n2,0.3,0,8,2000\n";
+    std::fs::write(d.join("z.csv"), csv).unwrap();
+    let out = smartteams(d, &["plot", "z.csv", "-o", "z.svg"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    if String::from_utf8_lossy(&out.stdout).contains("no font found") {
+        return; // No labels to read without a system font.
+    }
+    let svg = std::fs::read_to_string(d.join("z.svg")).unwrap();
+    // The texts of the treasures chart, from its title to the next chart's.
+    let texts: Vec<&str> = svg
+        .split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            t.split_once('>')
+                .and_then(|(_, rest)| rest.split_once("</text>"))
+                .map(|(s, _)| s.trim())
+        })
+        .collect();
+    let start = texts.iter().position(|t| *t == "Treasures delivered").unwrap();
+    let end = start
+        + 1
+        + texts[start + 1..]
+            .iter()
+            .position(|t| t.starts_with("Mean energy"))
+            .unwrap();
+    let ticks: std::collections::BTreeSet<&str> = texts[start..end]
+        .iter()
+        .copied()
+        .filter(|t| t.parse::<f64>().is_ok())
+        .collect();
+    assert!(ticks.contains("0.5") && ticks.contains("1.0"), "{ticks:?}");
 }
