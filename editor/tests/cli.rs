@@ -494,3 +494,15 @@ fn negative_coordinates_are_values_of_their_option() {
         "{err}"
     );
 }
+
+/// Output to a reader that has gone (`smartteams-editor stats MAP | head -1`) ends the
+/// command quietly, where `println!` panicked.
+#[test]
+fn a_reader_that_has_gone_ends_stats_quietly() {
+    let map = Path::new(env!("CARGO_MANIFEST_DIR")).join("../maps/maze.stmap");
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = editor().arg("stats").arg(&map).stdout(writer).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && err.is_empty(), "{:?}: {err}", out.status);
+}

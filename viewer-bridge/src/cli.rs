@@ -23,6 +23,19 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// `println!` that ends the process quietly once standard output's reader has gone
+/// (`smartteams strategies | head -1`), where `println!` would panic.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*)
+            && e.kind() == std::io::ErrorKind::BrokenPipe
+        {
+            std::process::exit(0);
+        }
+    }};
+}
+
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
@@ -111,7 +124,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// Draw a figure and say what it holds.
 fn plot(inputs: &[PathBuf], output: &std::path::Path, size: (u32, u32), x: crate::plot::XAxis) -> Result<()> {
     let s = crate::plot::metrics_figure(inputs, output, size, x)?;
-    println!(
+    say!(
         "{}: {} charts, {} lines each ({} runs): {}{}",
         output.display(),
         s.charts,
@@ -552,18 +565,16 @@ fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {
 /// `strategies`: each registered strategy and what it does.
 fn list_strategies(registry: &StrategyRegistry) {
     for (name, description) in registry.describe() {
-        println!("{name:14} {description}");
+        say!("{name:14} {description}");
     }
 }
 
 /// `tactics`: how to compose tactics, then each registered tactic and what it does.
 fn list_tactics(registry: &StrategyRegistry) {
-    println!(
-        "compose with strategy=\"tactics\" and <param name=\"tactics\" value=\"NAME,NAME,...\"/> (priority order);"
-    );
-    println!("a tactic's parameters are NAME.PARAM, the goal of boundary and shortest_path is goal=\"X,Y\"\n");
+    say!("compose with strategy=\"tactics\" and <param name=\"tactics\" value=\"NAME,NAME,...\"/> (priority order);");
+    say!("a tactic's parameters are NAME.PARAM, the goal of boundary and shortest_path is goal=\"X,Y\"\n");
     for (name, description) in registry.tactics().describe() {
-        println!("{name:14} {description}");
+        say!("{name:14} {description}");
     }
 }
 
@@ -578,7 +589,7 @@ fn view(args: &ViewArgs) -> Result<ExitCode> {
         bail!("--no-viewer leaves nothing to show");
     };
     crate::run::view_map(&args.map, &target)?;
-    println!("{}: shown in {target}", args.map.display());
+    say!("{}: shown in {target}", args.map.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -589,7 +600,7 @@ fn sweep(args: &crate::sweep::SweepArgs, registry: &StrategyRegistry) -> Result<
         Err(e) => return stopped_sweep(&e).ok_or(e),
     };
     if !args.quiet {
-        println!(
+        say!(
             "{}: {} runs of {} ({} resumed), {} rows; manifest {}",
             summary.output.display(),
             summary.runs,
@@ -614,7 +625,7 @@ fn sweep(args: &crate::sweep::SweepArgs, registry: &StrategyRegistry) -> Result<
 fn merge(args: &crate::sweep::MergeArgs) -> Result<ExitCode> {
     let summary = crate::sweep::merge_parts(args)?;
     let total = summary.runs_total.map_or(String::new(), |t| format!(" of {t}"));
-    println!(
+    say!(
         "{}: {} runs{total}, {} rows",
         args.output.display(),
         summary.runs,
@@ -636,7 +647,7 @@ fn stopped_sweep(e: &anyhow::Error) -> Option<ExitCode> {
     if !stopped {
         return None;
     }
-    println!("{e:#} (interrupted by {})", signal.name());
+    say!("{e:#} (interrupted by {})", signal.name());
     Some(ExitCode::from(signal.exit_status()))
 }
 

@@ -381,3 +381,18 @@ fn outputs_that_would_overwrite_each_other_or_an_input_are_refused() {
     assert_eq!(before("configs/demo.xml"), config, "the config changed");
     assert_eq!(before("maps/demo.stmap"), map, "the map changed");
 }
+
+/// Output to a reader that has gone (`smartteams strategies | head -1`) ends the command
+/// quietly, where `println!` panicked.
+#[test]
+fn a_reader_that_has_gone_ends_a_listing_quietly() {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    let out = Command::new(env!("CARGO_BIN_EXE_smartteams"))
+        .arg("strategies")
+        .stdout(writer)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success() && err.is_empty(), "{:?}: {err}", out.status);
+}

@@ -12,6 +12,19 @@ use sim_core::glam::DVec2;
 use sim_core::spatial::NoPath;
 use sim_core::world::MapData;
 
+/// `println!` that ends the process quietly once standard output's reader has gone
+/// (`smartteams-editor stats map.stmap | head -1`), where `println!` would panic.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(e) = writeln!(std::io::stdout(), $($arg)*)
+            && e.kind() == std::io::ErrorKind::BrokenPipe
+        {
+            std::process::exit(0);
+        }
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "smartteams-editor",
@@ -380,17 +393,17 @@ fn validate_map(path: &Path) -> ExitCode {
     let map = match load(path) {
         Ok(map) => map,
         Err(e) => {
-            println!("{e:#}");
+            say!("{e:#}");
             eprintln!("{}: not a valid map", path.display());
             return ExitCode::from(1);
         }
     };
     let problems = editor::validate::validate(&map);
     if problems.is_empty() {
-        println!("{}: ok", path.display());
+        say!("{}: ok", path.display());
     } else {
         for p in &problems {
-            println!("{}: {p}", path.display());
+            say!("{}: {p}", path.display());
         }
         eprintln!("{}: {} problem(s)", path.display(), problems.len());
         return ExitCode::from(1);
@@ -406,9 +419,9 @@ fn print_stats(path: &Path, json: bool) -> Result<ExitCode> {
     let map = load(path)?;
     let s = editor::stats::stats(&map, bytes);
     if json {
-        println!("{}", serde_json::to_string_pretty(&s)?);
+        say!("{}", serde_json::to_string_pretty(&s)?);
     } else {
-        println!("{s}");
+        say!("{s}");
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -419,7 +432,7 @@ fn print_path(path: &Path, from: DVec2, to: DVec2, robot_radius_m: f64, json: bo
     let found = editor::path::shortest_path(&map.obstacles, from, to, robot_radius_m)
         .with_context(|| format!("{}: cannot plan paths", path.display()))?;
     match found {
-        Ok(report) if json => println!("{}", serde_json::to_string(&report)?),
+        Ok(report) if json => say!("{}", serde_json::to_string(&report)?),
         Ok(report) => print!("{report}"),
         Err(no_path) => {
             let why = match no_path {
