@@ -141,3 +141,57 @@ fn bad_parameters_are_refused() {
     let e = generate(Kind::Caves, &opts(200_000.0, 200_000.0, 1, None)).unwrap_err();
     assert!(e.to_string().contains("raster"), "{e}");
 }
+
+/// An option a generator does not use is refused, not ignored; a cell size that is not
+/// positive is named as such (it read as a count of cells too large).
+#[test]
+fn options_a_generator_does_not_use_are_refused() {
+    let with = |f: fn(&mut GenerateOptions)| {
+        let mut o = opts(64.0, 48.0, 1, None);
+        f(&mut o);
+        o
+    };
+    let cases: [(Kind, GenerateOptions, &str); 5] = [
+        (
+            Kind::Maze,
+            with(|o| o.density = Some(0.5)),
+            "--density does not apply to the maze generator",
+        ),
+        (
+            Kind::Rooms,
+            with(|o| o.density = Some(0.5)),
+            "--density does not apply to the rooms generator",
+        ),
+        (
+            Kind::Noise,
+            with(|o| o.scale_m = Some(4.0)),
+            "--scale-m does not apply to the noise generator",
+        ),
+        (
+            Kind::Caves,
+            with(|o| o.count = Some(3)),
+            "--count does not apply to the caves generator",
+        ),
+        (
+            Kind::Noise,
+            with(|o| o.cell_m = -1.0),
+            "cell size must be positive, got -1 m",
+        ),
+    ];
+    for (kind, o, want) in cases {
+        let e = generate(kind, &o).unwrap_err().to_string();
+        assert!(e.contains(want), "{kind:?}: {e}");
+    }
+    // The options each uses are taken.
+    assert!(
+        generate(
+            Kind::Mesas,
+            &with(|o| {
+                o.density = Some(0.1);
+                o.scale_m = Some(8.0);
+                o.count = Some(5);
+            })
+        )
+        .is_ok()
+    );
+}

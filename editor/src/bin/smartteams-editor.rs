@@ -220,10 +220,10 @@ struct GenerateArgs {
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Target blocked fraction (generator default if absent).
+    /// Target blocked fraction (noise, fractal, caves, mesas; generator default if absent).
     #[arg(long)]
     density: Option<f64>,
-    /// Feature size in metres (fractal: noise wavelength; maze: corridor width; rooms: smallest room).
+    /// Feature size in metres (fractal: noise wavelength; maze: corridor width; rooms: smallest room; mesas: largest mesa radius).
     #[arg(long)]
     scale_m: Option<f64>,
     /// Mesas: number of obstacles (default: enough for the density).

@@ -103,8 +103,10 @@ impl GenerateOptions {
     }
 }
 
-/// Run generator `kind`.
+/// Run generator `kind`. An option it does not use (`density` for a maze or rooms,
+/// `scale_m` for noise or caves, `count` for any but mesas) is refused rather than ignored.
 pub fn generate(kind: Kind, opts: &GenerateOptions) -> Result<ObstacleMap> {
+    refuse_unused(kind, opts)?;
     match kind {
         Kind::Noise => raster_gens::white_noise(opts),
         Kind::Fractal => fractal::fractal(opts),
@@ -112,6 +114,28 @@ pub fn generate(kind: Kind, opts: &GenerateOptions) -> Result<ObstacleMap> {
         Kind::Maze => raster_gens::maze(opts),
         Kind::Rooms => raster_gens::rooms(opts),
         Kind::Mesas => mesas::mesas(opts),
+    }
+}
+
+/// Refuse the options of `opts` that generator `kind` does not use.
+fn refuse_unused(kind: Kind, opts: &GenerateOptions) -> Result<()> {
+    let (density, scale, count) = match kind {
+        Kind::Noise | Kind::Caves => (true, false, false),
+        Kind::Fractal => (true, true, false),
+        Kind::Maze | Kind::Rooms => (false, true, false),
+        Kind::Mesas => (true, true, true),
+    };
+    let given = [
+        (opts.density.is_some() && !density, "--density"),
+        (opts.scale_m.is_some() && !scale, "--scale-m"),
+        (opts.count.is_some() && !count, "--count"),
+    ];
+    match given.iter().find(|(unused, _)| *unused) {
+        Some((_, option)) => Err(EditorError::InvalidParameter(format!(
+            "{option} does not apply to the {} generator",
+            format!("{kind:?}").to_lowercase()
+        ))),
+        None => Ok(()),
     }
 }
 

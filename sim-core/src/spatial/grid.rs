@@ -57,6 +57,11 @@ impl Grid {
                 "map size must be positive, got {width_m} m × {height_m} m"
             )));
         }
+        if !(cell_m.is_finite() && cell_m > 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "cell size must be positive, got {cell_m} m"
+            )));
+        }
         let cells = |m: f64| -> Result<u32> {
             let c = (m / cell_m).ceil();
             if c.is_finite() && c >= 1.0 && c <= f64::from(1u32 << MAX_DEPTH) {
