@@ -433,5 +433,15 @@ pub fn compose(scene: Scene) -> Result<MapData> {
 pub fn compose_file(path: &Path) -> Result<MapData> {
     let bytes = std::fs::read(path).map_err(EditorError::io(path))?;
     let text = String::from_utf8(bytes).map_err(|_| EditorError::bad_input(path, "scene is not UTF-8 text"))?;
-    compose(parse_scene(&text, path)?)
+    let map = compose(parse_scene(&text, path)?)?;
+    // A map `validate` would refuse (a home or treasure inside an obstacle) is not written.
+    let problems = crate::validate::validate(&map);
+    if !problems.is_empty() {
+        let listed: Vec<String> = problems.iter().map(ToString::to_string).collect();
+        return Err(EditorError::bad_input(
+            path,
+            format!("the scene's map would not be valid: {}", listed.join("; ")),
+        ));
+    }
+    Ok(map)
 }

@@ -63,6 +63,7 @@ fn generate_place_validate_stats_preview() {
     assert_eq!(image::image_dimensions(&png).unwrap(), (192, 128));
 }
 
+/// A map with problems: `compose` will not write it, and `validate` exits 1 listing each.
 #[test]
 fn validate_exits_1_listing_every_problem() {
     let dir = tempfile::tempdir().unwrap();
@@ -75,6 +76,7 @@ fn validate_exits_1_listing_every_problem() {
     )
     .unwrap();
     let map = dir.path().join("s.stmap");
+    // `compose` refuses to write it, naming its problems.
     let out = editor()
         .arg("compose")
         .arg(&scene)
@@ -82,7 +84,17 @@ fn validate_exits_1_listing_every_problem() {
         .arg(&map)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && !map.exists(), "{err}");
+    assert!(
+        err.contains("the scene's map would not be valid: treasure 0 cannot be reached")
+            && err.contains("treasure 1 lies in a blocked cell"),
+        "{err}"
+    );
+    // Made with the library, which does not check, it fails `validate`.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let made = editor::compose::compose(editor::compose::parse_scene(&text, &scene).unwrap()).unwrap();
+    std::fs::write(&map, made.to_bytes()).unwrap();
     let out = editor().arg("validate").arg(&map).output().unwrap();
     assert_eq!(out.status.code(), Some(1));
     let text = String::from_utf8_lossy(&out.stdout);
