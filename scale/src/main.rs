@@ -639,7 +639,15 @@ fn exploration_maps(data: Option<&std::path::Path>, only: Option<&str>) -> Resul
     let from_env = std::env::var_os("SMARTTEAMS_DATA").map(std::path::PathBuf::from);
     let data = data.map(std::path::Path::to_path_buf).or(from_env);
     let mut maps = scale::exploration::comparison_maps(&workspace, data.as_deref())?;
+    let names: Vec<String> = maps.iter().map(|(n, _)| n.clone()).collect();
     maps.retain(|(n, _)| only.is_none_or(|o| n.contains(o)));
+    if maps.is_empty() {
+        anyhow::bail!(
+            "--only {}: no map's name holds it (the maps: {})",
+            only.unwrap_or_default(),
+            names.join(", ")
+        );
+    }
     Ok(maps)
 }
 

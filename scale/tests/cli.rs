@@ -367,3 +367,16 @@ fn starts_count_the_runs_farther_than_the_reference() {
     );
     assert_eq!(line, expected);
 }
+
+/// `exploration --only` that names no map is refused, listing the maps (it printed the
+/// table's header alone).
+#[test]
+fn exploration_only_naming_no_map_is_refused() {
+    let out = bench(&["exploration", "--only", "nothingmatches"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("--only nothingmatches: no map's name holds it (the maps: demo, rooms"),
+        "{err}"
+    );
+}

@@ -181,7 +181,7 @@ struct ImportArgs {
     /// Bitmaps: a pixel darker than this grey value (0–255) is blocked.
     #[arg(long, default_value_t = 128)]
     threshold: u8,
-    /// Bitmaps: light pixels are blocked instead of dark ones.
+    /// Bitmaps: pixels at or above the threshold are blocked instead of those below it.
     #[arg(long)]
     invert: bool,
     /// ROS: what unknown cells become.
