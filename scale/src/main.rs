@@ -25,10 +25,12 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Cli {
     #[command(subcommand)]
     scenario: Scenario,
-    /// Rounds to time after set-up.
+    /// Rounds to time after set-up (random-walk, swarm, kernel, config, scaling; for
+    /// exploration the bound of each run); fig4, curves, any-angle and nav-graph set their own.
     #[arg(long, default_value_t = 200, global = true)]
     rounds: u64,
-    /// Worker threads (0: one per core); for `scaling`, a list (default 1,2).
+    /// Worker threads (0: one per core) of random-walk, swarm, kernel and config; for
+    /// `scaling`, a list (default 1,2). The other scenarios set their own.
     #[arg(long, global = true, value_delimiter = ',')]
     threads: Vec<usize>,
 }
@@ -93,8 +95,8 @@ enum Timed {
         #[arg(long)]
         max_detour_m: Option<f64>,
     },
-    /// A Smart Teams XML config (for example `configs/bench-1000.xml`), its rounds played
-    /// with no outputs.
+    /// A Smart Teams XML config (for example `configs/bench-1000.xml`), played `--rounds`
+    /// rounds (not the config's) with no outputs.
     Config {
         /// The config file.
         file: std::path::PathBuf,
