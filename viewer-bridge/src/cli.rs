@@ -301,8 +301,8 @@ pub struct RunArgs {
     /// Run seed (overrides the config).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Write the whole state of the run to this file every `--checkpoint-every` rounds
-    /// (atomically: a run killed at any moment leaves the last checkpoint whole);
+    /// Write the whole state of the run to this file every `--checkpoint-every` rounds and
+    /// at its end (atomically: a run killed at any moment leaves the last checkpoint whole);
     /// `smartteams resume FILE` continues it.
     #[arg(long, value_name = "FILE")]
     pub checkpoint: Option<PathBuf>,

@@ -274,9 +274,10 @@ pub fn execute(
     let t0 = Instant::now();
     let result = run_rounds(&mut sim, &pool, loan.as_deref(), &mut outputs.observers(extra));
     let elapsed = t0.elapsed();
-    // Whatever happened, keep the outputs of the rounds that were played; a run stopped by
-    // a signal also writes its checkpoint, whatever the round.
-    if matches!(result, Ok(Some(_)))
+    // Whatever happened, keep the outputs of the rounds that were played; a run that ends,
+    // or is stopped by a signal, also writes its checkpoint, whatever the round (a run
+    // shorter than `--checkpoint-every` wrote none).
+    if result.is_ok()
         && let Some(c) = outputs.checkpoints.as_mut()
     {
         c.write_now(&sim)?;

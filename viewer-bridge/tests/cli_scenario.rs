@@ -266,7 +266,8 @@ fn view_writes_its_own_recording_beside_a_runs() {
     assert!(std::fs::metadata(dir.path().join("demo-map.rrd")).unwrap().len() > 0);
 }
 
-/// The summary names the files the run wrote; a checkpoint only once one was written.
+/// The summary names the files the run wrote, the checkpoint of its end among them (a run
+/// shorter than `--checkpoint-every` wrote none).
 #[test]
 fn the_summary_names_the_files_written() {
     let dir = tempfile::tempdir().unwrap();
@@ -286,18 +287,18 @@ fn the_summary_names_the_files_written() {
         String::from_utf8_lossy(&out.stdout).into_owned()
     };
     let written = |summary: &str| summary.lines().find(|l| l.starts_with("  written ")).map(str::to_owned);
-    let none = summary("100");
-    assert_eq!(
-        written(&none).as_deref(),
-        Some("  written           metrics m.csv, robot stats r.csv"),
-        "{none}"
-    );
-    let some = summary("10");
-    assert_eq!(
-        written(&some).as_deref(),
-        Some("  written           metrics m.csv, robot stats r.csv, checkpoint c.ckpt"),
-        "{some}"
-    );
+    // Every 10 rounds of 20, and every 100: the run's end is written either way.
+    for every in ["10", "100"] {
+        let said = summary(every);
+        assert_eq!(
+            written(&said).as_deref(),
+            Some("  written           metrics m.csv, robot stats r.csv, checkpoint c.ckpt"),
+            "{said}"
+        );
+        let checkpoint = sim_core::io::Checkpoint::read(&dir.path().join("c.ckpt")).unwrap();
+        assert_eq!(checkpoint.round(), 20, "every {every}");
+        std::fs::remove_file(dir.path().join("c.ckpt")).unwrap();
+    }
 }
 
 /// Tactics that only follow a goal, with no goal given and none to set one (alone or with
