@@ -518,3 +518,40 @@ fn a_reader_that_has_gone_ends_stats_quietly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success() && err.is_empty(), "{:?}: {err}", out.status);
 }
+
+/// An automatic home base smaller than `--home-radius-m` asked for is said to be.
+#[test]
+fn a_home_smaller_than_asked_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let generate = |radius: &str| {
+        let out = editor()
+            .args([
+                "generate",
+                "rooms",
+                "--width-m",
+                "64",
+                "--height-m",
+                "48",
+                "--home-radius-m",
+                radius,
+                "-o",
+            ])
+            .arg(dir.path().join("r.stmap"))
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = generate("50");
+    let home = MapData::load(&dir.path().join("r.stmap")).unwrap().home;
+    let HomeBase::Disc { radius_m, .. } = home else {
+        panic!("{home:?}");
+    };
+    assert!(
+        err.contains(&format!(
+            "warning: the home base has radius {radius_m} m: no free disc of the 50 m asked for fits"
+        )),
+        "{err}"
+    );
+    assert!(!generate("1").contains("warning"));
+}

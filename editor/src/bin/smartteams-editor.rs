@@ -10,7 +10,7 @@ use editor::place::{PlaceOptions, Spread};
 use editor::preview::PreviewOptions;
 use sim_core::glam::DVec2;
 use sim_core::spatial::NoPath;
-use sim_core::world::MapData;
+use sim_core::world::{HomeBase, MapData};
 
 /// `println!` that ends the process quietly once standard output's reader has gone
 /// (`smartteams-editor stats map.stmap | head -1`), where `println!` would panic.
@@ -303,6 +303,15 @@ fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) 
     };
     let placed = editor::place::place(&mut map, &place.options(false))?;
     warn_if_crowded(placed, place.treasures);
+    if place.home.is_none()
+        && let HomeBase::Disc { radius_m, .. } = map.home
+        && radius_m < place.home_radius_m * (1.0 - 1e-9)
+    {
+        eprintln!(
+            "warning: the home base has radius {radius_m} m: no free disc of the {} m asked for fits, so it is the largest that does near the centre",
+            place.home_radius_m
+        );
+    }
     Ok(map)
 }
 
