@@ -434,7 +434,8 @@ fn more_treasures_than_reachable_cells_are_warned_about() {
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    // (A home smaller than the 2 m asked for is warned of on so small a map: not this.)
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("treasures on"));
     let cells = reachable_free_cells(&MapData::load(&map).unwrap());
     assert!(cells > 1, "{cells}");
     let place = |treasures: u64| {
