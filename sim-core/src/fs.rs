@@ -5,6 +5,12 @@ use std::path::{Path, PathBuf};
 
 use crate::{Error, Result};
 
+/// `path` made absolute against the working folder (as given if that cannot be read), so
+/// that it names the same file from any folder later.
+pub fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
 /// Write `bytes` to `path` atomically and durably: to `<path>.tmp` (which the next write
 /// replaces, should a killed process leave one), flushed to disk, then renamed over `path`.
 /// A reader, a resumed run or a resumed sweep sees the old file or the new one, whole. Map

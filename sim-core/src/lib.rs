@@ -52,5 +52,5 @@ mod error;
 mod fs;
 
 pub use error::{Error, Result};
-pub use fs::write_atomically;
+pub use fs::{absolute, write_atomically};
 pub use glam;

@@ -230,7 +230,7 @@ impl ViewerArgs {
 pub fn recording_words(target: Option<&ViewerTarget>) -> String {
     match target {
         None => "none".to_owned(),
-        Some(ViewerTarget::Rrd(path)) => format!("rrd:{}", absolute(path).display()),
+        Some(ViewerTarget::Rrd(path)) => format!("rrd:{}", sim_core::absolute(path).display()),
         Some(ViewerTarget::Connect(url)) => format!("connect:{url}"),
         Some(ViewerTarget::Spawn { port }) => format!("spawn:{port}"),
     }
@@ -269,11 +269,6 @@ fn still_writable(
         );
     }
     Ok(path)
-}
-
-/// `path` made absolute against the working directory (as it is, if that cannot be read).
-fn absolute(path: &std::path::Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 /// Arguments of `smartteams view`.
@@ -418,8 +413,8 @@ impl OutputArgs {
         };
         let checkpoint = checkpoint.map(|mut plan| {
             plan.source.outputs = RunOutputs {
-                metrics: metrics.as_deref().map(absolute),
-                robot_stats: robot_stats.as_deref().map(absolute),
+                metrics: metrics.as_deref().map(sim_core::absolute),
+                robot_stats: robot_stats.as_deref().map(sim_core::absolute),
                 recording: Some(recording_words(viewer.as_ref())),
                 logging: Some(logging_words(&log)),
                 config_outputs: true,

@@ -304,10 +304,8 @@ pub fn metrics_figure(
         return Err(PlotError("no CSV to plot".into()));
     }
     // One file twice would count its runs twice, as more seeds, and narrow the band.
-    let same = |a: &PathBuf, b: &PathBuf| {
-        a == b || matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(x), Ok(y)) if x == y)
-    };
-    if let Some(k) = (0..inputs.len()).find(|&k| inputs[..k].iter().any(|q| same(&inputs[k], q))) {
+    let files: Vec<PathBuf> = inputs.iter().map(|p| crate::run::file_identity(p)).collect();
+    if let Some(k) = (0..files.len()).find(|&k| files[..k].contains(&files[k])) {
         let twice = inputs[k].display();
         return Err(PlotError(format!("{twice} is given twice: its runs would count twice")));
     }

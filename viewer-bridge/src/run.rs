@@ -338,7 +338,7 @@ pub fn refuse_overwriting(outputs: &[(&str, &Path)], inputs: &[(&str, &Path)]) -
 
 /// What names a file, whether it exists or not, for telling two paths to one file apart
 /// from paths to two: the file with links resolved if it exists, else its folder's.
-fn file_identity(path: &Path) -> PathBuf {
+pub(crate) fn file_identity(path: &Path) -> PathBuf {
     if let Ok(p) = std::fs::canonicalize(path) {
         return p;
     }
@@ -348,7 +348,7 @@ fn file_identity(path: &Path) -> PathBuf {
         .unwrap_or(Path::new("."));
     match (std::fs::canonicalize(folder), path.file_name()) {
         (Ok(folder), Some(name)) => folder.join(name),
-        _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+        _ => sim_core::absolute(path),
     }
 }
 

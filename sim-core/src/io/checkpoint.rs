@@ -95,9 +95,9 @@ impl RunSource {
     /// The set-up of a run of `config` (reads the map file for its checksum).
     pub fn of(config: &SimConfig) -> Result<Self> {
         Ok(Self {
-            config_path: absolute(&config.path),
+            config_path: crate::absolute(&config.path),
             config_text: config.text().to_owned(),
-            map_argument: config.map_argument().map(absolute),
+            map_argument: config.map_argument().map(crate::absolute),
             seed: config.seed,
             rounds: config.rounds,
             map_crc32: map_crc32(config.map_path())?,
@@ -115,11 +115,6 @@ impl RunSource {
         config.rounds = self.rounds;
         Ok(config)
     }
-}
-
-/// `path` made absolute against the working folder (as given if that cannot be known).
-fn absolute(path: &Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
 /// CRC-32 of a map file's bytes before its last four. Not of the whole file: a map file
