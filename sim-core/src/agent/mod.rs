@@ -18,8 +18,8 @@ pub use perception::{DataModule, Perception, SeenRobot, SeenTreasure};
 pub use registry::{ComposedFactory, Factory, StrategyRegistry, TacticFactory, TacticRegistry};
 pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
-    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, Navigator,
-    REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath, Tactic, Team,
-    Teaming, blocked,
+    BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, MAX_TOUR_STOPS,
+    Navigator, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath,
+    TOUR_BASE_WEIGHT, TOUR_STOPS, Tactic, Team, Teaming, Tour, blocked, first_stop,
 };
 pub use testing::TestWorld;

@@ -4,7 +4,7 @@ use glam::{DVec2, Vec2};
 
 use super::explorer::{Explorer, Sharing, share_knowledge};
 use super::spread::{MatesSketch, Spoke};
-use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy};
+use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy, Tour};
 use crate::world::{Action, Payload};
 
 /// Team mates' goals, with the round heard, sorted by robot id: 16 bytes a claim, as a
@@ -264,6 +264,8 @@ pub(super) struct ByTarget {
     pub(super) reveal_first: f64,
     /// Search again once the target is known with this part of the view round it.
     pub(super) replan_when_known: f64,
+    /// Plan tours over this many nearest frontiers (0: head for the nearest).
+    pub(super) tour_stops: usize,
 }
 
 impl Frontier {
@@ -277,7 +279,11 @@ impl Frontier {
             .with_replan_within_view(replan_within_view)
             .with_ranking_by_target(by_target.map(|b| b.seen_cost_views))
             .with_reveal_first(by_target.map_or(0.0, |b| b.reveal_first))
-            .with_replan_when_known(by_target.map(|b| b.replan_when_known));
+            .with_replan_when_known(by_target.map(|b| b.replan_when_known))
+            .with_tour(by_target.filter(|b| b.tour_stops > 0).map(|b| Tour {
+                stops: b.tour_stops,
+                ..Tour::default()
+            }));
         Self {
             core,
             sharing,

@@ -13,7 +13,9 @@ mod worker;
 
 use std::ops::RangeInclusive;
 
-use crate::agent::{REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry};
+use crate::agent::{
+    MAX_TOUR_STOPS, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry, TOUR_STOPS,
+};
 
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
@@ -54,19 +56,24 @@ fn register_builtins(r: &mut StrategyRegistry) {
          (by route, plus seen_cost_views view radii (2) for a view round it already known; those with \
          reveal_first (0.15) of their view unknown first), searching again once its target is seen nearer \
          than replan_within_view of its view radius (0.5), or seen with replan_when_known (0.65) of the view \
-         round it known; a target it gets no nearer to for 40 rounds is given up",
+         round it known; a target it gets no nearer to for 40 rounds is given up. Of the tour_stops (7) \
+         nearest frontiers a view radius apart it heads for the first of the tour that reaches them soonest, \
+         weighted by what each reveals (0: the nearest)",
         |p| {
             p.only(&[
                 "replan_within_view",
                 "seen_cost_views",
                 "reveal_first",
                 "replan_when_known",
+                "tour_stops",
             ])?;
             let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
             let by_target = frontier::ByTarget {
                 seen_cost_views: p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?,
                 reveal_first: p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?,
                 replan_when_known: p.f64_in("replan_when_known", REPLAN_WHEN_KNOWN, 0.0..=1.0)?,
+                tour_stops: usize::try_from(p.u64_in("tour_stops", TOUR_STOPS as u64, 0..=MAX_TOUR_STOPS as u64)?)
+                    .unwrap_or(TOUR_STOPS),
             };
             Ok(Box::new(frontier::Frontier::new(None, replan, Some(by_target))))
         },

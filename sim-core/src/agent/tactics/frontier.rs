@@ -4,6 +4,7 @@ use glam::DVec2;
 
 use super::Tactic;
 use super::navigator::Navigator;
+use super::tour::Tour;
 use crate::agent::ctx::Ctx;
 use crate::agent::strategy::Needs;
 use crate::spatial::PieceMemo;
@@ -87,6 +88,10 @@ pub struct FrontierSeeking {
     /// is known (`None`, the default: only as `replan_within_view` says).
     #[serde(default)]
     replan_when_known: Option<f64>,
+    /// Ranking by target, head for the first stop of a tour over the nearest frontiers
+    /// (`None`, the default: for the nearest; see [`Navigator::frontier_tour_route`]).
+    #[serde(default)]
+    tour: Option<Tour>,
     nav: Navigator,
     target: Option<DVec2>,
     /// Round of the last failed frontier search.
@@ -113,6 +118,7 @@ impl Default for FrontierSeeking {
             by_target: None,
             reveal_first: 0.0,
             replan_when_known: None,
+            tour: None,
             nav: Navigator::default(),
             target: None,
             failed_at: None,
@@ -162,6 +168,16 @@ impl FrontierSeeking {
         self
     }
 
+    /// Ranking by target, head for the first stop of the tour `tour` plans over the nearest
+    /// frontiers instead of the nearest (`None`: the nearest; see
+    /// [`Navigator::frontier_tour_route`]): what the nearest-first rule leaves behind is
+    /// taken on the way rather than walked back for.
+    #[must_use]
+    pub fn with_tour(mut self, tour: Option<Tour>) -> Self {
+        self.tour = tour;
+        self
+    }
+
     /// The route follower (strategies that also go elsewhere share it).
     pub fn navigator(&mut self) -> &mut Navigator {
         &mut self.nav
@@ -192,7 +208,7 @@ impl FrontierSeeking {
         }
         let need_plan = self.nav.is_idle() || self.target_revealed(ctx);
         if need_plan && self.failed_at.is_none_or(|r| ctx.round >= r + 20) {
-            let (memo, by_target, reveal_first) = (&mut self.memo, self.by_target, self.reveal_first);
+            let (memo, by_target, reveal_first, tour) = (&mut self.memo, self.by_target, self.reveal_first, self.tour);
             let given_up = &self.given_up;
             let found = ctx.timed_planning(|| {
                 let avoid = avoid();
@@ -204,6 +220,9 @@ impl FrontierSeeking {
                 {
                     let view_m = ctx.kind.view_radius_m;
                     let skip = (given_up.as_slice(), SAME_TARGET_VIEWS * view_m);
+                    if let Some(tour) = tour {
+                        return Navigator::frontier_tour_route(ctx, memo, views * view_m, reveal_first, skip, tour);
+                    }
                     return Navigator::nearest_frontier_route(ctx, memo, views * view_m, reveal_first, skip);
                 }
                 Navigator::frontier_route_memo(ctx, memo, &avoid, avoid_radius_m, max_detour_m)

@@ -26,6 +26,7 @@ mod frontier;
 mod navigator;
 mod path;
 mod team;
+mod tour;
 
 pub use boundary::BoundaryFollowing;
 pub use collision::CollisionAvoidance;
@@ -36,6 +37,7 @@ pub use frontier::{
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};
+pub use tour::{MAX_TOUR_STOPS, TOUR_BASE_WEIGHT, TOUR_STOPS, Tour, first_stop};
 
 use crate::agent::ctx::Ctx;
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS, Params};

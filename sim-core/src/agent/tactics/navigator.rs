@@ -4,6 +4,7 @@ use std::cell::{Cell, RefCell};
 
 use glam::DVec2;
 
+use super::tour::{self, Tour};
 use super::{SEARCH_BUDGET, blocked};
 use crate::agent::ctx::Ctx;
 use crate::spatial::{
@@ -181,6 +182,87 @@ impl Navigator {
         search(memo, 1.0)
     }
 
+    /// The route to the first stop of a tour over the frontiers nearest by route, for a
+    /// robot that avoids no claims: of the [`TOUR_CANDIDATES`] cheapest targets (ranked as
+    /// [`nearest_frontier_route`](Self::nearest_frontier_route) ranks them, those with
+    /// `reveal_first` of their view unknown if there are any), up to `tour.stops` at least
+    /// `tour.spacing_views` view radii apart, visited in the order that minimises the
+    /// weighted arrival ([`tour::first_stop`]; a stop weighs the part of its view still
+    /// unknown plus `tour.base_weight`). Legs between stops are taken as long as the
+    /// longer of the straight line and the difference of the walks to them, which no route
+    /// between them can be shorter than. A corner the nearest-first rule would leave for
+    /// last is taken when the tour passes it, rather than walked back for.
+    ///
+    /// Cost: one search settling the pieces nearer than the last candidate, and the first
+    /// stop's O(2^stops × stops²).
+    pub fn frontier_tour_route(
+        ctx: &Ctx,
+        memo: &mut PieceMemo,
+        seen_cost_m: f64,
+        reveal_first: f64,
+        skip: (&[DVec2], f64),
+        tour: Tour,
+    ) -> Option<Route> {
+        let terrain = ctx.terrain()?;
+        let (known, view_m) = (terrain.known, ctx.kind.view_radius_m);
+        let mut found = Vec::new();
+        if reveal_first > 0.0 {
+            found = Self::cheapest_frontiers(ctx, memo, seen_cost_m, 1.0 - reveal_first, skip);
+        }
+        if found.is_empty() {
+            found = Self::cheapest_frontiers(ctx, memo, seen_cost_m, 1.0, skip);
+        }
+        let mut stops = spaced(found, tour.stops.min(tour::MAX_TOUR_STOPS), tour.spacing_views * view_m);
+        let unknown: Vec<f64> = stops
+            .iter()
+            .map(|s| 1.0 - known.known_fraction_near(s.point, view_m))
+            .collect();
+        // The walk to each stop, without the search's charge for what is known round it.
+        let walk: Vec<f64> = stops
+            .iter()
+            .zip(&unknown)
+            .map(|(s, u)| s.cost_m - seen_cost_m * (1.0 - u))
+            .collect();
+        let weight: Vec<f64> = unknown.iter().map(|u| u + tour.base_weight).collect();
+        let leg_m = |i: usize, j: usize| stops[i].point.distance(stops[j].point).max((walk[i] - walk[j]).abs());
+        let (first, _) = tour::first_stop(&walk, leg_m, &weight)?;
+        let chosen = stops.swap_remove(first);
+        memo.set_route_end(chosen.nodes.last().copied());
+        Some(ctx.nav().route_to_found(ctx.position(), chosen, terrain))
+    }
+
+    /// The [`TOUR_CANDIDATES`] cheapest frontier targets, ranked by the walk plus
+    /// `seen_cost_m` times the part of the view round them known, among those with at most
+    /// `max_known` of it known; targets near those in `skip` are passed over.
+    fn cheapest_frontiers(
+        ctx: &Ctx,
+        memo: &mut PieceMemo,
+        seen_cost_m: f64,
+        max_known: f64,
+        (skip, skip_radius_m): (&[DVec2], f64),
+    ) -> Vec<FoundGoal> {
+        let Some(terrain) = ctx.terrain() else {
+            return Vec::new();
+        };
+        let (known, nav, view_m) = (terrain.known, ctx.nav(), ctx.kind.view_radius_m);
+        let start_hint = memo.route_end();
+        let ranking = Ranking::ByTarget { seen_cost_m, max_known };
+        let search = FrontierSearch::new(ranking, nav, known, skip, skip_radius_m, f64::INFINITY, memo);
+        nav.search_cheapest_goals(
+            ctx.position(),
+            start_hint,
+            |m| search.usable(m),
+            |n, d, at, reached| {
+                search
+                    .goal(n, d, at, reached)
+                    .filter(|&(_, t)| known_at_most(known, t, view_m, max_known))
+            },
+            &|t| seen_cost_m * known.known_fraction_near(t, view_m),
+            TOUR_CANDIDATES,
+            SEARCH_BUDGET,
+        )
+    }
+
     /// Route to the least contested of the `k` frontiers nearest by route (`MinPos`, after
     /// Bautin, Simonin and Charpillet, 2012): each frontier's rank is the number of
     /// `mates` (team mates' announced goals, where they are headed) that lie nearer to its
@@ -211,12 +293,7 @@ impl Navigator {
             k,
             SEARCH_BUDGET,
         );
-        let mut frontiers: Vec<FoundGoal> = Vec::with_capacity(found.len());
-        for f in found {
-            if frontiers.iter().all(|g| g.point.distance(f.point) > SAME_FRONTIER_M) {
-                frontiers.push(f);
-            }
-        }
+        let mut frontiers = spaced(found, usize::MAX, SAME_FRONTIER_M);
         let rank = |f: &FoundGoal| mates.iter().filter(|m| m.distance(f.point) < f.cost_m).count();
         // Cheapest first already: the first of the lowest rank is the nearest of them.
         let best = (0..frontiers.len()).min_by_key(|&i| (rank(&frontiers[i]), i))?;
@@ -259,7 +336,7 @@ impl Navigator {
                 |n, d, at, reached| {
                     search
                         .goal(n, d, at, reached)
-                        .filter(|&(_, t)| max_known >= 1.0 || known.known_fraction_near(t, view_m) <= max_known)
+                        .filter(|&(_, t)| known_at_most(known, t, view_m, max_known))
                 },
                 &|t| seen_cost_m * known.known_fraction_near(t, view_m),
                 SEARCH_BUDGET,
@@ -276,6 +353,31 @@ impl Navigator {
 /// the same frontier: its search finds one target per piece, and a frontier's unknown edge
 /// borders many pieces.
 pub const SAME_FRONTIER_M: f64 = 2.0;
+
+/// Frontier targets a tour's search gathers before it keeps those far enough apart
+/// ([`Navigator::frontier_tour_route`]): it finds one target per piece, and a frontier's
+/// unknown edge borders many pieces.
+pub const TOUR_CANDIDATES: usize = 64;
+
+/// Of `found` (cheapest first), up to `max` targets each more than `spacing_m` from every
+/// cheaper one kept.
+fn spaced(found: Vec<FoundGoal>, max: usize, spacing_m: f64) -> Vec<FoundGoal> {
+    let mut kept: Vec<FoundGoal> = Vec::with_capacity(found.len().min(max));
+    for f in found {
+        if kept.len() == max {
+            break;
+        }
+        if kept.iter().all(|g| g.point.distance(f.point) > spacing_m) {
+            kept.push(f);
+        }
+    }
+    kept
+}
+
+/// Whether at most `max_known` of the view round `t` is known (always, from 1 on).
+fn known_at_most(known: &KnownMap, t: DVec2, view_m: f64, max_known: f64) -> bool {
+    max_known >= 1.0 || known.known_fraction_near(t, view_m) <= max_known
+}
 
 /// Waypoints past the next that a robot held back by a wall looks at for one in straight
 /// reach.
