@@ -143,19 +143,19 @@ mod tests {
     #[test]
     fn a_near_corner_comes_first_unless_it_weighs_nothing() {
         // A big frontier 10 m off (weight 1.6), a corner 2 m off (0.6), 8 m between them
-        // (on the way). Corner first: 2 × 2.2 + 10 × 1.6 = 20.4; big first: 10 × 2.2 +
-        // 18 × 0.6 = 32.8.
+        // (on the way). Corner first: 0.6 × 2 + 1.6 × 10 = 17.2; big first: 1.6 × 10 +
+        // 0.6 × 18 = 26.8.
         let (first, cost) =
             first_stop(&[10.0, 2.0], |i, j| if i == j { 0.0 } else { 8.0 }, &[1.6, 0.6]).expect("two stops");
         assert_eq!(first, 1);
-        assert!((cost - 20.4).abs() < 1e-9, "{cost}");
-        // The corner behind the robot, 12 m from the big one. Corner first: 2 × 2.2 + 14 ×
-        // 1.6 = 26.8; big first: 10 × 2.2 + 22 × 0.6 = 35.2.
+        assert!((cost - 17.2).abs() < 1e-9, "{cost}");
+        // The corner behind the robot, 12 m from the big one. Corner first: 0.6 × 2 + 1.6 ×
+        // 14 = 23.6; big first: 1.6 × 10 + 0.6 × 22 = 29.2.
         let (first, cost) =
             first_stop(&[10.0, 2.0], |i, j| if i == j { 0.0 } else { 12.0 }, &[1.6, 0.6]).expect("two stops");
         assert_eq!(first, 1);
-        assert!((cost - 26.8).abs() < 1e-9, "{cost}");
-        // Weighing nothing, it is left for last: 10 × 1.6 = 16 against 2 × 1.6 + 14 × 1.6.
+        assert!((cost - 23.6).abs() < 1e-9, "{cost}");
+        // Weighing nothing, it is left for last: 1.6 × 10 = 16 against 1.6 × 14 = 22.4.
         let (first, cost) =
             first_stop(&[10.0, 2.0], |i, j| if i == j { 0.0 } else { 12.0 }, &[1.6, 0.0]).expect("two stops");
         assert_eq!(first, 0);
