@@ -2,14 +2,14 @@
 //! against rounds; right: after 50 rounds against the number of robots, beside the kernel's
 //! own map), and the explored fraction against rounds for 10, 100 and 1,000 robots.
 //!
-//! Robots run `frontier` exploration (each explores on its own, so its known map is what it
-//! has seen), all starting at home.
+//! Robots run `frontier` exploration towards the nearest frontier, as the paper's do (each
+//! explores on its own, so its known map is what it has seen), all starting at home.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use editor::generate::{GenerateOptions, mesas::mesas};
-use sim_core::agent::StrategyRegistry;
+use sim_core::agent::{Params, StrategyRegistry};
 use sim_core::engine::{Group, ScenarioBuilder, Simulation};
 use sim_core::glam::DVec2;
 use sim_core::world::{HomeBase, MapData, RobotType};
@@ -108,7 +108,13 @@ impl Fig4 {
             .with_seed(self.seed)
             .with_rounds(u64::MAX)
             .with_types(vec![RobotType::explorer()])
-            .with_group(Group::new("frontier", 0, robots).with_name("explorers"))
+            // The paper's explorers head for the nearest frontier: without the tour
+            // (crowds that do not talk explore less with it, BENCHMARKS.md).
+            .with_group(
+                Group::new("frontier", 0, robots)
+                    .with_name("explorers")
+                    .with_params(Params::from_pairs([("tour_stops", "0")])),
+            )
             .build(&registry)?;
         Ok(Simulation::new(scenario)?)
     }

@@ -72,7 +72,7 @@ pub fn first_stop(first_leg_m: &[f64], leg_m: impl Fn(usize, usize) -> f64, weig
             for next in (0..n).filter(|&m| visited & (1 << m) == 0) {
                 let cost = so_far + leg_m(last, next) * ahead[visited];
                 let slot = &mut best[visited | (1 << next)][next];
-                if cost < slot.0 || (cost == slot.0 && first < slot.1) {
+                if cost.total_cmp(&slot.0).then(first.cmp(&slot.1)).is_lt() {
                     *slot = (cost, first);
                 }
             }
