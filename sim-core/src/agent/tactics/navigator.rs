@@ -183,7 +183,7 @@ impl Navigator {
     }
 
     /// The route to the first stop of a tour over the frontiers nearest by route, for a
-    /// robot that avoids no claims: of the [`TOUR_CANDIDATES`] cheapest targets (ranked as
+    /// robot that avoids no claims: of the `TOUR_CANDIDATES` (64) cheapest targets (ranked as
     /// [`nearest_frontier_route`](Self::nearest_frontier_route) ranks them, those with
     /// `reveal_first` of their view unknown if there are any), up to `tour.stops` at least
     /// `tour.spacing_views` view radii apart, visited in the order that minimises the
@@ -231,7 +231,7 @@ impl Navigator {
         Some(ctx.nav().route_to_found(ctx.position(), chosen, terrain))
     }
 
-    /// The [`TOUR_CANDIDATES`] cheapest frontier targets, ranked by the walk plus
+    /// The `TOUR_CANDIDATES` cheapest frontier targets, ranked by the walk plus
     /// `seen_cost_m` times the part of the view round them known, among those with at most
     /// `max_known` of it known; targets near those in `skip` are passed over.
     fn cheapest_frontiers(
