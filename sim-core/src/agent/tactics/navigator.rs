@@ -252,12 +252,8 @@ impl Navigator {
             ctx.position(),
             start_hint,
             |m| search.usable(m),
-            |n, d, at, reached| {
-                search
-                    .goal(n, d, at, reached)
-                    .filter(|&(_, t)| known_at_most(known, t, view_m, max_known))
-            },
-            &|t| seen_cost_m * known.known_fraction_near(t, view_m),
+            |n, d, at, reached| search.goal_by_target(n, d, at, reached, view_m),
+            &|t| search.seen_charge(t, view_m),
             TOUR_CANDIDATES,
             SEARCH_BUDGET,
         )
@@ -328,17 +324,13 @@ impl Navigator {
                 |n, d, reached| search.goal(n, d, p, reached),
                 SEARCH_BUDGET,
             ),
-            Ranking::ByTarget { seen_cost_m, max_known } => nav.search_nearest_goal(
+            Ranking::ByTarget { .. } => nav.search_nearest_goal(
                 p,
                 start_hint,
                 terrain,
                 |m| search.usable(m),
-                |n, d, at, reached| {
-                    search
-                        .goal(n, d, at, reached)
-                        .filter(|&(_, t)| known_at_most(known, t, view_m, max_known))
-                },
-                &|t| seen_cost_m * known.known_fraction_near(t, view_m),
+                |n, d, at, reached| search.goal_by_target(n, d, at, reached, view_m),
+                &|t| search.seen_charge(t, view_m),
                 SEARCH_BUDGET,
             ),
         };
@@ -490,6 +482,34 @@ impl FrontierSearch<'_, '_> {
             self.skipped.set(Some((n, d, t)));
         }
         ok
+    }
+
+    /// The goal test of a search ranking by target: [`goal`](Self::goal), among targets
+    /// with at most the ranking's `max_known` of the view round them known (`view_m`, the
+    /// view radius).
+    fn goal_by_target(
+        &self,
+        n: NavNodeId,
+        d: f64,
+        at: DVec2,
+        reached: &dyn Fn(NavNodeId) -> bool,
+        view_m: f64,
+    ) -> Option<(NavNodeId, DVec2)> {
+        let max_known = match self.ranking {
+            Ranking::ByTarget { max_known, .. } => max_known,
+            Ranking::ByEntry => 1.0,
+        };
+        self.goal(n, d, at, reached)
+            .filter(|&(_, t)| known_at_most(self.known, t, view_m, max_known))
+    }
+
+    /// What a target costs beyond the walk to it: the ranking's `seen_cost_m` times the part
+    /// of the view round it known (0 ranking by entry).
+    fn seen_charge(&self, t: DVec2, view_m: f64) -> f64 {
+        match self.ranking {
+            Ranking::ByTarget { seen_cost_m, .. } => seen_cost_m * self.known.known_fraction_near(t, view_m),
+            Ranking::ByEntry => 0.0,
+        }
     }
 
     /// The search's goal test of piece `n`, entered at `at` after walking `d`: the skipped
