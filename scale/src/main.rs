@@ -197,7 +197,7 @@ enum Scenario {
         /// The shared map folder (ROS maps and the Stage cave); default: `SMARTTEAMS_DATA`.
         #[arg(long)]
         data: Option<std::path::PathBuf>,
-        /// Team sizes of `cooperative` to time against one robot (`0`: no teams).
+        /// Team sizes of `cooperative` (2 or more) to time against one robot (`0`: no teams).
         #[arg(long, value_delimiter = ',', default_value = "2,4,8")]
         teams: Vec<u32>,
         /// Only the maps whose name contains this.
@@ -283,6 +283,10 @@ fn run(cli: &Cli) -> Result<()> {
                 params: team_params.iter().cloned().collect(),
             };
             // A bad name or value stops the run before its table begins.
+            anyhow::ensure!(
+                !teams.sizes.contains(&1),
+                "--teams 1: a team has 2 robots or more (one robot is what every team is timed against; 0: no teams)"
+            );
             scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
             scale::exploration::check_strategy("cooperative", &teams.params)?;
             if starts > 0 {

@@ -380,3 +380,13 @@ fn exploration_only_naming_no_map_is_refused() {
         "{err}"
     );
 }
+
+/// `exploration --teams 1` is refused: one robot is what every team is timed against (it
+/// printed the single robot twice, as `1:` and as a team of 1).
+#[test]
+fn exploration_teams_of_one_are_refused() {
+    let out = bench(&["exploration", "--only", "indoor loop", "--teams", "0,1"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(err.contains("--teams 1: a team has 2 robots or more"), "{err}");
+}
