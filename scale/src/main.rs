@@ -302,10 +302,12 @@ fn run(cli: &Cli) -> Result<()> {
             ref turns,
             alternate,
         } => {
-            let threads = if cli.threads.is_empty() {
+            // 0 is one thread per core, as for the other scenarios: the report names the count.
+            let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+            let threads: Vec<usize> = if cli.threads.is_empty() {
                 vec![1, 2]
             } else {
-                cli.threads.clone()
+                cli.threads.iter().map(|&n| if n == 0 { cores } else { n }).collect()
             };
             scaling(scenario, cli.rounds, &threads, turns, alternate)
         }

@@ -390,3 +390,26 @@ fn exploration_teams_of_one_are_refused() {
     assert!(!out.status.success(), "{err}");
     assert!(err.contains("--teams 1: a team has 2 robots or more"), "{err}");
 }
+
+/// `--threads 0` in the scaling report is one thread per core, named by its count (it
+/// printed `0 thr` and `on 0 thread(s)`).
+#[test]
+fn scaling_with_zero_threads_names_the_core_count() {
+    let out = bench(&[
+        "--rounds",
+        "10",
+        "--threads",
+        "1,0",
+        "scaling",
+        "random-walk",
+        "--robots",
+        "200",
+        "--side-m",
+        "128",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+    assert!(text.contains(&format!("{cores} thr (s)")), "{text}");
+    assert!(!text.contains("0 thr"), "{text}");
+}
