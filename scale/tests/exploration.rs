@@ -205,6 +205,24 @@ fn frontiers_tour_takes_the_loops_corners_on_the_way() {
     );
 }
 
+/// A `frontier` robot that sees another heads for the nearest frontier for the next 50
+/// rounds instead of planning tours: two robots setting out together on the indoor loop
+/// walk as with `tour_stops` 0 over their first 50 rounds, while one robot alone walks
+/// another way.
+#[test]
+fn frontier_robots_in_company_head_for_the_nearest_frontier() {
+    let maps = indoor_maps().unwrap();
+    let (_, ring) = maps
+        .iter()
+        .find(|(name, _)| name == "indoor loop")
+        .expect("the indoor loop");
+    let run = |robots, pairs: &[(&str, &str)]| {
+        explore_with(ring, "frontier", &Params::from_pairs(pairs.iter().copied()), robots, 50).unwrap()
+    };
+    assert_eq!(run(2, &[]), run(2, &[("tour_stops", "0")]));
+    assert_ne!(run(1, &[]), run(1, &[("tour_stops", "0")]));
+}
+
 /// Two `cooperative` robots on the rooms example map (128 m × 96 m, radios of 20 m) soon
 /// part and seldom hear each other. Each keeps the other's announced goal, however far, as
 /// one to stay away from, so they explore different parts rather than each other's: 90 %

@@ -233,7 +233,21 @@ pub(super) struct Frontier {
     /// The last target it left to a team mate, and the round it first did.
     #[serde(default)]
     left_since: Option<(DVec2, u64)>,
+    /// A lone explorer's tour (`frontier` with `tour_stops` above 0), planned while it has
+    /// seen no other robot for [`COMPANY_ROUNDS`].
+    #[serde(default)]
+    tour: Option<Tour>,
+    /// The round until which a lone explorer heads for the nearest frontier instead, having
+    /// seen another robot.
+    #[serde(default)]
+    company_until: u64,
 }
+
+/// Rounds a lone `frontier` robot that saw another robot heads for the nearest frontier
+/// rather than plan tours: robots that set out together plan much the same tours and walk
+/// together, and crowds that do not talk explored a quarter to a third less (BENCHMARKS.md,
+/// "The paper's Fig. 4").
+const COMPANY_ROUNDS: u64 = 50;
 
 /// `cooperative` robots that have heard fewer team mates than this settle clashing goals
 /// ([`Frontier::yield_to_lower_ids`]); in crowds each clash would cost a search.
@@ -279,11 +293,11 @@ impl Frontier {
             .with_replan_within_view(replan_within_view)
             .with_ranking_by_target(by_target.map(|b| b.seen_cost_views))
             .with_reveal_first(by_target.map_or(0.0, |b| b.reveal_first))
-            .with_replan_when_known(by_target.map(|b| b.replan_when_known))
-            .with_tour(by_target.filter(|b| b.tour_stops > 0).map(|b| Tour {
-                stops: b.tour_stops,
-                ..Tour::default()
-            }));
+            .with_replan_when_known(by_target.map(|b| b.replan_when_known));
+        let tour = by_target.filter(|b| b.tour_stops > 0).map(|b| Tour {
+            stops: b.tour_stops,
+            ..Tour::default()
+        });
         Self {
             core,
             sharing,
@@ -295,7 +309,22 @@ impl Frontier {
             crowd: false,
             waiting_until: 0,
             left_since: None,
+            tour,
+            company_until: 0,
         }
+    }
+
+    /// A lone explorer plans tours while it has seen no other robot for [`COMPANY_ROUNDS`],
+    /// and heads for the nearest frontier otherwise.
+    fn tour_while_alone(&mut self, ctx: &Ctx) {
+        let Some(tour) = self.tour else {
+            return;
+        };
+        if !ctx.robots_in_view().is_empty() {
+            self.company_until = ctx.round + COMPANY_ROUNDS;
+        }
+        let alone = ctx.round >= self.company_until;
+        self.core.frontier.set_tour(alone.then_some(tour));
     }
 
     /// When a team mate with a lower id announced this round a goal within `radius_m` of
@@ -431,9 +460,10 @@ impl Strategy for Frontier {
 
     fn needs(&self) -> Needs {
         Needs {
-            // Other robots are never looked at: the physical unit prevents collisions and
-            // the collision tactic handles being stuck.
-            robots: false,
+            // Other robots are looked at only by a lone explorer with a tour, to know
+            // whether it is alone: the physical unit prevents collisions and the collision
+            // tactic handles being stuck.
+            robots: self.tour.is_some(),
             treasures: self.sharing.is_some(),
             messages: self.sharing.is_some(),
             ..Needs::ALL
@@ -450,6 +480,7 @@ impl Strategy for Frontier {
         } else {
             0.0
         };
+        self.tour_while_alone(ctx);
         if let Some(a) = self.core.reflexes(ctx) {
             if let Some(spoke) = &mut self.spoke {
                 spoke.interrupt();

@@ -58,7 +58,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
          than replan_within_view of its view radius (0.5), or seen with replan_when_known (0.65) of the view \
          round it known; a target it gets no nearer to for 40 rounds is given up. Of the tour_stops (7) \
          nearest frontiers a view radius apart it heads for the first of the tour that reaches them soonest, \
-         weighted by what each reveals (0: the nearest)",
+         weighted by what each reveals, while it has seen no other robot for 50 rounds (0: the nearest)",
         |p| {
             p.only(&[
                 "replan_within_view",

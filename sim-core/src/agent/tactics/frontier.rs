@@ -178,6 +178,11 @@ impl FrontierSeeking {
         self
     }
 
+    /// [`with_tour`](Self::with_tour) on a seeker already made: from its next search on.
+    pub fn set_tour(&mut self, tour: Option<Tour>) {
+        self.tour = tour;
+    }
+
     /// The route follower (strategies that also go elsewhere share it).
     pub fn navigator(&mut self) -> &mut Navigator {
         &mut self.nav
