@@ -556,3 +556,70 @@ fn a_home_smaller_than_asked_is_warned_of() {
     );
     assert!(!generate("1").contains("warning"));
 }
+
+/// Options `place` would ignore are refused before anything is written: a home base radius
+/// without `--home` (the map's home base is kept), and cluster options without `--spread
+/// clustered`. With `--home`, the radius is taken.
+#[test]
+fn place_refuses_options_it_would_ignore() {
+    let dir = tempfile::tempdir().unwrap();
+    let (map, out_map) = (dir.path().join("m.stmap"), dir.path().join("placed.stmap"));
+    run_ok(
+        editor()
+            .args([
+                "generate",
+                "noise",
+                "--width-m",
+                "16",
+                "--height-m",
+                "16",
+                "--density",
+                "0",
+                "--quiet",
+                "-o",
+            ])
+            .arg(&map),
+    );
+    let place = |args: &[&str]| {
+        editor()
+            .arg("place")
+            .arg(&map)
+            .args(args)
+            .arg("-o")
+            .arg(&out_map)
+            .output()
+            .unwrap()
+    };
+    for (args, says) in [
+        (
+            &["--home-radius-m", "5"][..],
+            "--home-radius-m sizes the home base --home places",
+        ),
+        (
+            &["--clusters", "3"][..],
+            "--clusters applies only with --spread clustered",
+        ),
+        (
+            &["--treasures", "2", "--cluster-sigma-m", "1"][..],
+            "--cluster-sigma-m applies only with --spread clustered",
+        ),
+    ] {
+        let out = place(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(says), "{args:?}: {err}");
+        assert!(!out_map.exists(), "{args:?} wrote a map");
+    }
+    run_ok(
+        editor()
+            .arg("place")
+            .arg(&map)
+            .args(["--home", "8,8", "--home-radius-m", "5", "-o"])
+            .arg(&out_map),
+    );
+    let placed = MapData::load(&out_map).unwrap();
+    assert!(
+        matches!(placed.home, HomeBase::Disc { radius_m, .. } if (radius_m - 5.0).abs() < 1e-9),
+        "{:?}",
+        placed.home
+    );
+}

@@ -118,9 +118,9 @@ struct PlaceArgs {
     /// Home base centre `X,Y` in metres (must be free).
     #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
     home: Option<DVec2>,
-    /// Home base radius in metres.
-    #[arg(long, default_value_t = 2.0)]
-    home_radius_m: f64,
+    /// Home base radius in metres (default 2; `place` takes it only with `--home`).
+    #[arg(long)]
+    home_radius_m: Option<f64>,
     /// Number of treasures to scatter.
     #[arg(long, default_value_t = 0)]
     treasures: u32,
@@ -130,12 +130,12 @@ struct PlaceArgs {
     /// How treasures are spread.
     #[arg(long, value_enum, default_value_t = SpreadArg::Uniform)]
     spread: SpreadArg,
-    /// Number of clusters (with `--spread clustered`).
-    #[arg(long, default_value_t = 4)]
-    clusters: u32,
-    /// Spread of a cluster in metres (with `--spread clustered`).
-    #[arg(long, default_value_t = 5.0)]
-    cluster_sigma_m: f64,
+    /// Number of clusters (with `--spread clustered`; default 4).
+    #[arg(long)]
+    clusters: Option<u32>,
+    /// Spread of a cluster in metres (with `--spread clustered`; default 5).
+    #[arg(long)]
+    cluster_sigma_m: Option<f64>,
     /// Treasure quantity, `N` or `MIN..MAX` (inclusive).
     #[arg(long, default_value = "1", value_parser = parse_range)]
     quantity: (u32, u32),
@@ -151,18 +151,44 @@ enum SpreadArg {
 }
 
 impl PlaceArgs {
+    /// The home base radius asked for, m.
+    fn home_radius_m(&self) -> f64 {
+        self.home_radius_m.unwrap_or(PlaceOptions::default().home_radius_m)
+    }
+
+    /// Refuse options that would be ignored: cluster options without `--spread clustered`,
+    /// and, where the map's home base is kept unless `--home` is given (`place`), a radius
+    /// without `--home`.
+    fn refuse_unused(&self, keeps_map_home: bool) -> Result<()> {
+        if keeps_map_home && self.home.is_none() && self.home_radius_m.is_some() {
+            anyhow::bail!(
+                "--home-radius-m sizes the home base --home places; without --home the map's home base is kept"
+            );
+        }
+        if matches!(self.spread, SpreadArg::Uniform) {
+            let unused = [
+                (self.clusters.is_some(), "--clusters"),
+                (self.cluster_sigma_m.is_some(), "--cluster-sigma-m"),
+            ];
+            if let Some((_, option)) = unused.iter().find(|u| u.0) {
+                anyhow::bail!("{option} applies only with --spread clustered");
+            }
+        }
+        Ok(())
+    }
+
     fn options(&self, auto_home: bool) -> PlaceOptions {
         PlaceOptions {
             home: self.home,
             auto_home,
-            home_radius_m: self.home_radius_m,
+            home_radius_m: self.home_radius_m(),
             treasures: self.treasures,
             keep_treasures: self.keep_treasures,
             spread: match self.spread {
                 SpreadArg::Uniform => Spread::Uniform,
                 SpreadArg::Clustered => Spread::Clustered {
-                    clusters: self.clusters,
-                    sigma_m: self.cluster_sigma_m,
+                    clusters: self.clusters.unwrap_or(4),
+                    sigma_m: self.cluster_sigma_m.unwrap_or(5.0),
                 },
             },
             quantity: self.quantity,
@@ -295,7 +321,8 @@ fn save(map: &MapData, path: &Path) -> Result<()> {
 }
 
 fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) -> Result<MapData> {
-    let home = editor::place::auto_home(&obstacles, place.home_radius_m)?;
+    place.refuse_unused(false)?;
+    let home = editor::place::auto_home(&obstacles, place.home_radius_m())?;
     let mut map = MapData {
         obstacles,
         home,
@@ -305,11 +332,11 @@ fn with_placement(obstacles: sim_core::spatial::ObstacleMap, place: &PlaceArgs) 
     warn_if_crowded(placed, place.treasures);
     if place.home.is_none()
         && let HomeBase::Disc { radius_m, .. } = map.home
-        && radius_m < place.home_radius_m * (1.0 - 1e-9)
+        && radius_m < place.home_radius_m() * (1.0 - 1e-9)
     {
         eprintln!(
             "warning: the home base has radius {radius_m} m: no free disc of the {} m asked for fits, so it is the largest that does near the centre",
-            place.home_radius_m
+            place.home_radius_m()
         );
     }
     Ok(map)
@@ -389,6 +416,7 @@ fn compose_map(scene: &Path, output: &Path) -> Result<ExitCode> {
 
 /// `place`: set the home base and treasures of the map at `path` and save it to `output`.
 fn place_on_map(path: &Path, place: &PlaceArgs, output: &Path) -> Result<ExitCode> {
+    place.refuse_unused(true)?;
     let mut map = load(path)?;
     let placed = editor::place::place(&mut map, &place.options(false))?;
     warn_if_crowded(placed, place.treasures);
