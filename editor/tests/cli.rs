@@ -623,3 +623,56 @@ fn place_refuses_options_it_would_ignore() {
         placed.home
     );
 }
+
+/// Import options the file's format does not use are refused, naming the file, rather than
+/// ignored: `--origin` of a ROS map (its YAML states it), `--unknown` of a bitmap or a
+/// Moving AI map, `--threshold` and `--invert` of a Moving AI map.
+#[test]
+fn import_refuses_options_its_format_does_not_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let mai = dir.path().join("tiny.map");
+    std::fs::write(&mai, "type octile\nheight 3\nwidth 4\nmap\n....\n.@..\n....\n").unwrap();
+    // The ROS map's image is a bitmap of its own.
+    let yaml = write_ros_5cm(dir.path(), 40, 40, |_, _| false);
+    let png = dir.path().join("img.pgm");
+    let out_map = dir.path().join("out.stmap");
+    for (file, args, says) in [
+        (
+            &yaml,
+            &["--origin", "1,1"][..],
+            "--origin applies only to bitmaps and Moving AI maps",
+        ),
+        (&png, &["--unknown", "free"][..], "--unknown applies only to ROS maps"),
+        (&mai, &["--unknown", "free"][..], "--unknown applies only to ROS maps"),
+        (&mai, &["--threshold", "100"][..], "--threshold applies only to bitmaps"),
+        (&mai, &["--invert"][..], "--invert applies only to bitmaps"),
+    ] {
+        let out = editor()
+            .arg("import")
+            .arg(file)
+            .args(args)
+            .arg("-o")
+            .arg(&out_map)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        let name = file.file_name().unwrap().to_string_lossy();
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(&*name) && err.contains(says), "{args:?}: {err}");
+        assert!(!out_map.exists(), "{args:?} wrote a map");
+    }
+    run_ok(
+        editor()
+            .arg("import")
+            .arg(&png)
+            .args(["--threshold", "255", "--invert", "--origin", "-2,-2", "-o"])
+            .arg(&out_map),
+    );
+    run_ok(
+        editor()
+            .arg("import")
+            .arg(&mai)
+            .args(["--origin", "-2,-2", "-o"])
+            .arg(&out_map),
+    );
+}

@@ -204,18 +204,19 @@ struct ImportArgs {
     /// Metres per pixel (bitmaps; default 1; overrides a ROS or Moving AI resolution).
     #[arg(long)]
     resolution_m: Option<f64>,
-    /// Bitmaps: a pixel darker than this grey value (0–255) is blocked.
-    #[arg(long, default_value_t = 128)]
-    threshold: u8,
+    /// Bitmaps: a pixel darker than this grey value (0–255) is blocked (default 128).
+    #[arg(long)]
+    threshold: Option<u8>,
     /// Bitmaps: pixels at or above the threshold are blocked instead of those below it.
     #[arg(long)]
     invert: bool,
-    /// ROS: what unknown cells become.
-    #[arg(long, value_enum, default_value_t = UnknownArg::Blocked)]
-    unknown: UnknownArg,
-    /// World position `X,Y` of the map's lower-left corner (bitmaps, Moving AI).
-    #[arg(long, value_parser = parse_point, default_value = "0,0", allow_hyphen_values = true)]
-    origin: DVec2,
+    /// ROS: what unknown cells become (default blocked).
+    #[arg(long, value_enum)]
+    unknown: Option<UnknownArg>,
+    /// World position `X,Y` of the map's lower-left corner (bitmaps, Moving AI; default
+    /// 0,0; a ROS map's YAML states its own).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    origin: Option<DVec2>,
     #[command(flatten)]
     place: PlaceArgs,
     /// Output map file.
@@ -391,20 +392,44 @@ fn generate_map(args: &GenerateArgs) -> Result<ExitCode> {
 /// `import`: import the obstacles from a file, place the home base and treasures, and save
 /// the map.
 fn import_map(args: &ImportArgs) -> Result<ExitCode> {
+    refuse_unused_import_options(args)?;
+    let defaults = ImportOptions::default();
     let opts = ImportOptions {
         resolution_m: args.resolution_m,
-        threshold: args.threshold,
+        threshold: args.threshold.unwrap_or(defaults.threshold),
         invert: args.invert,
         unknown: match args.unknown {
-            UnknownArg::Blocked => Unknown::Blocked,
-            UnknownArg::Free => Unknown::Free,
+            None | Some(UnknownArg::Blocked) => Unknown::Blocked,
+            Some(UnknownArg::Free) => Unknown::Free,
         },
-        origin: args.origin,
+        origin: args.origin.unwrap_or(defaults.origin),
     };
     let obstacles = editor::import::import(&args.file, &opts)?;
     let map = with_placement(obstacles, &args.place)?;
     save(&map, &args.output)?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuse the import options the file's format does not use (the format is the file
+/// extension's, as `import` reads it): they would be ignored.
+fn refuse_unused_import_options(args: &ImportArgs) -> Result<()> {
+    use editor::import::Format;
+    let format = Format::of(&args.file);
+    let (bitmap, ros) = (format == Format::Bitmap, format == Format::Ros);
+    let unused = [
+        (args.threshold.is_some() && !bitmap, "--threshold", "bitmaps"),
+        (args.invert && !bitmap, "--invert", "bitmaps"),
+        (args.unknown.is_some() && !ros, "--unknown", "ROS maps"),
+        (
+            args.origin.is_some() && ros,
+            "--origin",
+            "bitmaps and Moving AI maps (a ROS map's YAML states its origin)",
+        ),
+    ];
+    if let Some((_, option, applies)) = unused.iter().find(|u| u.0) {
+        anyhow::bail!("{}: {option} applies only to {applies}", args.file.display());
+    }
+    Ok(())
 }
 
 /// `compose`: build the map of an XML scene and save it.
