@@ -177,6 +177,23 @@ fn write_ros_5cm(dir: &Path, w: u32, h: u32, blocked: impl Fn(u32, u32) -> bool)
     yaml
 }
 
+/// `import FILE ARGS -o OUT`, which must fail with exit status 2 and write nothing; its
+/// standard error.
+fn import_refused(file: &Path, args: &[&str], out_map: &Path) -> String {
+    let out = editor()
+        .arg("import")
+        .arg(file)
+        .args(args)
+        .arg("-o")
+        .arg(out_map)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(!out_map.exists(), "{args:?}: nothing is written on failure");
+    err
+}
+
 fn run_ok(cmd: &mut Command) -> std::process::Output {
     let out = cmd.output().unwrap();
     assert!(
@@ -283,21 +300,11 @@ fn import_refuses_grids_it_cannot_compute_with() {
         &["--origin", "1e20,1e20"],
         &["--origin", "1e308,0"],
     ] {
-        let out = editor()
-            .arg("import")
-            .arg(&file)
-            .args(args)
-            .arg("-o")
-            .arg(&out_map)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        let err = import_refused(&file, args, &out_map);
         assert!(
             err.contains("tiny.map") && err.contains("cannot be computed with"),
             "{args:?}: {err}"
         );
-        assert!(!out_map.exists(), "{args:?}: nothing is written on failure");
     }
     // The same file at sensible settings imports.
     run_ok(
@@ -647,19 +654,9 @@ fn import_refuses_options_its_format_does_not_use() {
         (&mai, &["--threshold", "100"][..], "--threshold applies only to bitmaps"),
         (&mai, &["--invert"][..], "--invert applies only to bitmaps"),
     ] {
-        let out = editor()
-            .arg("import")
-            .arg(file)
-            .args(args)
-            .arg("-o")
-            .arg(&out_map)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
+        let err = import_refused(file, args, &out_map);
         let name = file.file_name().unwrap().to_string_lossy();
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(&*name) && err.contains(says), "{args:?}: {err}");
-        assert!(!out_map.exists(), "{args:?} wrote a map");
     }
     run_ok(
         editor()
