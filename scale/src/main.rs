@@ -302,12 +302,13 @@ fn run(cli: &Cli) -> Result<()> {
             ref turns,
             alternate,
         } => {
-            // 0 is one thread per core, as for the other scenarios: the report names the count.
-            let cores = std::thread::available_parallelism().map_or(1, std::num::NonZero::get);
+            // 0 is rayon's default pool size, as for the other scenarios (one thread per core
+            // unless RAYON_NUM_THREADS says otherwise): the report names the count.
             let threads: Vec<usize> = if cli.threads.is_empty() {
                 vec![1, 2]
             } else {
-                cli.threads.iter().map(|&n| if n == 0 { cores } else { n }).collect()
+                let default = rayon::current_num_threads();
+                cli.threads.iter().map(|&n| if n == 0 { default } else { n }).collect()
             };
             scaling(scenario, cli.rounds, &threads, turns, alternate)
         }

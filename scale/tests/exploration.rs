@@ -176,7 +176,7 @@ fn parameters_reach_the_compared_explorer() {
 /// On the indoor loop (a ring corridor round a block, 20 m × 20 m at 0.1 m), heading for
 /// the nearest frontier leaves the ring's outer corners behind and walks back round the
 /// ring for them at the end: 1.45× the greedy reference's walk to 98 %. `frontier`'s tour
-/// takes them as it passes: within 1.05× of the reference (3.6 % over it today).
+/// takes them as it passes: within 1.05× of the reference.
 #[test]
 fn frontiers_tour_takes_the_loops_corners_on_the_way() {
     let ring = &indoor_loop();

@@ -275,8 +275,8 @@ pub fn execute(
     let result = run_rounds(&mut sim, &pool, loan.as_deref(), &mut outputs.observers(extra));
     let elapsed = t0.elapsed();
     // Whatever happened, keep the outputs of the rounds that were played; a run that ends,
-    // or is stopped by a signal, also writes its checkpoint, whatever the round (a run
-    // shorter than `--checkpoint-every` wrote none).
+    // or is stopped by a signal, also writes its checkpoint, whatever the round, so even a
+    // run shorter than `--checkpoint-every` can be resumed.
     if result.is_ok()
         && let Some(c) = outputs.checkpoints.as_mut()
     {

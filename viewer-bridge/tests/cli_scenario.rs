@@ -266,8 +266,8 @@ fn view_writes_its_own_recording_beside_a_runs() {
     assert!(std::fs::metadata(dir.path().join("demo-map.rrd")).unwrap().len() > 0);
 }
 
-/// The summary names the files the run wrote, the checkpoint of its end among them (a run
-/// shorter than `--checkpoint-every` wrote none).
+/// The summary names the files the run wrote, the checkpoint of its end among them, also
+/// when the run is shorter than `--checkpoint-every`.
 #[test]
 fn the_summary_names_the_files_written() {
     let dir = tempfile::tempdir().unwrap();

@@ -144,6 +144,12 @@ struct PlaceArgs {
     place_seed: u64,
 }
 
+/// `--clusters` by default.
+const CLUSTERS: u32 = 4;
+
+/// `--cluster-sigma-m` by default.
+const CLUSTER_SIGMA_M: f64 = 5.0;
+
 #[derive(Clone, Copy, ValueEnum)]
 enum SpreadArg {
     Uniform,
@@ -187,8 +193,8 @@ impl PlaceArgs {
             spread: match self.spread {
                 SpreadArg::Uniform => Spread::Uniform,
                 SpreadArg::Clustered => Spread::Clustered {
-                    clusters: self.clusters.unwrap_or(4),
-                    sigma_m: self.cluster_sigma_m.unwrap_or(5.0),
+                    clusters: self.clusters.unwrap_or(CLUSTERS),
+                    sigma_m: self.cluster_sigma_m.unwrap_or(CLUSTER_SIGMA_M),
                 },
             },
             quantity: self.quantity,

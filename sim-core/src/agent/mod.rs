@@ -20,6 +20,6 @@ pub use strategy::{Needs, Strategy, StrategyFailure, restore_state, save_state};
 pub use tactics::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, MAX_TOUR_STOPS,
     Navigator, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEARCH_BUDGET, SEEN_COST_VIEWS, ShortestPath,
-    TOUR_BASE_WEIGHT, TOUR_STOPS, Tactic, Team, Teaming, Tour, blocked, first_stop,
+    TOUR_BASE_WEIGHT, TOUR_STOPS, Tactic, Team, Teaming, Tour, blocked,
 };
 pub use testing::TestWorld;

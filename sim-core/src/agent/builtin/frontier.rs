@@ -244,9 +244,8 @@ pub(super) struct Frontier {
 }
 
 /// Rounds a lone `frontier` robot that saw another robot heads for the nearest frontier
-/// rather than plan tours: robots that set out together plan much the same tours and walk
-/// together, and crowds that do not talk explored a quarter to a third less (BENCHMARKS.md,
-/// "The paper's Fig. 4").
+/// rather than plan tours: robots that set out together would plan much the same tours and
+/// walk together (BENCHMARKS.md, "The paper's Fig. 4").
 const COMPANY_ROUNDS: u64 = 50;
 
 /// `cooperative` robots that have heard fewer team mates than this settle clashing goals

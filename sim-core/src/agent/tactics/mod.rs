@@ -37,7 +37,7 @@ pub use frontier::{
 pub use navigator::Navigator;
 pub use path::ShortestPath;
 pub use team::{Team, Teaming};
-pub use tour::{MAX_TOUR_STOPS, TOUR_BASE_WEIGHT, TOUR_STOPS, Tour, first_stop};
+pub use tour::{MAX_TOUR_STOPS, TOUR_BASE_WEIGHT, TOUR_STOPS, Tour};
 
 use crate::agent::ctx::Ctx;
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS, Params};

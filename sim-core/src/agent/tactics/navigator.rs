@@ -187,7 +187,7 @@ impl Navigator {
     /// [`nearest_frontier_route`](Self::nearest_frontier_route) ranks them, those with
     /// `reveal_first` of their view unknown if there are any), up to `tour.stops` at least
     /// `tour.spacing_views` view radii apart, visited in the order that minimises the
-    /// weighted arrival ([`tour::first_stop`]; a stop weighs the part of its view still
+    /// weighted arrival (`tour::first_stop`; a stop weighs the part of its view still
     /// unknown plus `tour.base_weight`). Legs between stops are taken as long as the
     /// longer of the straight line and the difference of the walks to them, which no route
     /// between them can be shorter than. A corner the nearest-first rule would leave for
