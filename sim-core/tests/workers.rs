@@ -387,9 +387,13 @@ fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
 /// the target to mate 2: no goal, and it stays put for `wait_rounds` rounds (5 by
 /// default). Mate 2 then announces no goal (in round 3), and once its wait is over the
 /// robot searches again and sets out east: in round 7 by default, in round 3 with
-/// `wait_rounds` 1. Were mate 2 to keep its goal, the robot would take the target once it
-/// has left it for 80 rounds. With mate 2's goal 8.5 m from the target, with `wait_rounds` 0, or with
-/// mate 0 alone heard (a team of two), it sets out east at once.
+/// `wait_rounds` 1. While both mates keep saying their goals (every 10 rounds, as a mate
+/// walking on does every 20), the robot searches every 5 rounds, finds the same target and
+/// leaves it again, to round 101 and on. Mates that fall silent after round 22 are
+/// forgotten 50 rounds later (at round 80, claims are pruned every 10), and the robot sets
+/// out at its next search, in round 82, for the nearer end, west. With mate 2's goal 8.5 m from the target,
+/// with `wait_rounds` 0, or with mate 0 alone heard (a team of two), it sets out east at
+/// once.
 #[test]
 fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
     // Searching again, the robot takes the nearest frontier clear of the mates' goals, as
@@ -417,14 +421,25 @@ fn a_robot_of_a_small_team_leaves_a_target_nearer_to_a_mates_goal_and_waits() {
             wait_rounds + 2
         );
     }
-    // Both mates keep their goals (and say so every 10 rounds, as claims are forgotten
-    // after 50): the robot searches again every 5 rounds, finds the same target and leaves
-    // it again, and takes it once it has left it for 80 rounds (round 82).
-    let heard: Vec<_> = (0..81).map(|k| if k % 10 == 0 { &near[..] } else { quiet }).collect();
-    let (_, after) = goals_after_announcements(&heard, &base);
+    // `after[k]` is round k + 2.
+    let saying = |until: usize| -> Vec<_> {
+        (0..100)
+            .map(|k| if k % 10 == 0 && k <= until { &near[..] } else { quiet })
+            .collect()
+    };
+    let (_, after) = goals_after_announcements(&saying(usize::MAX), &base);
+    let moved = after.iter().position(|&step| step != (None, Action::Idle));
+    assert_eq!(
+        moved,
+        None,
+        "waits while the mates keep their goals: {:?}",
+        moved.map(|k| after[k])
+    );
+    let (_, after) = goals_after_announcements(&saying(20), &base);
     let moved = after.iter().position(|&step| step != (None, Action::Idle));
     assert_eq!(moved, Some(80), "waits to round 81: {:?}", moved.map(|k| after[k]));
-    assert!(east(after[80].0), "east in round 82: {:?}", after[80]);
+    let west = after[80].0.is_some_and(|g| g.x < 7.5);
+    assert!(west, "the nearer west end in round 82: {:?}", after[80]);
     let no_wait = base.clone().with("wait_rounds", "0");
     let far = mates(25.5);
     for (mates, params) in [(&far[..], &base), (&near[..], &no_wait), (&near[..1], &base)] {

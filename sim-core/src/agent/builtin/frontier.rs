@@ -230,9 +230,12 @@ pub(super) struct Frontier {
     /// [`Frontier::leave_to_mates`]).
     #[serde(default)]
     waiting_until: u64,
-    /// The last target it left to a team mate, and the round it first did.
+    /// The round the goal was last announced, and the walk left to it then.
     #[serde(default)]
-    left_since: Option<(DVec2, u64)>,
+    announced_at: (u64, f64),
+    /// Where the robot stood last round (for [`Frontier::held_back`]).
+    #[serde(default)]
+    last_position: Option<DVec2>,
     /// A lone explorer's tour (`frontier` with `tour_stops` above 0), planned while it has
     /// seen no other robot for [`COMPANY_ROUNDS`].
     #[serde(default)]
@@ -257,14 +260,14 @@ const SMALL_TEAM_MATES: f64 = 12.0;
 /// costs more time than the walk it saves (BENCHMARKS.md, "Exploration quality").
 const WAITING_TEAM_MATES: f64 = 2.0;
 
-/// Rounds a `cooperative` robot leaves the same target (within [`SAME_LEFT_TARGET_M`]) to its
-/// team mates before it takes it after all: a mate held up, in a doorway crowded with
-/// waiting robots, say, would otherwise hold them all (BENCHMARKS.md, "Exploration
-/// quality").
-const LEAVE_AT_MOST_ROUNDS: u64 = 80;
+/// Rounds a team mate's announced goal is kept without news of it.
+const CLAIM_KEPT_ROUNDS: u64 = 50;
 
-/// Targets this near count as the same for [`LEAVE_AT_MOST_ROUNDS`].
-const SAME_LEFT_TARGET_M: f64 = 1.0;
+/// A robot that leaves targets to its mates announces its goal again after this many rounds
+/// if it came nearer to it meanwhile, so that mates keep a goal walked to for longer than
+/// [`CLAIM_KEPT_ROUNDS`] (a robot that comes no nearer lets its goal be forgotten, and
+/// taken).
+const REANNOUNCE_ROUNDS: u64 = 20;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
 /// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
@@ -307,7 +310,8 @@ impl Frontier {
             mates: MatesSketch::default(),
             crowd: false,
             waiting_until: 0,
-            left_since: None,
+            announced_at: (0, 0.0),
+            last_position: None,
             tour,
             company_until: 0,
         }
@@ -330,7 +334,7 @@ impl Frontier {
     /// this robot's target, drop the route: the next search avoids the mate's goal. Robots
     /// that set out together pick the same nearest frontier before they hear each other;
     /// without this the higher ids follow the lowest until their targets are reached.
-    fn yield_to_lower_ids(&mut self, ctx: &Ctx, radius_m: f64) {
+    fn yield_to_lower_ids(&mut self, ctx: &Ctx, radius_m: f64) -> bool {
         let (me, now, home) = (ctx.me.id.get(), heard_in(ctx.round), ctx.home().center());
         let nav = self.core.frontier.navigator();
         let clash = nav.destination().is_some_and(|target| {
@@ -341,6 +345,7 @@ impl Frontier {
         if clash {
             nav.clear();
         }
+        clash
     }
 
     /// The rounds this robot waits when it leaves a target to its team mates, if it does:
@@ -353,27 +358,22 @@ impl Frontier {
     }
 
     /// Leave a new target to a team mate: when the target (set this round, `before` being
-    /// the goal before) lies nearer to a mate's announced goal than the robot's route to
-    /// it, drop the route and wait `wait_rounds` (then search again). The mate,
-    /// once at its goal, is nearer; walking there would cross the ground the mate is
-    /// exploring. A target left for [`LEAVE_AT_MOST_ROUNDS`] is taken. Returns whether the
-    /// robot waits. O(claims).
-    fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>, wait_rounds: u64) -> bool {
-        let Some(target) = ctx.goal().filter(|&t| Some(t) != before) else {
+    /// the goal before, or found again after yielding it) lies nearer to a mate's announced
+    /// goal than the robot's route to it, drop the route and wait `wait_rounds` (then search
+    /// again). The mate, once at its goal, is nearer; walking there would cross the ground
+    /// the mate is exploring. Returns whether the robot waits. O(claims).
+    fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>, yielded: bool, wait_rounds: u64) -> bool {
+        let Some(target) = ctx.goal().filter(|&t| yielded || Some(t) != before) else {
             return false;
         };
         let (me, home) = (ctx.me.id.get(), ctx.home().center());
         let nav = self.core.frontier.navigator();
         let walk_m = nav.remaining_m(ctx.position());
-        let left_since = self.left_since.filter(|l| l.0.distance(target) <= SAME_LEFT_TARGET_M);
-        let left_long = left_since.is_some_and(|l| ctx.round >= l.1 + LEAVE_AT_MOST_ROUNDS);
-        let nearer_mate = !left_long
-            && self
-                .claims
-                .iter()
-                .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
+        let nearer_mate = self
+            .claims
+            .iter()
+            .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
         if nearer_mate {
-            self.left_since = Some(left_since.unwrap_or((target, ctx.round)));
             nav.clear();
             ctx.set_goal(None);
             self.waiting_until = ctx.round + wait_rounds;
@@ -383,8 +383,9 @@ impl Frontier {
 
     /// A sharing robot's round with its team: share its known map as `share` says, take in
     /// the goals its mates announced (see [`Claims`]), count the mates heard, and in a small
-    /// team yield a clashing target to a lower id ([`Frontier::yield_to_lower_ids`]).
-    fn hear_team(&mut self, ctx: &mut Ctx, share: Sharing) {
+    /// team yield a clashing target to a lower id ([`Frontier::yield_to_lower_ids`]; returns
+    /// whether it did).
+    fn hear_team(&mut self, ctx: &mut Ctx, share: Sharing) -> bool {
         share_knowledge(ctx, share.every_rounds, &mut self.shared_area);
         let radius = share.avoid_radius_m;
         let home = ctx.home().center();
@@ -431,20 +432,42 @@ impl Frontier {
             }
         });
         if round.is_multiple_of(10) {
-            self.claims
-                .retain(|(_, g, heard)| round <= u64::from(*heard) + 50 && goal_of(*g, home).distance(p) <= near);
+            self.claims.retain(|(_, g, heard)| {
+                round <= u64::from(*heard) + CLAIM_KEPT_ROUNDS && goal_of(*g, home).distance(p) <= near
+            });
         }
         keep_newest(&mut self.claims, share.max_claims, round);
         self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
-        if !self.crowd {
-            self.yield_to_lower_ids(ctx, radius);
-        }
+        !self.crowd && self.yield_to_lower_ids(ctx, radius)
     }
 
-    /// Announce the goal to team mates, only when it changed: claims stay cheap in crowds.
-    fn announce_goal(&mut self, ctx: &mut Ctx) {
-        if self.sharing.is_some() && ctx.goal() != self.announced {
+    /// Whether the robot, walking to a goal, moved less than half a step last round: held
+    /// back by a wall or by robots (a waiting mate makes way when told, see [`make_way`]).
+    /// Called once a round: it notes the position.
+    fn held_back(&mut self, ctx: &Ctx) -> bool {
+        let p = ctx.position();
+        let moved_m = self.last_position.replace(p).map_or(f64::INFINITY, |q| q.distance(p));
+        ctx.goal().is_some()
+            && matches!(ctx.me.last_action.0, Action::MoveTo { .. })
+            && moved_m < 0.5 * ctx.kind.speed_m_per_round
+    }
+
+    /// Whether to announce an unchanged goal again: [`REANNOUNCE_ROUNDS`] after the last
+    /// announcement, if the walk left to it shrank meanwhile.
+    fn walking_on(&mut self, ctx: &Ctx) -> bool {
+        let (at, walk_m) = self.announced_at;
+        ctx.goal().is_some()
+            && ctx.round >= at + REANNOUNCE_ROUNDS
+            && self.core.frontier.navigator().remaining_m(ctx.position()) < walk_m - ctx.kind.speed_m_per_round
+    }
+
+    /// Announce the goal to team mates when it changed (claims stay cheap in crowds), or
+    /// `again`.
+    fn announce_goal(&mut self, ctx: &mut Ctx, again: bool) {
+        if self.sharing.is_some() && (again || ctx.goal() != self.announced) {
             self.announced = ctx.goal();
+            let walk_m = self.core.frontier.navigator().remaining_m(ctx.position());
+            self.announced_at = (ctx.round, walk_m);
             let goal = ctx.goal();
             ctx.broadcast(Payload::Position {
                 position: ctx.position(),
@@ -473,11 +496,11 @@ impl Strategy for Frontier {
         let max_detour_m = self.sharing.and_then(|s| s.max_detour_m).unwrap_or(f64::INFINITY);
         // Claims keep their goals from here (see [`Claims`]).
         let home = ctx.home().center();
-        let radius = if let Some(share) = self.sharing {
-            self.hear_team(ctx, share);
-            share.avoid_radius_m
+        let (radius, yielded) = if let Some(share) = self.sharing {
+            let yielded = self.hear_team(ctx, share);
+            (share.avoid_radius_m, yielded)
         } else {
-            0.0
+            (0.0, false)
         };
         self.tour_while_alone(ctx);
         if let Some(a) = self.core.reflexes(ctx) {
@@ -487,10 +510,12 @@ impl Strategy for Frontier {
             return a;
         }
         let leaves_targets = self.leaves_targets();
+        // Held back, it tells the waiting mates in its way (see [`make_way`]).
+        let held_back = leaves_targets.is_some() && self.held_back(ctx);
         if leaves_targets.is_some() && ctx.round < self.waiting_until {
             ctx.set_goal(None);
-            self.announce_goal(ctx);
-            return Action::Idle;
+            self.announce_goal(ctx, false);
+            return make_way(ctx).unwrap_or(Action::Idle);
         }
         let before = ctx.goal();
         let claims = &self.claims;
@@ -508,25 +533,107 @@ impl Strategy for Frontier {
                 max_detour_m,
                 compare,
             );
-            if leaves_targets.is_some_and(|wait_rounds| self.leave_to_mates(ctx, before, wait_rounds)) {
+            if leaves_targets.is_some_and(|wait_rounds| self.leave_to_mates(ctx, before, yielded, wait_rounds)) {
                 Action::Idle
             } else {
                 a
             }
         };
-        self.announce_goal(ctx);
+        let again = leaves_targets.is_some() && (held_back || self.walking_on(ctx));
+        self.announce_goal(ctx, again);
         action
     }
+}
+
+/// A waiting robot's step out of the way of the nearest team mate that announced its goal
+/// last round from within two steps of touching it (as a robot held back does): a step to
+/// the side of the mate's line to its goal, ahead along it if that side is blocked, or to
+/// the other side; `None` if the robot is behind the mate, or no step is free. Robots that
+/// start packed, or wait in a doorway, otherwise hold in the mate they left their target to.
+fn make_way(ctx: &Ctx) -> Option<Action> {
+    let p = ctx.position();
+    let (radius_m, step_m) = (ctx.kind.radius_m, ctx.kind.speed_m_per_round);
+    let reach_m = 2.0 * (radius_m + step_m);
+    let (mate, goal) = ctx
+        .messages()
+        .iter()
+        .filter_map(|m| match *m.payload {
+            Payload::Position {
+                position,
+                goal: Some(goal),
+            } if position.distance(p) <= reach_m => Some((position, goal)),
+            _ => None,
+        })
+        .min_by(|a, b| a.0.distance(p).total_cmp(&b.0.distance(p)))?;
+    let heading = (goal - mate).try_normalize()?;
+    let off = p - mate;
+    if off.dot(heading) < -radius_m {
+        return None;
+    }
+    let side = if heading.perp_dot(off) >= 0.0 {
+        heading.perp()
+    } else {
+        -heading.perp()
+    };
+    [side, heading, -side]
+        .into_iter()
+        .map(|d| p + d * step_m)
+        .find(|&to| ctx.can_move(p, to) == Some(true))
+        .map(|to| Action::MoveTo { to })
 }
 
 #[cfg(test)]
 mod tests {
     use std::collections::BTreeMap;
 
-    use glam::Vec2;
+    use glam::{DVec2, Vec2};
     use proptest::prelude::*;
 
-    use super::{Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, merge_claims, stored_goal};
+    use super::{
+        Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, make_way, merge_claims, stored_goal,
+    };
+    use crate::agent::TestWorld;
+    use crate::spatial::RobotId;
+    use crate::world::{Action, Inbox, Message, Payload, Recipient};
+
+    /// Where a waiting robot steps when mate 2 announces, from `mate` (relative to the
+    /// robot), a goal at `goal` (relative too), in the world of `art` (the robot knows it
+    /// all; the explorer type: 0.125 m radius, 1 m steps, so mates within 2.25 m count).
+    fn step_aside(art: &str, mate: DVec2, goal: DVec2) -> Option<DVec2> {
+        let mut w = TestWorld::from_ascii(art, 1.0).unwrap().knowing_all();
+        let p = w.robot.position;
+        let said = Message {
+            from: RobotId::new(2),
+            sent_round: 0,
+            to: Recipient::Broadcast,
+            payload: std::sync::Arc::new(Payload::Position {
+                position: p + mate,
+                goal: Some(p + goal),
+            }),
+        };
+        w.mind.perception.inbox = Inbox::from(vec![said]);
+        make_way(&w.ctx()).map(|a| match a {
+            Action::MoveTo { to } => to - p,
+            other => panic!("a move, not {other:?}"),
+        })
+    }
+
+    /// A mate 1 m west and 0.2 m south of the robot, heading east: the robot, north of the
+    /// mate's line, steps 1 m north. In a corridor one cell wide it cannot: it steps 1 m
+    /// east, ahead of the mate. A mate heading west (the robot behind it), one 2.5 m off,
+    /// or one with nowhere to go: no step.
+    #[test]
+    fn a_waiting_robot_steps_off_a_near_mates_way() {
+        let open = [".....", ".....", "..R..", ".....", "....."].join("\n");
+        let corridor = ["#####", "..R..", "#####"].join("\n");
+        let (mate, east, west) = (DVec2::new(-1.0, -0.2), DVec2::new(10.0, -0.2), DVec2::new(-10.0, -0.2));
+        let near = |a: Option<DVec2>, b: DVec2| a.is_some_and(|a| a.distance(b) < 1e-9);
+        assert!(near(step_aside(&open, mate, east), DVec2::Y));
+        assert!(near(step_aside(&corridor, mate, east), DVec2::X));
+        assert_eq!(step_aside(&open, mate, west), None);
+        assert_eq!(step_aside(&open, DVec2::new(-2.5, 0.0), east), None);
+        assert_eq!(step_aside(&open, mate, mate), None);
+    }
 
     /// A goal kept in single precision from the home comes back within 6 mm on a
     /// 100 km map whatever its origin, here 5,000 km out (a projected map's coordinates),
