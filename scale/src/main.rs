@@ -720,7 +720,7 @@ fn exploration_from_starts(
         let starts = starts_along_the_reference(&map, k, max_rounds)?;
         let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
         let (mut cells, mut at90, mut at98) = (Vec::new(), Vec::new(), Vec::new());
-        for m in maps {
+        for (start, m) in maps.enumerate() {
             let built_in = compared.explore(&m, max_rounds)?;
             let reference = explore(&m, GREEDY_REFERENCE, 1, max_rounds)?;
             let cell = |a, b| match (a, b) {
@@ -735,7 +735,8 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
-            team_runs.extend(TeamRuns::run(&m, teams, max_rounds, None)?);
+            let start = if start == 0 { "home".to_owned() } else { format!("start {start}") };
+            team_runs.extend(TeamRuns::run(&m, teams, max_rounds, None)?.map(|r| (format!("{name} from {start}"), r)));
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
         all90.extend(at90);
@@ -810,16 +811,22 @@ impl TeamRuns {
 
 /// Per team size: the mean speed-up over one robot, the runs faster than one robot (2
 /// robots: at least 1.6× faster), and the runs whose summed distance is within 1.25× one
-/// robot's, out of the runs that reached 90 %.
-fn print_team_runs(runs: &[TeamRuns]) {
-    let mut sizes: Vec<u32> = runs.iter().flat_map(|r| r.teams.iter().map(|t| t.0)).collect();
+/// robot's, out of the runs that reached 90 %; then the runs (named) short of the speed-up.
+fn print_team_runs(runs: &[(String, TeamRuns)]) {
+    let mut sizes: Vec<u32> = runs.iter().flat_map(|r| r.1.teams.iter().map(|t| t.0)).collect();
     sizes.sort_unstable();
     sizes.dedup();
     for robots in sizes {
-        let of_size: Vec<Option<(f64, f64)>> = runs
+        let named: Vec<(&str, Option<(f64, f64)>)> = runs
             .iter()
-            .flat_map(|r| r.teams.iter().filter(|t| t.0 == robots).map(|t| r.against_one(&t.1)))
+            .flat_map(|(name, r)| {
+                r.teams
+                    .iter()
+                    .filter(|t| t.0 == robots)
+                    .map(|t| (name.as_str(), r.against_one(&t.1)))
+            })
             .collect();
+        let of_size: Vec<Option<(f64, f64)>> = named.iter().map(|n| n.1).collect();
         let speedups: Vec<f64> = of_size.iter().flatten().map(|r| r.0).collect();
         let ratios: Vec<f64> = of_size.iter().flatten().map(|r| r.1).collect();
         let bar = if robots == 2 { 1.6 } else { 1.0 };
@@ -832,6 +839,13 @@ fn print_team_runs(runs: &[TeamRuns]) {
             mean(&ratios),
             ratios.iter().filter(|&&x| x <= 1.25).count()
         );
+        let short: Vec<String> = named
+            .iter()
+            .filter_map(|&(name, r)| r.filter(|r| r.0 < bar).map(|r| format!("{name} ({:.2}x)", r.0)))
+            .collect();
+        if !short.is_empty() {
+            println!("  short of {bar}x: {}", short.join(", "));
+        }
     }
 }
 

@@ -239,10 +239,9 @@ fn two_cooperative_robots_divide_the_rooms_map_after_they_part() {
 
 /// Eight `cooperative` robots in the 1.2 m corridors of the indoor corner maze, starting
 /// packed at home. Robots that leave their targets to mates wait (and step out of the way of
-/// a mate held back among them) rather than follow the mates, as long as the mates say they
-/// are still walking to their goals: the eight reach 90 % sooner than one robot, walking
-/// at most 1.25× its distance between them (2.2× when waiting robots took a target left
-/// for 80 rounds, or a goal heard 50 rounds before was forgotten: convoys of six).
+/// a mate held back among them) rather than follow the mates: the eight reach 90 % sooner
+/// than one robot, walking at most 1.25× its distance between them (2.2× when waiting
+/// robots took a target they had left for 80 rounds: convoys of six).
 #[test]
 fn eight_cooperative_robots_in_a_maze_walk_no_more_than_one_and_a_quarter() {
     let maze = indoor_map("indoor corner maze");

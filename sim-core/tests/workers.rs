@@ -387,9 +387,8 @@ fn a_small_teams_robot_yields_a_shared_target_to_a_lower_id() {
 /// the target to mate 2: no goal, and it stays put for `wait_rounds` rounds (5 by
 /// default). Mate 2 then announces no goal (in round 3), and once its wait is over the
 /// robot searches again and sets out east: in round 7 by default, in round 3 with
-/// `wait_rounds` 1. While both mates keep saying their goals (every 10 rounds, as a mate
-/// walking on does every 20), the robot searches every 5 rounds, finds the same target and
-/// leaves it again, to round 101 and on. Mates that fall silent after round 22 are
+/// `wait_rounds` 1. While both mates keep saying their goals (every 10 rounds), the robot
+/// searches every 5 rounds, finds the same target and leaves it again, to round 101 and on. Mates that fall silent after round 22 are
 /// forgotten 50 rounds later (at round 80, claims are pruned every 10), and the robot sets
 /// out at its next search, in round 82, for the nearer end, west. With mate 2's goal 8.5 m from the target,
 /// with `wait_rounds` 0, or with mate 0 alone heard (a team of two), it sets out east at

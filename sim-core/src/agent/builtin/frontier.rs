@@ -230,9 +230,6 @@ pub(super) struct Frontier {
     /// [`Frontier::leave_to_mates`]).
     #[serde(default)]
     waiting_until: u64,
-    /// The round the goal was last announced, and the walk left to it then.
-    #[serde(default)]
-    announced_at: (u64, f64),
     /// Where the robot stood last round (for [`Frontier::held_back`]).
     #[serde(default)]
     last_position: Option<DVec2>,
@@ -262,12 +259,6 @@ const WAITING_TEAM_MATES: f64 = 2.0;
 
 /// Rounds a team mate's announced goal is kept without news of it.
 const CLAIM_KEPT_ROUNDS: u64 = 50;
-
-/// A robot that leaves targets to its mates announces its goal again after this many rounds
-/// if it came nearer to it meanwhile, so that mates keep a goal walked to for longer than
-/// [`CLAIM_KEPT_ROUNDS`] (a robot that comes no nearer lets its goal be forgotten, and
-/// taken).
-const REANNOUNCE_ROUNDS: u64 = 20;
 
 /// How a lone explorer (`frontier`) ranks frontiers and when it searches again (see
 /// `FrontierSeeking::with_ranking_by_target`, `with_reveal_first` and
@@ -310,7 +301,6 @@ impl Frontier {
             mates: MatesSketch::default(),
             crowd: false,
             waiting_until: 0,
-            announced_at: (0, 0.0),
             last_position: None,
             tour,
             company_until: 0,
@@ -361,7 +351,9 @@ impl Frontier {
     /// the goal before, or found again after yielding it) lies nearer to a mate's announced
     /// goal than the robot's route to it, drop the route and wait `wait_rounds` (then search
     /// again). The mate, once at its goal, is nearer; walking there would cross the ground
-    /// the mate is exploring. Returns whether the robot waits. O(claims).
+    /// the mate is exploring. It leaves the target until it no longer keeps the mate's goal
+    /// ([`CLAIM_KEPT_ROUNDS`] without news of it). Returns whether the robot waits.
+    /// O(claims).
     fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>, yielded: bool, wait_rounds: u64) -> bool {
         let Some(target) = ctx.goal().filter(|&t| yielded || Some(t) != before) else {
             return false;
@@ -452,22 +444,11 @@ impl Frontier {
             && moved_m < 0.5 * ctx.kind.speed_m_per_round
     }
 
-    /// Whether to announce an unchanged goal again: [`REANNOUNCE_ROUNDS`] after the last
-    /// announcement, if the walk left to it shrank meanwhile.
-    fn walking_on(&mut self, ctx: &Ctx) -> bool {
-        let (at, walk_m) = self.announced_at;
-        ctx.goal().is_some()
-            && ctx.round >= at + REANNOUNCE_ROUNDS
-            && self.core.frontier.navigator().remaining_m(ctx.position()) < walk_m - ctx.kind.speed_m_per_round
-    }
-
     /// Announce the goal to team mates when it changed (claims stay cheap in crowds), or
     /// `again`.
     fn announce_goal(&mut self, ctx: &mut Ctx, again: bool) {
         if self.sharing.is_some() && (again || ctx.goal() != self.announced) {
             self.announced = ctx.goal();
-            let walk_m = self.core.frontier.navigator().remaining_m(ctx.position());
-            self.announced_at = (ctx.round, walk_m);
             let goal = ctx.goal();
             ctx.broadcast(Payload::Position {
                 position: ctx.position(),
@@ -539,8 +520,7 @@ impl Strategy for Frontier {
                 a
             }
         };
-        let again = leaves_targets.is_some() && (held_back || self.walking_on(ctx));
-        self.announce_goal(ctx, again);
+        self.announce_goal(ctx, held_back);
         action
     }
 }
