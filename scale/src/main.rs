@@ -735,7 +735,11 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
-            let start = if start == 0 { "home".to_owned() } else { format!("start {start}") };
+            let start = if start == 0 {
+                "home".to_owned()
+            } else {
+                format!("start {start}")
+            };
             team_runs.extend(TeamRuns::run(&m, teams, max_rounds, None)?.map(|r| (format!("{name} from {start}"), r)));
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
