@@ -352,7 +352,8 @@ fn teams_run_from_every_start_as_the_library_runs_them() {
         .map(|(start, x)| format!("indoor corner maze from {start} ({x:.2}x)"))
         .collect();
     assert!(!short.is_empty(), "the runs no team falls short in: {speedups:?}");
-    expected += &format!("\n  short of 1.6x: {}", short.join(", "));
+    expected.push_str("\n  short of 1.6x: ");
+    expected.push_str(&short.join(", "));
     assert_eq!(line, expected);
 }
 
