@@ -43,9 +43,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "teams.xml",
         rounds: 800,
-        digest: 0x00cc_d0d4_7e81_3071,
-        metrics_crc: 0x92b2_10f8,
-        robots_crc: 0xf5f3_6830,
+        digest: 0xab0f_aadb_3f0e_bdfd,
+        metrics_crc: 0xcd2a_99aa,
+        robots_crc: 0x765d_a778,
     },
     Golden {
         config: "tactics.xml",
