@@ -406,8 +406,8 @@ fn exploration_teams_of_one_are_refused() {
     assert!(err.contains("--teams 1: a team has 2 robots or more"), "{err}");
 }
 
-/// `--threads 0` in the scaling report is one thread per core, named by its count (it
-/// printed `0 thr` and `on 0 thread(s)`).
+/// `--threads 0` in the scaling report is one thread per core, named by its count, never
+/// as `0 thr`.
 #[test]
 fn scaling_with_zero_threads_names_the_core_count() {
     let out = bench(&[
