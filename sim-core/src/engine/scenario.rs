@@ -402,8 +402,56 @@ struct Placer<'a> {
     obstacles: &'a ObstacleMap,
     spacing: f64,
     used: HashSet<(i64, i64)>,
-    /// First ring around each centre that may still have room.
-    progress: HashMap<(i64, i64), i64>,
+    /// Per lattice centre, the ring being filled (see [`Ring`]).
+    progress: HashMap<(i64, i64), Ring>,
+}
+
+/// A ring of lattice points round a centre, nearest to `at` first, and how far it has been
+/// searched for robots of `radius_m`: the points before `next` are taken or blocked for
+/// them, and stay so (points are only ever taken, and the map does not change), so the next
+/// search for the same `at` and radius resumes there. A search for another `at` or radius
+/// sorts the ring again and starts from its first point.
+#[derive(Debug)]
+struct Ring {
+    /// Its distance from the centre, in lattice steps (the square ring's half side).
+    step: i64,
+    at: DVec2,
+    radius_m: f64,
+    cells: Vec<(i64, i64)>,
+    next: usize,
+}
+
+impl Ring {
+    /// Ring `ring` round lattice point `c` (spacing `s`), sorted by distance to `at`, ties
+    /// by lattice coordinates.
+    fn new(c: (i64, i64), ring: i64, at: DVec2, radius_m: f64, s: f64) -> Self {
+        let mut cells: Vec<(i64, i64)> = Vec::with_capacity(usize::try_from(8 * ring.max(1)).unwrap_or(0));
+        for dx in -ring..=ring {
+            for dy in -ring..=ring {
+                if dx.abs().max(dy.abs()) == ring {
+                    cells.push((c.0 + dx, c.1 + dy));
+                }
+            }
+        }
+        cells.sort_by(|a, b| {
+            lattice_point(*a, s)
+                .distance_squared(at)
+                .total_cmp(&lattice_point(*b, s).distance_squared(at))
+                .then(a.cmp(b))
+        });
+        Self {
+            step: ring,
+            at,
+            radius_m,
+            cells,
+            next: 0,
+        }
+    }
+}
+
+/// The position of lattice point `q` (spacing `s`).
+fn lattice_point(q: (i64, i64), s: f64) -> DVec2 {
+    DVec2::new(q.0 as f64 * s, q.1 as f64 * s)
 }
 
 impl<'a> Placer<'a> {
@@ -433,35 +481,126 @@ impl<'a> Placer<'a> {
         (side * side).min(by_area)
     }
 
+    /// The free lattice point nearest to `at` (ring by ring round the lattice point nearest
+    /// to it, each ring nearest first) where a disc of `radius` fits, taken; `None` when
+    /// none is left within [`max_ring`](Self::max_ring). Cost: amortised O(log ring) a call
+    /// for calls with the same `at` and radius, which resume where the last left off (each
+    /// ring sorted once); `placements_equal_a_search_from_each_ring_start` checks them
+    /// against a search from the start of the ring every call.
     fn next_near(&mut self, at: DVec2, radius: f64) -> Option<DVec2> {
         let s = self.spacing;
         let c = ((at.x / s).round() as i64, (at.y / s).round() as i64);
         let max_ring = self.max_ring();
-        let first = self.progress.get(&c).copied().unwrap_or(0);
-        for ring in first..=max_ring {
-            self.progress.insert(c, ring);
-            let mut cells: Vec<(i64, i64)> = Vec::new();
-            for dx in -ring..=ring {
-                for dy in -ring..=ring {
-                    if dx.abs().max(dy.abs()) == ring {
-                        cells.push((c.0 + dx, c.1 + dy));
+        let mut state = match self.progress.remove(&c) {
+            Some(r) if r.at == at && r.radius_m.to_bits() == radius.to_bits() => r,
+            Some(r) => Ring::new(c, r.step, at, radius, s),
+            None => Ring::new(c, 0, at, radius, s),
+        };
+        let found = loop {
+            if let Some(&q) = state.cells.get(state.next) {
+                state.next += 1;
+                if !self.used.contains(&q) && self.obstacles.is_disc_free(lattice_point(q, s), radius) {
+                    self.used.insert(q);
+                    break Some(lattice_point(q, s));
+                }
+            } else if state.step < max_ring {
+                state = Ring::new(c, state.step + 1, at, radius, s);
+            } else {
+                break None;
+            }
+        };
+        self.progress.insert(c, state);
+        found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::{HashMap, HashSet};
+
+    use glam::DVec2;
+    use proptest::prelude::*;
+
+    use super::{Placer, lattice_point};
+    use crate::spatial::{Grid, ObstacleMap};
+
+    /// The placer's search without its memory of each ring: every call sorts the ring it
+    /// left off at again and searches it from its first point.
+    struct SortingPlacer<'a> {
+        placer: Placer<'a>,
+        rings: HashMap<(i64, i64), i64>,
+        used: HashSet<(i64, i64)>,
+    }
+
+    impl SortingPlacer<'_> {
+        fn next_near(&mut self, at: DVec2, radius: f64) -> Option<DVec2> {
+            let s = self.placer.spacing;
+            let c = ((at.x / s).round() as i64, (at.y / s).round() as i64);
+            let first = self.rings.get(&c).copied().unwrap_or(0);
+            for ring in first..=self.placer.max_ring() {
+                self.rings.insert(c, ring);
+                let mut cells = Vec::new();
+                for dx in -ring..=ring {
+                    for dy in -ring..=ring {
+                        if dx.abs().max(dy.abs()) == ring {
+                            cells.push((c.0 + dx, c.1 + dy));
+                        }
+                    }
+                }
+                cells.sort_by(|a, b| {
+                    let (pa, pb) = (lattice_point(*a, s), lattice_point(*b, s));
+                    pa.distance_squared(at)
+                        .total_cmp(&pb.distance_squared(at))
+                        .then(a.cmp(b))
+                });
+                for q in cells {
+                    if !self.used.contains(&q) && self.placer.obstacles.is_disc_free(lattice_point(q, s), radius) {
+                        self.used.insert(q);
+                        return Some(lattice_point(q, s));
                     }
                 }
             }
-            let pos = |q: (i64, i64)| DVec2::new(q.0 as f64 * s, q.1 as f64 * s);
-            cells.sort_by(|a, b| {
-                pos(*a)
-                    .distance_squared(at)
-                    .total_cmp(&pos(*b).distance_squared(at))
-                    .then(a.cmp(b))
-            });
-            for q in cells {
-                if !self.used.contains(&q) && self.obstacles.is_disc_free(pos(q), radius) {
-                    self.used.insert(q);
-                    return Some(pos(q));
-                }
+            None
+        }
+    }
+
+    /// A 12 m × 12 m map of 0.5 m cells, each blocked with probability `density` (a hash of
+    /// `seed` and the cell).
+    fn rocky_map(seed: u64, density: f64) -> ObstacleMap {
+        let grid = Grid::from_size_m(DVec2::ZERO, 0.5, 12.0, 12.0).expect("a valid grid");
+        ObstacleMap::from_fn(grid, |x, y| {
+            let h = (u64::from(x) << 32 | u64::from(y))
+                .wrapping_add(seed)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            ((h >> 11) as f64 / (1u64 << 53) as f64) < density
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig {
+            cases: 64,
+            rng_seed: proptest::test_runner::RngSeed::Fixed(11),
+            ..ProptestConfig::default()
+        })]
+
+        /// Placing robots one by one, round starts of which two share a lattice point, with
+        /// radii that change between calls, gives the same points, and runs out of room at
+        /// the same call, as sorting and searching the ring afresh every call.
+        #[test]
+        fn placements_equal_a_search_from_each_ring_start(
+            seed in any::<u64>(),
+            density in 0.0f64..0.5,
+            calls in proptest::collection::vec((0usize..3, 0usize..3), 1..400),
+        ) {
+            let map = rocky_map(seed, density);
+            let starts = [DVec2::new(6.0, 6.0), DVec2::new(6.1, 5.95), DVec2::new(2.3, 9.7)];
+            let radii = [0.1, 0.25, 0.45];
+            let mut fast = Placer::new(&map, 0.55);
+            let mut slow = SortingPlacer { placer: Placer::new(&map, 0.55), rings: HashMap::new(), used: HashSet::new() };
+            for (k, &(start, radius)) in calls.iter().enumerate() {
+                let (at, r) = (starts[start], radii[radius]);
+                prop_assert_eq!(fast.next_near(at, r), slow.next_near(at, r), "call {}", k);
             }
         }
-        None
     }
 }
