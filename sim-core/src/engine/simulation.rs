@@ -459,9 +459,10 @@ impl Simulation {
     pub fn nav_if_built(&self) -> Option<&NavGraph> {
         self.nav.get()
     }
-    /// The navigation graph (built now if nobody needed it yet).
+    /// The navigation graph (built now if nobody needed it yet, on the current rayon pool's
+    /// workers).
     pub fn nav(&self) -> &NavGraph {
-        self.nav.get_or_build(&self.map.obstacles)
+        self.nav.get_or_build_on_all_workers(&self.map.obstacles)
     }
     /// Robot types.
     pub fn types(&self) -> &[RobotType] {
@@ -833,7 +834,7 @@ impl Simulation {
         // Strategies that plan routes would build the graph in their first round; build it
         // here instead, so that set-up time is set-up time. Without them it is never built.
         if self.agents.iter().any(|a| a.needs.obstacles) {
-            self.nav.get_or_build(&self.map.obstacles);
+            self.nav.get_or_build_on_all_workers(&self.map.obstacles);
         }
         self.report.metrics = self.metrics(0, 0, 0, self.robot_memory_bytes());
     }

@@ -12,12 +12,43 @@ use std::collections::BinaryHeap;
 use std::ops::ControlFlow;
 
 use glam::DVec2;
+use rayon::prelude::*;
 
 use crate::spatial::geometry::Aabb;
 use crate::spatial::grid::Grid;
 use crate::spatial::known_map::KnownMap;
 use crate::spatial::obstacle_map::{MAX_LEG_BLOCKS, ObstacleMap};
 use crate::spatial::quadtree::{Finger, Square};
+
+/// Free leaves a task of [`NavGraph::build`]'s edge search takes.
+const LEAVES_A_TASK: usize = 4096;
+
+/// Who builds a [`NavGraph`]: the current rayon pool's workers, or the calling thread alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Workers {
+    All,
+    One,
+}
+
+impl Workers {
+    /// Sort `v` (keys distinct or not: equal keys are equal values, so the result is the
+    /// same either way).
+    fn sort<T: Ord + Send>(self, v: &mut [T]) {
+        match self {
+            Self::All => v.par_sort_unstable(),
+            Self::One => v.sort_unstable(),
+        }
+    }
+
+    /// The least number of tasks a parallel iterator keeps together: all of them for
+    /// [`One`](Self::One), which then runs as one job on the calling thread.
+    fn min_tasks(self) -> usize {
+        match self {
+            Self::All => 1,
+            Self::One => usize::MAX,
+        }
+    }
+}
 
 mod corridor;
 mod funnel;
@@ -44,8 +75,18 @@ impl LazyNavGraph {
         Self::default()
     }
 
-    /// The graph of `obstacles`, built now if nobody asked before. Always pass the same map.
+    /// The graph of `obstacles`, built now on this thread alone if nobody asked before
+    /// ([`NavGraph::build_on_this_thread`]). Always pass the same map. Strategies ask in a
+    /// round's parallel step: a build that shared its work with the pool could, while it
+    /// waits, be handed another robot's turn asking for the graph it is building.
     pub fn get_or_build(&self, obstacles: &ObstacleMap) -> &NavGraph {
+        self.0.get_or_init(|| NavGraph::build_on_this_thread(obstacles))
+    }
+
+    /// [`get_or_build`](Self::get_or_build) for callers outside any parallel step (a
+    /// simulation's set-up): the build runs on the current rayon pool's workers
+    /// ([`NavGraph::build`]). The same graph.
+    pub fn get_or_build_on_all_workers(&self, obstacles: &ObstacleMap) -> &NavGraph {
         self.0.get_or_init(|| NavGraph::build(obstacles))
     }
 
@@ -264,8 +305,22 @@ thread_local! {
 }
 
 impl NavGraph {
-    /// Build from the obstacle map's free leaves.
+    /// Build from the obstacle map's free leaves. Cost: O(leaves × log leaves); the edge
+    /// search and the sorts run on the current rayon pool's workers, and the graph does not
+    /// depend on how many there are (edges are sorted into one order;
+    /// `graphs_built_on_one_thread_and_on_all_workers_are_equal`). Not for a task of a
+    /// parallel step that may ask for the graph again (see [`LazyNavGraph::get_or_build`]).
     pub fn build(obstacles: &ObstacleMap) -> Self {
+        Self::build_with(obstacles, Workers::All)
+    }
+
+    /// [`build`](Self::build) on the calling thread alone: it runs no job of the pool's and
+    /// takes none.
+    pub fn build_on_this_thread(obstacles: &ObstacleMap) -> Self {
+        Self::build_with(obstacles, Workers::One)
+    }
+
+    fn build_with(obstacles: &ObstacleMap, workers: Workers) -> Self {
         let grid = *obstacles.grid();
         let mut leaves = Vec::new();
         obstacles.tree().for_each_leaf(|sq, blocked| {
@@ -275,7 +330,7 @@ impl NavGraph {
         });
         let keys: Vec<u64> = leaves.iter().map(|s| morton(s.x, s.y)).collect();
         debug_assert!(keys.windows(2).all(|w| w[0] < w[1]), "leaves come in Z order");
-        let (pieces, piece_of) = pieces::merge(&leaves);
+        let (pieces, piece_of) = pieces::merge(&leaves, workers);
         // Nodes numbered in Z order of their pieces' lower-left cells (distinct: pieces are
         // disjoint), so that neighbours have nearby ids and a search's reads of nodes,
         // marks and neighbour lists fall in few cache lines. Searches break ties by `rank`
@@ -300,45 +355,72 @@ impl NavGraph {
             adjacent: Vec::new(),
         };
         graph.index_keys();
-        // Pieces of leaves that share a stretch of edge (east and north of every leaf),
-        // each pair stored both ways.
-        let mut edges: Vec<(u32, u32)> = Vec::new();
-        let half = 0.5 * grid.cell_m();
-        for (i, sq) in leaves.iter().enumerate() {
-            let s = sq.side_cells();
-            let east = Aabb {
-                min: grid.corner(sq.x + s, sq.y),
-                max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(half, 0.0),
-            };
-            let north = Aabb {
-                min: grid.corner(sq.x, sq.y + s),
-                max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(0.0, half),
-            };
-            let a = graph.piece_of[i];
-            for strip in [east, north] {
-                let _ = obstacles.tree().visit_leaves_in(&strip, false, |n, _| {
-                    let b = graph.piece_of[graph.find(n).expect("free leaf is a node")];
-                    if a != b {
-                        edges.push((a, b));
-                        edges.push((b, a));
-                    }
-                    ControlFlow::Continue(())
-                });
-            }
-        }
         // Each node's neighbours in the merge's order, as they were listed before the
-        // renumbering.
-        edges.sort_unstable_by_key(|&(a, b)| (a, graph.rank[b as usize]));
+        // renumbering: edges as keys (node << 32 | the neighbour's rank), sorted.
+        let mut edges = graph.edge_keys(obstacles, &leaves, workers);
+        workers.sort(&mut edges);
         edges.dedup();
         graph.starts = vec![0; graph.pieces.len() + 1];
-        for &(a, _) in &edges {
-            graph.starts[a as usize + 1] += 1;
+        for &key in &edges {
+            graph.starts[(key >> 32) as usize + 1] += 1;
         }
         for i in 0..graph.pieces.len() {
             graph.starts[i + 1] += graph.starts[i];
         }
-        graph.adjacent = edges.into_iter().map(|e| e.1).collect();
+        graph.adjacent = edges
+            .into_iter()
+            .map(|key| id_of[(key & 0xFFFF_FFFF) as usize])
+            .collect();
         graph
+    }
+
+    /// The edges between pieces whose leaves share a stretch of edge (found east and north
+    /// of every leaf of `leaves`, the free leaves in Z order), each pair both ways, as keys
+    /// `a << 32 | rank[b]` in no particular order (duplicates included). On all workers, in
+    /// tasks of [`LEAVES_A_TASK`] leaves. O(leaves × log leaves).
+    fn edge_keys(&self, obstacles: &ObstacleMap, leaves: &[Square], workers: Workers) -> Vec<u64> {
+        let grid = self.grid;
+        let half = 0.5 * grid.cell_m();
+        let key = |a: u32, b: u32| u64::from(a) << 32 | u64::from(self.rank[b as usize]);
+        let parts: Vec<Vec<u64>> = leaves
+            .par_chunks(LEAVES_A_TASK)
+            .with_min_len(workers.min_tasks())
+            .enumerate()
+            .map(|(c, chunk)| {
+                let mut out = Vec::new();
+                for (k, sq) in chunk.iter().enumerate() {
+                    let s = sq.side_cells();
+                    let east = Aabb {
+                        min: grid.corner(sq.x + s, sq.y),
+                        max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(half, 0.0),
+                    };
+                    let north = Aabb {
+                        min: grid.corner(sq.x, sq.y + s),
+                        max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(0.0, half),
+                    };
+                    let a = self.piece_of[c * LEAVES_A_TASK + k];
+                    for strip in [east, north] {
+                        let _ = obstacles.tree().visit_leaves_in(&strip, false, |n, _| {
+                            let b = self.piece_of[self.find(n).expect("free leaf is a node")];
+                            if a != b {
+                                out.push(key(a, b));
+                                out.push(key(b, a));
+                            }
+                            ControlFlow::Continue(())
+                        });
+                    }
+                }
+                // Neighbouring leaves of one piece list the same edges: fewer to copy and sort.
+                out.sort_unstable();
+                out.dedup();
+                out
+            })
+            .collect();
+        let mut edges = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+        for part in parts {
+            edges.extend_from_slice(&part);
+        }
+        edges
     }
 
     /// Fill `key_starts`: prefixes of whole squares of cells (two bits a level), about 16

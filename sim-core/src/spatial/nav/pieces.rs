@@ -41,14 +41,22 @@ impl Piece {
 /// between points of its portals; a cap keeps that estimate local on long open stretches.
 pub(super) const MAX_SPAN_LEAVES: u32 = 16;
 
+/// A run's sort key for stacking: (leaf level, first column, leaves, row).
+type RunKey = (u8, u32, u32, u32);
+
 /// Merge disjoint free `leaves` into pieces. Returns the pieces and each leaf's piece.
-pub(super) fn merge(leaves: &[Square]) -> (Vec<Piece>, Vec<u32>) {
+pub(super) fn merge(leaves: &[Square], workers: super::Workers) -> (Vec<Piece>, Vec<u32>) {
     let leaf = |i: u32| leaves[i as usize];
-    let mut order: Vec<u32> = (0..u32::try_from(leaves.len()).expect("leaves fit u32")).collect();
-    order.sort_unstable_by_key(|&i| {
-        let s = leaf(i);
-        (s.level, s.y, s.x)
-    });
+    // Sorted with their keys beside them (no key is read through an index), on all
+    // workers; keys are distinct (leaves are disjoint), so the order is the keys' alone.
+    let mut keyed: Vec<(u8, u32, u32, u32)> = (0..u32::try_from(leaves.len()).expect("leaves fit u32"))
+        .map(|i| {
+            let s = leaf(i);
+            (s.level, s.y, s.x, i)
+        })
+        .collect();
+    workers.sort(&mut keyed);
+    let order: Vec<u32> = keyed.into_iter().map(|k| k.3).collect();
     // Runs: where they start in `order`, and how many leaves they hold.
     let mut runs: Vec<(u32, u32)> = Vec::new();
     for (k, &i) in order.iter().enumerate() {
@@ -71,8 +79,10 @@ pub(super) fn merge(leaves: &[Square]) -> (Vec<Piece>, Vec<u32>) {
         let first = leaf(order[r.0 as usize]);
         (first.level, first.x, r.1, first.y)
     };
-    let mut stacked: Vec<(u32, u32)> = runs;
-    stacked.sort_unstable_by_key(|&r| key(r));
+    // Distinct keys again (two runs of one level cannot start at one cell).
+    let mut keyed: Vec<(RunKey, (u32, u32))> = runs.into_iter().map(|r| (key(r), r)).collect();
+    workers.sort(&mut keyed);
+    let stacked = keyed.into_iter().map(|k| k.1);
     let mut pieces: Vec<Piece> = Vec::new();
     let mut piece_of = vec![0u32; leaves.len()];
     let mut below: Option<((u8, u32, u32, u32), u32)> = None;
@@ -125,7 +135,7 @@ mod tests {
             sq(4, 0, 1),
             sq(9, 9, 0),
         ];
-        let (pieces, of) = merge(&leaves);
+        let (pieces, of) = merge(&leaves, super::super::Workers::One);
         assert_eq!(pieces.len(), 3, "{pieces:?}");
         let block = pieces[of[0] as usize];
         assert_eq!(block, Piece { x: 0, y: 0, w: 3, h: 2 });
@@ -137,7 +147,7 @@ mod tests {
     #[test]
     fn rows_of_different_widths_do_not_stack() {
         let leaves = [sq(0, 0, 0), sq(1, 0, 0), sq(0, 1, 0)];
-        let (pieces, _) = merge(&leaves);
+        let (pieces, _) = merge(&leaves, super::super::Workers::One);
         assert_eq!(pieces.len(), 2, "{pieces:?}");
     }
 
@@ -145,7 +155,7 @@ mod tests {
     fn pieces_span_at_most_the_cap() {
         let n = 3 * MAX_SPAN_LEAVES + 1;
         let leaves: Vec<Square> = (0..n).map(|x| sq(x, 0, 0)).collect();
-        let (pieces, _) = merge(&leaves);
+        let (pieces, _) = merge(&leaves, super::super::Workers::One);
         assert_eq!(pieces.len(), 4);
         assert!(pieces.iter().all(|p| p.w <= MAX_SPAN_LEAVES));
     }
