@@ -118,7 +118,8 @@ enum Scenario {
         turns: Vec<TurnSharing>,
         /// Play the runs in turn, this many rounds at a time, each on its own simulation
         /// (0: one run after the other), so that a drift of the machine's speed falls on
-        /// all of them alike.
+        /// all of them alike. In one process a 1-thread run slows a 2-thread one played in
+        /// turn with it (BENCHMARKS.md, "Scaling"): for speed-ups, alternate processes.
         #[arg(long, default_value_t = 0)]
         alternate: u64,
         #[command(subcommand)]

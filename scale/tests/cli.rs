@@ -428,3 +428,52 @@ fn scaling_with_zero_threads_names_the_core_count() {
     assert!(text.contains(&format!("{cores} thr (s)")), "{text}");
     assert!(!text.contains("0 thr"), "{text}");
 }
+
+/// `scripts/bench-threads.sh`: each pair's ratio is its 2-thread rounds/s over its 1-thread
+/// rounds/s as printed, and the last line gives the median of the pairs' ratios (for two
+/// pairs, their mean), worked out here from the pair lines.
+#[test]
+fn the_threads_script_prints_each_pair_and_their_median() {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../scripts/bench-threads.sh");
+    let run = |args: &[&str]| {
+        Command::new("bash")
+            .arg(script)
+            .args(args)
+            .env("SMARTTEAMS_BENCH", env!("CARGO_BIN_EXE_smartteams-bench"))
+            .output()
+            .expect("bash runs")
+    };
+    let out = run(&["2", "random-walk", "--robots", "30", "--side-m", "64", "--rounds", "20"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let ratios: Vec<f64> = text
+        .lines()
+        .filter(|l| l.starts_with("pair "))
+        .map(|l| {
+            let between = |from: &str, to: &str| -> f64 {
+                let rest = &l[l.find(from).unwrap_or_else(|| panic!("{from} in {l}")) + from.len()..];
+                rest[..rest.find(to).unwrap_or_else(|| panic!("{to} in {l}"))]
+                    .parse()
+                    .expect("a number")
+            };
+            let printed: f64 = l
+                .rsplit(", ")
+                .next()
+                .and_then(|r| r.strip_suffix('x'))
+                .and_then(|r| r.parse().ok())
+                .unwrap_or_else(|| panic!("a ratio ending {l}"));
+            let (one, two) = (between("1 thread ", " "), between("2 threads ", ","));
+            assert!((two / one - printed).abs() < 0.001, "{l}");
+            printed
+        })
+        .collect();
+    assert_eq!(ratios.len(), 2, "{text}");
+    let median = (ratios[0] + ratios[1]) / 2.0;
+    assert!(
+        text.contains(&format!("1 -> 2 threads: {median:.3} ("))
+            && text.contains("median of 2 pairs; identical digests"),
+        "{text}"
+    );
+    let none = run(&["1", "nav-graph"]);
+    assert!(!none.status.success(), "a scenario without rounds is an error");
+}
