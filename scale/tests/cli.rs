@@ -468,7 +468,7 @@ fn the_threads_script_prints_each_pair_and_their_median() {
         })
         .collect();
     assert_eq!(ratios.len(), 2, "{text}");
-    let median = (ratios[0] + ratios[1]) / 2.0;
+    let median = f64::midpoint(ratios[0], ratios[1]);
     assert!(
         text.contains(&format!("1 -> 2 threads: {median:.3} ("))
             && text.contains("median of 2 pairs; identical digests"),
