@@ -422,13 +422,13 @@ struct Ring {
 }
 
 impl Ring {
-    /// Ring `ring` round lattice point `c` (spacing `s`), sorted by distance to `at`, ties
-    /// by lattice coordinates.
-    fn new(c: (i64, i64), ring: i64, at: DVec2, radius_m: f64, s: f64) -> Self {
-        let mut cells: Vec<(i64, i64)> = Vec::with_capacity(usize::try_from(8 * ring.max(1)).unwrap_or(0));
-        for dx in -ring..=ring {
-            for dy in -ring..=ring {
-                if dx.abs().max(dy.abs()) == ring {
+    /// The ring `step` lattice steps round lattice point `c` (spacing `s`), sorted by
+    /// distance to `at`, ties by lattice coordinates.
+    fn new(c: (i64, i64), step: i64, at: DVec2, radius_m: f64, s: f64) -> Self {
+        let mut cells: Vec<(i64, i64)> = Vec::with_capacity(usize::try_from(8 * step.max(1)).unwrap_or(0));
+        for dx in -step..=step {
+            for dy in -step..=step {
+                if dx.abs().max(dy.abs()) == step {
                     cells.push((c.0 + dx, c.1 + dy));
                 }
             }
@@ -440,7 +440,7 @@ impl Ring {
                 .then(a.cmp(b))
         });
         Self {
-            step: ring,
+            step,
             at,
             radius_m,
             cells,

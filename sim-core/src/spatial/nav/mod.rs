@@ -40,9 +40,10 @@ impl Workers {
         }
     }
 
-    /// The least number of tasks a parallel iterator keeps together: all of them for
-    /// [`One`](Self::One), which then runs as one job on the calling thread.
-    fn min_tasks(self) -> usize {
+    /// The least number of tasks (items of a parallel iterator) one job takes: 1 for
+    /// [`All`](Self::All); for [`One`](Self::One) all of them, in one job on the calling
+    /// thread, which then never splits nor waits.
+    fn tasks_a_job(self) -> usize {
         match self {
             Self::All => 1,
             Self::One => usize::MAX,
@@ -376,15 +377,16 @@ impl NavGraph {
 
     /// The edges between pieces whose leaves share a stretch of edge (found east and north
     /// of every leaf of `leaves`, the free leaves in Z order), each pair both ways, as keys
-    /// `a << 32 | rank[b]` in no particular order (duplicates included). On all workers, in
-    /// tasks of [`LEAVES_A_TASK`] leaves. O(leaves × log leaves).
+    /// `a << 32 | rank[b]`: in tasks of [`LEAVES_A_TASK`] leaves on `workers`, each task's
+    /// keys sorted without repeats, one task's after another (a key may repeat across
+    /// tasks). O(leaves × log leaves).
     fn edge_keys(&self, obstacles: &ObstacleMap, leaves: &[Square], workers: Workers) -> Vec<u64> {
         let grid = self.grid;
         let half = 0.5 * grid.cell_m();
         let key = |a: u32, b: u32| u64::from(a) << 32 | u64::from(self.rank[b as usize]);
         let parts: Vec<Vec<u64>> = leaves
             .par_chunks(LEAVES_A_TASK)
-            .with_min_len(workers.min_tasks())
+            .with_min_len(workers.tasks_a_job())
             .enumerate()
             .map(|(c, chunk)| {
                 let mut out = Vec::new();

@@ -44,11 +44,12 @@ pub(super) const MAX_SPAN_LEAVES: u32 = 16;
 /// A run's sort key for stacking: (leaf level, first column, leaves, row).
 type RunKey = (u8, u32, u32, u32);
 
-/// Merge disjoint free `leaves` into pieces. Returns the pieces and each leaf's piece.
+/// Merge disjoint free `leaves` into pieces, sorting on `workers`. Returns the pieces and
+/// each leaf's piece (the same whoever sorts).
 pub(super) fn merge(leaves: &[Square], workers: super::Workers) -> (Vec<Piece>, Vec<u32>) {
     let leaf = |i: u32| leaves[i as usize];
-    // Sorted with their keys beside them (no key is read through an index), on all
-    // workers; keys are distinct (leaves are disjoint), so the order is the keys' alone.
+    // Sorted with their keys beside them (no key is read through an index); keys are
+    // distinct (leaves are disjoint), so the order is the keys' alone.
     let mut keyed: Vec<(u8, u32, u32, u32)> = (0..u32::try_from(leaves.len()).expect("leaves fit u32"))
         .map(|i| {
             let s = leaf(i);
@@ -85,7 +86,7 @@ pub(super) fn merge(leaves: &[Square], workers: super::Workers) -> (Vec<Piece>, 
     let stacked = keyed.into_iter().map(|k| k.1);
     let mut pieces: Vec<Piece> = Vec::new();
     let mut piece_of = vec![0u32; leaves.len()];
-    let mut below: Option<((u8, u32, u32, u32), u32)> = None;
+    let mut below: Option<(RunKey, u32)> = None;
     for r in stacked {
         let (level, x, len, y) = key(r);
         let side = 1u32 << level;
