@@ -401,7 +401,11 @@ impl NavGraph {
                         max: grid.corner(sq.x + s, sq.y + s) + DVec2::new(0.0, half),
                     };
                     let a = self.piece_of[c * LEAVES_A_TASK + k];
-                    for strip in [east, north] {
+                    // A strip inside the leaf's own piece (a rectangle) meets only that
+                    // piece: no edge, no search.
+                    let p = self.pieces[a as usize];
+                    let inside = [sq.x + s < p.x + p.w, sq.y + s < p.y + p.h];
+                    for (strip, _) in [east, north].into_iter().zip(inside).filter(|(_, inside)| !inside) {
                         let _ = obstacles.tree().visit_leaves_in(&strip, false, |n, _| {
                             let b = self.piece_of[self.find(n).expect("free leaf is a node")];
                             if a != b {
