@@ -431,9 +431,9 @@ pub fn measure_with(scenario: Scenario, rounds: u64, threads: usize, sharing: Tu
 /// on its own workers; with `block` 0, one run after the other, each built when its turn
 /// comes and dropped before the next. Alternated, a drift of the machine's speed (a VM's
 /// can move by a third within seconds) falls on every run alike, so that their ratios hold
-/// still; but on the 2-core VM a 2-thread run played in turn with a 1-thread one ran 1.3–1.4×
-/// as long as alone (BENCHMARKS.md, "Scaling"), so speed-ups between thread counts are
-/// better taken from processes alternated. The measurements come in the order of `runs`. Cost: alternated, every run's
+/// still. A 2-thread run played in turn with a 1-thread one in one process runs slower than
+/// alone (BENCHMARKS.md, "Scaling"): take speed-ups between thread counts from processes
+/// alternated (`scripts/bench-threads.sh`). The measurements come in the order of `runs`. Cost: alternated, every run's
 /// simulation is in memory at once; one after the other, one at a time. A `make` that
 /// shares one map (as [`Swarm::scenario_on`] does) generates it once for all the runs.
 ///

@@ -319,7 +319,7 @@ fn from_every_start(
 /// corner maze, from home and one start, gives the mean of the two speed-ups over one robot
 /// and the counts of runs at least 1.6× faster and within 1.25× the distance, as the
 /// library's own runs from the same starts give them, then names the runs less than 1.6×
-/// faster (from the start: 1.40×).
+/// faster (the test needs one: the run from the start is).
 #[test]
 fn teams_run_from_every_start_as_the_library_runs_them() {
     let rounds = 3_000;

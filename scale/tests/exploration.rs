@@ -240,8 +240,7 @@ fn two_cooperative_robots_divide_the_rooms_map_after_they_part() {
 /// Eight `cooperative` robots in the 1.2 m corridors of the indoor corner maze, starting
 /// packed at home. Robots that leave their targets to mates wait (and step out of the way of
 /// a mate held back among them) rather than follow the mates: the eight reach 90 % sooner
-/// than one robot, walking at most 1.25× its distance between them (waiting robots that
-/// take a target once they have left it for 80 rounds walk in convoys: 2.2×).
+/// than one robot, walking at most 1.25× its distance between them.
 #[test]
 fn eight_cooperative_robots_in_a_maze_walk_no_more_than_one_and_a_quarter() {
     let maze = indoor_map("indoor corner maze");

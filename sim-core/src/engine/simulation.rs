@@ -834,7 +834,7 @@ impl Simulation {
         // Strategies that plan routes would build the graph in their first round; build it
         // here instead, so that set-up time is set-up time. Without them it is never built.
         if self.agents.iter().any(|a| a.needs.obstacles) {
-            self.nav.get_or_build_on_all_workers(&self.map.obstacles);
+            self.nav();
         }
         self.report.metrics = self.metrics(0, 0, 0, self.robot_memory_bytes());
     }

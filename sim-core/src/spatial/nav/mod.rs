@@ -404,8 +404,10 @@ impl NavGraph {
                     // A strip inside the leaf's own piece (a rectangle) meets only that
                     // piece: no edge, no search.
                     let p = self.pieces[a as usize];
-                    let inside = [sq.x + s < p.x + p.w, sq.y + s < p.y + p.h];
-                    for (strip, _) in [east, north].into_iter().zip(inside).filter(|(_, inside)| !inside) {
+                    for (strip, inside) in [(east, sq.x + s < p.x + p.w), (north, sq.y + s < p.y + p.h)] {
+                        if inside {
+                            continue;
+                        }
                         let _ = obstacles.tree().visit_leaves_in(&strip, false, |n, _| {
                             let b = self.piece_of[self.find(n).expect("free leaf is a node")];
                             if a != b {
