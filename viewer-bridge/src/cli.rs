@@ -519,7 +519,7 @@ impl ResumeArgs {
 /// Parse the command line and run, with the strategies of `registry`. Errors are printed
 /// with their causes (`{:#}`) and give exit status 1.
 pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
-    let cli = Cli::parse();
+    let cli = parse_command_line();
     if let Err(e) = crate::stop::install() {
         eprintln!("warning: {e:#}; Ctrl-C will end runs without keeping their outputs");
     }
@@ -530,6 +530,33 @@ pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// The command line, or exit with clap's message. A value given to `--connect` or `--spawn`
+/// after a space, which clap takes for another argument (the option's value is optional),
+/// gets a message that shows it written with `=`.
+fn parse_command_line() -> Cli {
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    Cli::try_parse_from(&args).unwrap_or_else(|e| {
+        if e.kind() == clap::error::ErrorKind::UnknownArgument
+            && let Some(hint) = value_after_a_space(&args)
+        {
+            eprintln!("error: {hint}");
+            std::process::exit(2);
+        }
+        e.exit()
+    })
+}
+
+/// For arguments with `--connect X` or `--spawn X`, where `X` is no option and no file, the
+/// message that says to write `--connect=X`.
+fn value_after_a_space(args: &[std::ffi::OsString]) -> Option<String> {
+    args.windows(2).find_map(|pair| {
+        let (option, value) = (pair[0].to_str()?, pair[1].to_str()?);
+        let valued = matches!(option, "--connect" | "--spawn") && !value.starts_with('-');
+        (valued && !std::path::Path::new(value).is_file())
+            .then(|| format!("{option} takes its value after `=`, not a space: {option}={value}"))
+    })
 }
 
 fn dispatch(cli: Cli, registry: &StrategyRegistry) -> Result<ExitCode> {

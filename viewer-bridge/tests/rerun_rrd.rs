@@ -863,6 +863,32 @@ fn bad_viewer_options_are_clear_errors() {
     assert!(err.contains("no Rerun viewer listens"), "{err}");
 }
 
+/// A viewer address or port after a space, which clap takes for another argument, gets a
+/// message showing it written with `=`, before the config or after it.
+#[test]
+fn a_viewer_value_after_a_space_is_shown_written_with_equals() {
+    let config = workspace().join("configs/demo.xml");
+    let cases: [(&[&str], &str); 2] = [
+        (&["--connect", "127.0.0.1:1"], "--connect=127.0.0.1:1"),
+        (&["--spawn", "9000"], "--spawn=9000"),
+    ];
+    for (viewer, shown) in cases {
+        for config_first in [true, false] {
+            let mut cmd = smartteams();
+            cmd.arg("run");
+            if config_first {
+                cmd.arg(&config).args(viewer);
+            } else {
+                cmd.args(viewer).arg(&config);
+            }
+            let out = cmd.output().unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{viewer:?}: {err}");
+            assert!(err.contains(shown) && err.contains("not a space"), "{viewer:?}: {err}");
+        }
+    }
+}
+
 /// `--connect` to a `rerun server` (a data server, which refuses streams) fails at once
 /// with an error naming the address and what to stream to, instead of playing the rounds
 /// and losing them.
