@@ -335,7 +335,8 @@ pub struct OutputArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// How a round's moves and actions are shared among the threads: `auto` (side by side
-    /// from 3 threads and 512 robots, else in id order), `in-order` or `side-by-side`.
+    /// from 3 threads and 512 robots or 2 threads and 4,096 robots, else in id order),
+    /// `in-order` or `side-by-side`.
     /// Results do not depend on it.
     #[arg(long, default_value = "auto")]
     pub turns: TurnSharing,

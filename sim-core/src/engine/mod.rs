@@ -12,7 +12,7 @@ pub use hot_workers::{CoreLoan, with_hot_workers, with_hot_workers_lending};
 pub use round::MAX_MAP_MERGES_PER_ROUND;
 pub use scenario::{Group, Scenario, ScenarioBuilder, Start};
 pub use simulation::{
-    DEFAULT_DECIDE_LIMIT, PhaseTimes, SIDE_BY_SIDE_MIN_ROBOTS, SIDE_BY_SIDE_MIN_WORKERS, Simulation, TurnSharing,
+    DEFAULT_DECIDE_LIMIT, PhaseTimes, SIDE_BY_SIDE_MIN_ROBOTS, SIDE_BY_SIDE_MIN_ROBOTS_ON_TWO, Simulation, TurnSharing,
 };
 
 /// The most worker threads a run may ask for: beyond the cores of any machine runs are

@@ -246,9 +246,12 @@ pub struct Simulation {
 /// ```
 /// use sim_core::engine::TurnSharing;
 ///
-/// // 10,000 robots: side by side on 4 workers, in id order on 2; 100 robots in id order.
-/// assert!(TurnSharing::Auto.side_by_side(10_000, 4));
-/// assert!(!TurnSharing::Auto.side_by_side(10_000, 2));
+/// // 10,000 robots side by side on 2 workers or more; 1,000 robots from 3 workers; 100
+/// // robots in id order.
+/// assert!(TurnSharing::Auto.side_by_side(10_000, 2));
+/// assert!(!TurnSharing::Auto.side_by_side(10_000, 1));
+/// assert!(!TurnSharing::Auto.side_by_side(1_000, 2));
+/// assert!(TurnSharing::Auto.side_by_side(1_000, 4));
 /// assert!(!TurnSharing::Auto.side_by_side(100, 16));
 /// assert!(TurnSharing::SideBySide.side_by_side(10, 1));
 /// assert_eq!("side-by-side".parse::<TurnSharing>().unwrap(), TurnSharing::SideBySide);
@@ -259,26 +262,27 @@ pub struct Simulation {
 pub enum TurnSharing {
     /// Every turn in id order, on one thread: the least work.
     InOrder,
-    /// Side by side when the pool has at least [`SIDE_BY_SIDE_MIN_WORKERS`] workers and
-    /// the run at least [`SIDE_BY_SIDE_MIN_ROBOTS`] robots; in id order otherwise.
+    /// Side by side on 3 workers or more in runs of at least [`SIDE_BY_SIDE_MIN_ROBOTS`]
+    /// robots, and on 2 workers in runs of at least [`SIDE_BY_SIDE_MIN_ROBOTS_ON_TWO`]; in
+    /// id order otherwise.
     #[default]
     Auto,
     /// Side by side whatever the workers and robots: the moves settled by strips of the map,
     /// a worker a strip, then every turn at once, those at treasures in id order (see
-    /// `round/moves.rs`). It does about half as much work again as the pass in id order
-    /// (settling a move, then taking its turn), which more workers share.
+    /// `round/moves.rs`). It does about a fifth more work than the pass in id order
+    /// (settling a move, then taking its turn), which the workers share.
     SideBySide,
 }
 
-/// [`TurnSharing::Auto`] shares turns from this many workers: on 2 cores, rounds side by
-/// side took a little longer than in id order (see BENCHMARKS.md, "Scaling"); more workers
-/// share the extra work.
-pub const SIDE_BY_SIDE_MIN_WORKERS: usize = 3;
-
-/// [`TurnSharing::Auto`] shares turns in runs of at least this many robots: with fewer
-/// there are movers for one strip only, and handing the rest of the turns out costs about
-/// what it saves.
+/// [`TurnSharing::Auto`] shares turns on 3 workers or more in runs of at least this many
+/// robots: with fewer there are movers for one strip only, and handing the rest of the
+/// turns out costs about what it saves.
 pub const SIDE_BY_SIDE_MIN_ROBOTS: usize = 512;
+
+/// [`TurnSharing::Auto`] shares turns on 2 workers in runs of at least this many robots.
+/// Two workers share the extra work of side by side only where step 3 is a large part of
+/// the round, in crowds of thousands (see BENCHMARKS.md, "Scaling").
+pub const SIDE_BY_SIDE_MIN_ROBOTS_ON_TWO: usize = 4096;
 
 impl std::str::FromStr for TurnSharing {
     type Err = crate::Error;
@@ -311,7 +315,11 @@ impl TurnSharing {
     pub fn side_by_side(self, robots: usize, workers: usize) -> bool {
         match self {
             TurnSharing::InOrder => false,
-            TurnSharing::Auto => workers >= SIDE_BY_SIDE_MIN_WORKERS && robots >= SIDE_BY_SIDE_MIN_ROBOTS,
+            TurnSharing::Auto => match workers {
+                0 | 1 => false,
+                2 => robots >= SIDE_BY_SIDE_MIN_ROBOTS_ON_TWO,
+                _ => robots >= SIDE_BY_SIDE_MIN_ROBOTS,
+            },
             TurnSharing::SideBySide => true,
         }
     }

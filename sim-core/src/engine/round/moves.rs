@@ -42,6 +42,10 @@ const SAMPLE: u64 = 1024;
 /// hints that change nothing.
 const READ_AHEAD: usize = 8;
 
+/// How many times a mover waiting for another block's mover checks before it yields its
+/// core at each further check: waits between two running workers last far less.
+const SPINS_BEFORE_YIELD: u32 = 1 << 12;
+
 /// The bits of an end's `x` while it is not settled: a NaN no arithmetic makes, and ends
 /// are finite.
 const UNSETTLED: u64 = u64::MAX;
@@ -298,6 +302,7 @@ impl Settle<'_> {
     /// `j`, if no worker is at its block, or else by the worker that is (it is waited for).
     fn end_of(&self, j: usize) -> DVec2 {
         let slot = &self.moves.slots[j];
+        let mut spins = 0_u32;
         loop {
             if let Some(end) = slot.end() {
                 return end;
@@ -317,8 +322,12 @@ impl Settle<'_> {
             if let Some(mut cursor) = cursor {
                 let _busy = Busy::new(&block.busy);
                 self.advance(&mut cursor, u32::try_from(j + 1).expect("robot ids are u32"));
-            } else {
+            } else if spins < SPINS_BEFORE_YIELD {
+                spins += 1;
                 std::hint::spin_loop();
+            } else {
+                // The worker waited for has likely lost its core to another process.
+                std::thread::yield_now();
             }
         }
     }
