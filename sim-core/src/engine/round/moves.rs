@@ -43,7 +43,8 @@ const SAMPLE: u64 = 1024;
 const READ_AHEAD: usize = 8;
 
 /// How many times a mover waiting for another block's mover checks before it yields its
-/// core at each further check: waits between two running workers last far less.
+/// core at each further check. Waits between two running workers are far shorter; yielding
+/// sooner hands the core to any other process that wants it (BENCHMARKS.md, "Scaling").
 const SPINS_BEFORE_YIELD: u32 = 1 << 12;
 
 /// The bits of an end's `x` while it is not settled: a NaN no arithmetic makes, and ends
