@@ -91,6 +91,40 @@ fn a_budget_that_never_fills_delivers_exactly_what_no_budget_does() {
     assert_eq!(inboxes(&free)[5].len(), 11);
 }
 
+/// 150 chatters, more senders than one block of addressing takes: every inbox holds the
+/// round's messages to it in sender order (each sender's in the order queued: its
+/// broadcast, then its direct message to robot 0), with or without a budget, on 1 and 4
+/// threads.
+#[test]
+fn many_senders_are_delivered_in_sender_order() {
+    let n = 150u32;
+    let expected: Vec<Vec<(u32, bool)>> = (0..n)
+        .map(|r| {
+            (0..n)
+                .filter(|&s| s != r)
+                .flat_map(|s| {
+                    let direct = (r == 0).then_some((s, false));
+                    std::iter::once((s, true)).chain(direct)
+                })
+                .collect()
+        })
+        .collect();
+    for budget in [u64::MAX, u64::MAX - 1] {
+        for threads in [1, 4] {
+            let kind = RobotType::explorer().with_radio_bytes_per_round(budget);
+            let mut sim = chatting(vec![kind], vec![Group::new("chatter", 0, n)]);
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| sim.step());
+            let mut got = inboxes(&sim);
+            if budget < u64::MAX {
+                // A budget takes messages addressed to the receiver first (robot 0's).
+                got[0].sort_by_key(|&(s, broadcast)| (s, !broadcast));
+            }
+            assert_eq!(got, expected, "budget {budget}, {threads} threads");
+        }
+    }
+}
+
 #[test]
 fn a_full_radio_drops_the_rest() {
     let mut sim = chatters(70);

@@ -347,8 +347,10 @@ pub struct PhaseTimes {
     /// Of `resolve`, when turns go side by side: settling the moves and taking the other
     /// turns (all workers).
     pub side_by_side: Duration,
-    /// Of `resolve`: putting the turns' events in the report and addressing their messages,
-    /// in id order (one thread).
+    /// Of `resolve`: putting the turns' events in the report in id order, sorting the
+    /// senders, and joining their messages' lists in id order (one thread).
+    pub events: Duration,
+    /// Of `resolve`: addressing the messages, blocks of senders on all workers.
     pub addressing: Duration,
     /// Rounds whose step 3 took its turns side by side (see [`TurnSharing`]); the others
     /// took them in id order.

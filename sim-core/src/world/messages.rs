@@ -116,9 +116,11 @@ pub struct Inbox {
 }
 
 impl Inbox {
-    /// The messages `picks` names in `bag`, in that order. Every pick must index `bag`.
+    /// The messages `picks` names in `bag`, in that order. Every pick must index `bag`:
+    /// reading one that does not panics. Not checked here, even with debug assertions: a
+    /// crowded round makes thousands of inboxes of a hundred picks or more, and every read
+    /// checks its pick anyway.
     pub fn new(bag: Arc<Vec<Message>>, picks: Vec<u32>) -> Self {
-        debug_assert!(picks.iter().all(|&k| (k as usize) < bag.len()));
         Self { bag, picks }
     }
 

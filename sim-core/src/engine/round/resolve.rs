@@ -3,8 +3,8 @@
 //! rest. The turns go in id order, or side by side (see
 //! [`TurnSharing`](crate::engine::TurnSharing)): the moves settled first (see
 //! [`SettledMoves`]), then the turns taken at once, those at treasures in id order.
-//! Messages are addressed after the turns, in id order, to whoever was in range at send
-//! time and alive then.
+//! Messages are addressed after the turns, as in id order (blocks of senders on all
+//! workers), to whoever was in range at send time and alive then.
 
 use std::sync::Arc;
 use std::time::Instant;
@@ -64,9 +64,9 @@ impl Simulation {
         }
         let t = Instant::now();
         self.settle_events(&mut out);
+        self.phase_times.events += t.elapsed();
         let sent = self.address_sends(round, turns, &mut out.senders);
         let t2 = Instant::now();
-        self.phase_times.addressing += t2.duration_since(t);
         self.fan_out(turns);
         self.phase_times.fan_out += t2.elapsed();
         sent
@@ -179,22 +179,41 @@ impl Simulation {
         self.report.events.extend(out.events.drain(..).map(|(_, e)| e));
     }
 
-    /// Address the messages the turns paid for, sender by sender in id order. Returns
-    /// messages and bytes sent.
+    /// Address the messages the turns paid for, sender by sender in id order. Blocks of
+    /// senders are addressed on all workers, each into its own lists, and the lists joined
+    /// in id order: they are those of one pass by id
+    /// (`many_senders_are_delivered_in_sender_order`, tests/radio.rs). Returns messages and
+    /// bytes sent.
     fn address_sends(&mut self, round: u64, turns: &[Turn], senders: &mut [u32]) -> (u64, u64) {
-        let (mut messages, mut bytes) = (0, 0);
+        let started = Instant::now();
         senders.sort_unstable();
-        for &i in &*senders {
-            let i = i as usize;
-            let range_m = self.types[self.robots[i].type_index].comm_radius_m;
-            let mut paid = std::mem::take(&mut self.agents[i].paid_sends);
-            for (to, payload) in paid.drain(..) {
-                messages += 1;
-                bytes += payload.size_bytes();
-                self.send(i, range_m, round, to, payload, turns);
-            }
-            self.agents[i].paid_sends = paid;
+        let t = Instant::now();
+        let addressing = Addressing {
+            robots: &self.robots,
+            types: &self.types,
+            turns,
+            round,
+            radio_limited: self.radio_limited,
+        };
+        let blocks: Vec<Addressed> = sender_blocks(&mut self.agents, senders)
+            .into_par_iter()
+            .map(|(first, senders, agents)| addressing.block(first, senders, agents))
+            .collect();
+        let joined = Instant::now();
+        let (mut messages, mut bytes) = (0, 0);
+        for block in blocks {
+            messages += block.messages;
+            bytes += block.bytes;
+            self.outgoing.extend(block.outgoing);
+            let base = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
+            self.fanout.extend(block.fanout.into_iter().map(|f| Fanout {
+                bag: base.checked_add(f.bag).expect("fewer than 2^32 messages a round"),
+                ..f
+            }));
+            self.mailbag.extend(block.bag);
         }
+        self.phase_times.addressing += joined.duration_since(t);
+        self.phase_times.events += t.duration_since(started) + joined.elapsed();
         (messages, bytes)
     }
 
@@ -240,21 +259,80 @@ impl Simulation {
         });
         self.fanout.clear();
     }
+}
 
-    /// Address a message to the robots in range at send time (start-of-round positions) and
-    /// alive then.
-    fn send(&mut self, i: usize, range_m: f64, round: u64, to: Recipient, payload: Payload, turns: &[Turn]) {
+/// Senders a task addresses in [`Simulation::address_sends`].
+const SENDERS_PER_TASK: usize = 64;
+
+/// The sorted `senders` (each robot pays once a round, so none twice) in blocks of
+/// [`SENDERS_PER_TASK`], each with the agents from its first sender to its last, apart from
+/// every other block's, and the index of that first sender.
+fn sender_blocks<'a>(agents: &'a mut [Agent], senders: &'a [u32]) -> Vec<(usize, &'a [u32], &'a mut [Agent])> {
+    let mut blocks = Vec::with_capacity(senders.len().div_ceil(SENDERS_PER_TASK));
+    let (mut rest, mut start) = (agents, 0);
+    for block in senders.chunks(SENDERS_PER_TASK) {
+        let (first, last) = (block[0] as usize, block[block.len() - 1] as usize);
+        let (mine, after) = std::mem::take(&mut rest)[first - start..].split_at_mut(last + 1 - first);
+        blocks.push((first, block, mine));
+        (rest, start) = (after, last + 1);
+    }
+    blocks
+}
+
+/// What addressing a round's messages reads: the robots after step 3, where and whether
+/// alive each was when it began.
+struct Addressing<'a> {
+    robots: &'a [Robot],
+    types: &'a [RobotType],
+    turns: &'a [Turn],
+    round: u64,
+    radio_limited: bool,
+}
+
+/// A block of senders' messages, addressed: with radio budgets, `outgoing`; without,
+/// `fanout` with its `bag` indices into this block's `bag`.
+#[derive(Default)]
+struct Addressed {
+    outgoing: Vec<Outgoing>,
+    fanout: Vec<Fanout>,
+    bag: Vec<Message>,
+    messages: u64,
+    bytes: u64,
+}
+
+impl Addressing<'_> {
+    /// Address what the `senders` (in id order; `agents` from index `first` on) paid for.
+    fn block(&self, first: usize, senders: &[u32], agents: &mut [Agent]) -> Addressed {
+        let mut out = Addressed::default();
+        for &i in senders {
+            let i = i as usize;
+            let agent = &mut agents[i - first];
+            let range_m = self.types[self.robots[i].type_index].comm_radius_m;
+            let mut paid = std::mem::take(&mut agent.paid_sends);
+            for (to, payload) in paid.drain(..) {
+                self.send(i, range_m, to, payload, &agent.hearers, &mut out);
+            }
+            agent.paid_sends = paid;
+        }
+        out
+    }
+
+    /// Address a message of robot `i` to the robots in range at send time (start-of-round
+    /// positions) and alive then; a broadcast's are `hearers` (listed in step 2, see
+    /// `Agent::hearers`).
+    fn send(&self, i: usize, range_m: f64, to: Recipient, payload: Payload, hearers: &[RobotId], out: &mut Addressed) {
         let from = self.robots[i].id;
-        let at = turns[i].start;
         let bytes = payload.size_bytes();
+        out.messages += 1;
+        out.bytes += bytes;
         let message = Message {
             from,
-            sent_round: round,
+            sent_round: self.round,
             to,
             payload: Arc::new(payload),
         };
         if self.radio_limited {
-            self.outgoing.push(Outgoing {
+            out.outgoing.push(Outgoing {
                 from: i,
                 range_m,
                 message,
@@ -262,13 +340,14 @@ impl Simulation {
             });
             return;
         }
+        let at = self.turns[i].start;
         let direct: [RobotId; 1];
         let receivers: &[RobotId] = match to {
-            // Listed in step 2 (see `Agent::hearers`).
-            Recipient::Broadcast => &self.agents[i].hearers,
+            Recipient::Broadcast => hearers,
             Recipient::Direct(target) => {
                 direct = [target];
-                let in_range = turns
+                let in_range = self
+                    .turns
                     .get(target.index())
                     .is_some_and(|t| target != from && t.start.distance(at) <= range_m);
                 if in_range { &direct } else { &[] }
@@ -277,18 +356,17 @@ impl Simulation {
         // Stored once, in the bag the receivers share; each gets its index after step 3.
         if receivers
             .iter()
-            .any(|to| alive_at_send(&self.robots, turns, to.index(), i))
+            .any(|to| alive_at_send(self.robots, self.turns, to.index(), i))
         {
-            let bag = u32::try_from(self.mailbag.len()).expect("fewer than 2^32 messages a round");
-            self.fanout.push(Fanout {
+            out.fanout.push(Fanout {
                 from: u32::try_from(i).expect("robot indices are u32"),
-                bag,
+                bag: u32::try_from(out.bag.len()).expect("fewer than 2^32 messages a round"),
                 to: match to {
                     Recipient::Broadcast => None,
                     Recipient::Direct(target) => Some(target.get()),
                 },
             });
-            self.mailbag.push(message);
+            out.bag.push(message);
         }
     }
 }
