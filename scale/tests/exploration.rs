@@ -237,6 +237,25 @@ fn two_cooperative_robots_divide_the_rooms_map_after_they_part() {
     );
 }
 
+/// Eight `cooperative` robots on the indoor loop (a 20 m ring corridor), starting packed at
+/// home: more robots than the ring needs. A robot leaves a target that a mate's announced
+/// walk passes, so the eight reach 90 % sooner than one robot and walk at most 1.25× its
+/// distance between them (1.43× when only mates' goals were left alone).
+#[test]
+fn eight_cooperative_robots_on_a_loop_leave_what_a_mate_walks_past() {
+    let ring = indoor_loop();
+    let run = |robots| explore(&ring, "cooperative", robots, 20_000).unwrap().at_90.unwrap();
+    let ((one_rounds, one_m), (eight_rounds, eight_m)) = (run(1), run(8));
+    assert!(
+        eight_rounds < one_rounds,
+        "8 robots {eight_rounds} rounds, 1 robot {one_rounds}"
+    );
+    assert!(
+        eight_m <= 1.25 * one_m,
+        "8 robots walked {eight_m:.1} m, 1 robot {one_m:.1} m"
+    );
+}
+
 /// Eight `cooperative` robots in the 1.2 m corridors of the indoor corner maze, starting
 /// packed at home. Robots that leave their targets to mates wait (and step out of the way of
 /// a mate held back among them) rather than follow the mates: the eight reach 90 % sooner

@@ -24,6 +24,50 @@ fn stored_goal(goal: DVec2, home: DVec2) -> Vec2 {
     (goal - home).as_vec2()
 }
 
+/// A team mate's last announced walk: from where it stood to its goal.
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
+struct MateWalk {
+    id: u32,
+    from: DVec2,
+    goal: DVec2,
+    heard_round: u64,
+}
+
+impl MateWalk {
+    /// Whether the mate, walking straight on, passes within `reach_m` of `target`: the
+    /// point of its walk nearest the target is within `reach_m` of it, and the walk there
+    /// is a straight move `ctx`'s robot knows to be free.
+    fn passes(&self, ctx: &Ctx, target: DVec2, reach_m: f64) -> bool {
+        let near = nearest_on_segment(self.from, self.goal, target);
+        near.distance(target) <= reach_m && ctx.can_move(self.from, near) == Some(true)
+    }
+}
+
+/// The point of the segment from `a` to `b` nearest to `p`.
+fn nearest_on_segment(a: DVec2, b: DVec2, p: DVec2) -> DVec2 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    a + t * ab
+}
+
+/// Note a mate's announcement in a small team's `walks`: its walk from `from` to `goal`
+/// replaces its last, or without a goal, the mate has none.
+fn note_walk(walks: &mut Vec<MateWalk>, id: u32, from: DVec2, goal: Option<DVec2>, heard_round: u64) {
+    walks.retain(|w| w.id != id);
+    if let Some(goal) = goal {
+        walks.push(MateWalk {
+            id,
+            from,
+            goal,
+            heard_round,
+        });
+    }
+}
+
 /// The goal a claim holds ([`stored_goal`]'s inverse, to single precision).
 fn goal_of(stored: Vec2, home: DVec2) -> DVec2 {
     home + stored.as_dvec2()
@@ -241,6 +285,10 @@ pub(super) struct Frontier {
     /// seen another robot.
     #[serde(default)]
     company_until: u64,
+    /// In a small team, each mate's last announced walk (at most one a mate, fewer than
+    /// [`SMALL_TEAM_MATES`]; none in a crowd).
+    #[serde(default)]
+    walks: Vec<MateWalk>,
 }
 
 /// Rounds a lone `frontier` robot that saw another robot heads for the nearest frontier
@@ -304,6 +352,7 @@ impl Frontier {
             last_position: None,
             tour,
             company_until: 0,
+            walks: Vec::new(),
         }
     }
 
@@ -349,11 +398,13 @@ impl Frontier {
 
     /// Leave a new target to a team mate: when the target (set this round, `before` being
     /// the goal before, or found again after yielding it) lies nearer to a mate's announced
-    /// goal than the robot's route to it, drop the route and wait `wait_rounds` (then search
-    /// again). The mate, once at its goal, is nearer; walking there would cross the ground
-    /// the mate is exploring. It leaves the target until it no longer keeps the mate's goal
-    /// ([`CLAIM_KEPT_ROUNDS`] without news of it). Returns whether the robot waits.
-    /// O(claims).
+    /// goal than the robot's route to it, or a mate's announced walk passes within a view
+    /// radius of it from nearer than that route ([`MateWalk::passes`]), drop the route and
+    /// wait `wait_rounds` (then search again). The mate, once at its goal or on its way, is
+    /// nearer; walking there would cross the ground the mate is exploring. It leaves the
+    /// target until it no longer keeps the mate's goal or walk ([`CLAIM_KEPT_ROUNDS`]
+    /// without news of it). Returns whether the robot waits. O(claims + walks), a swept-disc
+    /// test for each walk that passes near.
     fn leave_to_mates(&mut self, ctx: &mut Ctx, before: Option<DVec2>, yielded: bool, wait_rounds: u64) -> bool {
         let Some(target) = ctx.goal().filter(|&t| yielded || Some(t) != before) else {
             return false;
@@ -361,10 +412,18 @@ impl Frontier {
         let (me, home) = (ctx.me.id.get(), ctx.home().center());
         let nav = self.core.frontier.navigator();
         let walk_m = nav.remaining_m(ctx.position());
-        let nearer_mate = self
+        let nearer_goal = self
             .claims
             .iter()
             .any(|&(id, goal, _)| id != me && goal_of(goal, home).distance(target) < walk_m);
+        let (view_m, round) = (ctx.kind.view_radius_m, ctx.round);
+        let nearer_mate = nearer_goal
+            || self.walks.iter().any(|w| {
+                w.id != me
+                    && round <= w.heard_round + CLAIM_KEPT_ROUNDS
+                    && w.from.distance(target) < walk_m
+                    && w.passes(ctx, target, view_m)
+            });
         if nearer_mate {
             nav.clear();
             ctx.set_goal(None);
@@ -398,8 +457,12 @@ impl Frontier {
             updates.clear();
             let counting = !self.crowd || self.spoke.is_some();
             let mut mates = counting.then_some(&mut self.mates);
+            let mut walks = (!self.crowd).then_some(&mut self.walks);
             updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
-                Payload::Position { goal, .. } => {
+                Payload::Position { goal, position } => {
+                    if let Some(walks) = walks.as_deref_mut() {
+                        note_walk(walks, m.from.get(), position, goal, round);
+                    }
                     if let Some(mates) = mates.as_deref_mut() {
                         mates.heard(m.from);
                     }
@@ -424,6 +487,8 @@ impl Frontier {
             }
         });
         if round.is_multiple_of(10) {
+            self.walks
+                .retain(|w| round <= w.heard_round + CLAIM_KEPT_ROUNDS && !self.crowd);
             self.claims.retain(|(_, g, heard)| {
                 round <= u64::from(*heard) + CLAIM_KEPT_ROUNDS && goal_of(*g, home).distance(p) <= near
             });
@@ -570,11 +635,23 @@ mod tests {
     use proptest::prelude::*;
 
     use super::{
-        Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, make_way, merge_claims, stored_goal,
+        Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, make_way, merge_claims,
+        nearest_on_segment, stored_goal,
     };
     use crate::agent::TestWorld;
     use crate::spatial::RobotId;
     use crate::world::{Action, Inbox, Message, Payload, Recipient};
+
+    /// The point of a walk nearest a target, by hand: beside the walk its foot, before the
+    /// start the start, past the goal the goal; a walk of no length is its start.
+    #[test]
+    fn the_nearest_point_of_a_walk_is_the_foot_or_an_end() {
+        let (a, b) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
+        assert_eq!(nearest_on_segment(a, b, DVec2::new(3.0, 4.0)), DVec2::new(3.0, 1.0));
+        assert_eq!(nearest_on_segment(a, b, DVec2::new(-2.0, 0.0)), a);
+        assert_eq!(nearest_on_segment(a, b, DVec2::new(9.0, -3.0)), b);
+        assert_eq!(nearest_on_segment(a, a, DVec2::new(3.0, 4.0)), a);
+    }
 
     /// Where a waiting robot steps when mate 2 announces, from `mate` (relative to the
     /// robot), a goal at `goal` (relative too), in the world of `art` (the robot knows it
