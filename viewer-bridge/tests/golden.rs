@@ -43,9 +43,9 @@ const GOLDEN: &[Golden] = &[
     Golden {
         config: "teams.xml",
         rounds: 800,
-        digest: 0xab0f_aadb_3f0e_bdfd,
-        metrics_crc: 0xcd2a_99aa,
-        robots_crc: 0x765d_a778,
+        digest: 0xeaa2_c270_4dd3_cb71,
+        metrics_crc: 0x25e1_68d5,
+        robots_crc: 0x3a95_e8fa,
     },
     Golden {
         config: "tactics.xml",

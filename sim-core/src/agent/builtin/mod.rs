@@ -84,7 +84,8 @@ fn register_builtins(r: &mut StrategyRegistry) {
          (the max_claims most recently heard, 64 by default; by a detour of at most max_detour_m, \
          unbounded by default; in teams of fewer than 12 mates heard, a robot yields a target to a mate \
          with a lower id that announces a goal near it, and in teams of 3 to 12 a robot whose new target is \
-         nearer to a mate's goal than to itself leaves it to the mate and waits wait_rounds rounds, 5 by \
+         nearer to a mate's goal than to itself, or that a mate's announced walk passes, leaves it to the \
+         mate and waits wait_rounds rounds, 5 by \
          default, 0: never, stepping out of the way of mates held back near it; in teams of fewer than 12 mates heard, a robot takes of the compare_frontiers \
          frontiers nearest to it, 8 by default, the one fewest mates' goals are nearer to, 0: the nearest \
          frontier clear of them); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
