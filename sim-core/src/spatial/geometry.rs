@@ -781,7 +781,14 @@ pub(crate) fn floor(v: f64) -> f64 {
 }
 
 /// Squared distance from `p` to the segment `ab`.
+#[inline]
 pub fn point_segment_distance_squared(p: DVec2, a: DVec2, b: DVec2) -> f64 {
+    nearest_point_on_segment(p, a, b).distance_squared(p)
+}
+
+/// The point of the segment `ab` nearest to `p` (`a` if the segment has no length).
+#[inline]
+pub fn nearest_point_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
     let ab = b - a;
     let len2 = ab.length_squared();
     let t = if len2 > 0.0 {
@@ -789,7 +796,7 @@ pub fn point_segment_distance_squared(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     } else {
         0.0
     };
-    (a + ab * t).distance_squared(p)
+    a + ab * t
 }
 
 /// The parameter interval `[t0, t1]` ⊆ `[0, 1]` of the segment `a + t (b - a)` inside the
@@ -878,6 +885,20 @@ mod tests {
         // Near a corner: distance to (1,1) from (1.6,1.8) is 1.0.
         assert_eq!(d(1.6, 1.8, 1.0).classify(&unit()), Overlap::Disjoint);
         assert_eq!(d(1.6, 1.8, 1.01).classify(&unit()), Overlap::Partial);
+    }
+
+    /// The point of a segment nearest a point, by hand: beside the segment its foot, before
+    /// the start the start, past the end the end; a segment of no length is its start.
+    #[test]
+    fn the_nearest_point_of_a_segment_is_the_foot_or_an_end() {
+        let (a, b) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
+        assert_eq!(
+            nearest_point_on_segment(DVec2::new(3.0, 4.0), a, b),
+            DVec2::new(3.0, 1.0)
+        );
+        assert_eq!(nearest_point_on_segment(DVec2::new(-2.0, 0.0), a, b), a);
+        assert_eq!(nearest_point_on_segment(DVec2::new(9.0, -3.0), a, b), b);
+        assert_eq!(nearest_point_on_segment(DVec2::new(3.0, 4.0), a, a), a);
     }
 
     /// The segment-to-box distance that skips the clip for segments well off the box is the

@@ -18,7 +18,8 @@ mod view_stencil;
 pub use anyangle::{AnyAnglePath, AnyAnglePlanner, MAX_RASTER_CELLS, MAX_VERTICES, NoPath, reference};
 pub use geometry::{
     Aabb, BlockCells, Capsule, CellMasks, CellRows, Clipped, Disc, DiscBeyond, Overlap, Shape, clip_line, clip_segment,
-    point_segment_distance_squared, segment_box_distance_squared, segment_enters_box_interior,
+    nearest_point_on_segment, point_segment_distance_squared, segment_box_distance_squared,
+    segment_enters_box_interior,
 };
 pub use grid::{Grid, MAX_DEPTH};
 pub use ids::{RobotId, TreasureId};

@@ -5,6 +5,7 @@ use glam::{DVec2, Vec2};
 use super::explorer::{Explorer, Sharing, share_knowledge};
 use super::spread::{MatesSketch, Spoke};
 use crate::agent::{Ctx, FrontierSeeking, Needs, Strategy, Tour};
+use crate::spatial::nearest_point_on_segment;
 use crate::world::{Action, Payload};
 
 /// Team mates' goals, with the round heard, sorted by robot id: 16 bytes a claim, as a
@@ -38,20 +39,9 @@ impl MateWalk {
     /// point of its walk nearest the target is within `reach_m` of it, and the walk there
     /// is a straight move `ctx`'s robot knows to be free.
     fn passes(&self, ctx: &Ctx, target: DVec2, reach_m: f64) -> bool {
-        let near = nearest_on_segment(self.from, self.goal, target);
+        let near = nearest_point_on_segment(target, self.from, self.goal);
         near.distance(target) <= reach_m && ctx.can_move(self.from, near) == Some(true)
     }
-}
-
-/// The point of the segment from `a` to `b` nearest to `p`.
-fn nearest_on_segment(a: DVec2, b: DVec2, p: DVec2) -> DVec2 {
-    let ab = b - a;
-    let t = if ab.length_squared() > 0.0 {
-        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    a + t * ab
 }
 
 /// Note a mate's announcement in a small team's `walks`: its walk from `from` to `goal`
@@ -635,23 +625,11 @@ mod tests {
     use proptest::prelude::*;
 
     use super::{
-        Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, make_way, merge_claims,
-        nearest_on_segment, stored_goal,
+        Claims, Update, goal_of, hear_claims, keep_newest, keep_newest_into, make_way, merge_claims, stored_goal,
     };
     use crate::agent::TestWorld;
     use crate::spatial::RobotId;
     use crate::world::{Action, Inbox, Message, Payload, Recipient};
-
-    /// The point of a walk nearest a target, by hand: beside the walk its foot, before the
-    /// start the start, past the goal the goal; a walk of no length is its start.
-    #[test]
-    fn the_nearest_point_of_a_walk_is_the_foot_or_an_end() {
-        let (a, b) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
-        assert_eq!(nearest_on_segment(a, b, DVec2::new(3.0, 4.0)), DVec2::new(3.0, 1.0));
-        assert_eq!(nearest_on_segment(a, b, DVec2::new(-2.0, 0.0)), a);
-        assert_eq!(nearest_on_segment(a, b, DVec2::new(9.0, -3.0)), b);
-        assert_eq!(nearest_on_segment(a, a, DVec2::new(3.0, 4.0)), a);
-    }
 
     /// Where a waiting robot steps when mate 2 announces, from `mate` (relative to the
     /// robot), a goal at `goal` (relative too), in the world of `art` (the robot knows it
