@@ -212,9 +212,9 @@ enum Scenario {
         /// Draw each map's two walks into this folder, `MAP.png`: the reference's on the
         /// left, `--strategy`'s on the right, blue to 90 % explored, red from there on, the
         /// start green, what was first seen after 90 % amber, what stayed unseen pink; and
-        /// the teams', one robot first, into `MAP-teams.png` (from home; not with
-        /// `--starts`).
-        #[arg(long, value_name = "DIR", conflicts_with = "starts")]
+        /// the teams', one robot first, into `MAP-teams.png`. With `--starts`, each start's
+        /// too: `MAP-start-K.png` and `MAP-start-K-teams.png`.
+        #[arg(long, value_name = "DIR")]
         trace: Option<std::path::PathBuf>,
     },
     /// The paper's Fig. 4: known-map memory against rounds and robots on a 500,000-leaf
@@ -291,7 +291,16 @@ fn run(cli: &Cli) -> Result<()> {
             scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
             scale::exploration::check_strategy("cooperative", &teams.params)?;
             if starts > 0 {
-                exploration_from_starts(&compared, data.as_deref(), &teams, only.as_deref(), starts, cli.rounds)
+                let only = only.as_deref();
+                exploration_from_starts(
+                    &compared,
+                    data.as_deref(),
+                    &teams,
+                    only,
+                    starts,
+                    trace.as_deref(),
+                    cli.rounds,
+                )
             } else {
                 let maps = exploration_maps(data.as_deref(), only.as_deref())?;
                 exploration(&compared, &maps, &teams, trace.as_deref(), cli.rounds)
@@ -702,16 +711,21 @@ impl Compared {
 /// `exploration --starts K`: each map from home and from `k` points along the reference's
 /// run, both explorers from each; the ratios of `strategy` to the reference at every start,
 /// each map's means, and the means over every run; then, for each team size of `teams`, its
-/// runs from every start against one `cooperative` robot's from the same start.
+/// runs from every start against one `cooperative` robot's from the same start. With
+/// `trace`, each start's walks are drawn there as `exploration`'s are from home.
 fn exploration_from_starts(
     compared: &Compared,
     data: Option<&std::path::Path>,
     teams: &Teams,
     only: Option<&str>,
     k: usize,
+    trace: Option<&std::path::Path>,
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
+    if let Some(dir) = trace {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot make the folder {}", dir.display()))?;
+    }
     let strategy = &compared.strategy;
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
     println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
@@ -722,8 +736,19 @@ fn exploration_from_starts(
         let maps = std::iter::once(std::sync::Arc::clone(&map)).chain(starts.iter().map(|&p| starting_at(&map, p)));
         let (mut cells, mut at90, mut at98) = (Vec::new(), Vec::new(), Vec::new());
         for (start, m) in maps.enumerate() {
-            let built_in = compared.explore(&m, max_rounds)?;
-            let reference = explore(&m, GREEDY_REFERENCE, 1, max_rounds)?;
+            let start = if start == 0 {
+                "home".to_owned()
+            } else {
+                format!("start {start}")
+            };
+            let traced_name = format!("{name} {start}");
+            let (reference, built_in) = match trace {
+                Some(dir) => traced_runs(compared, &traced_name, &m, max_rounds, dir)?,
+                None => (
+                    explore(&m, GREEDY_REFERENCE, 1, max_rounds)?,
+                    compared.explore(&m, max_rounds)?,
+                ),
+            };
             let cell = |a, b| match (a, b) {
                 (Some(_), None) => format!("{strategy} only"),
                 (None, Some(_)) => "reference only".to_owned(),
@@ -736,12 +761,9 @@ fn exploration_from_starts(
             ));
             at90.extend(distance_ratio(built_in.at_90, reference.at_90));
             at98.extend(distance_ratio(built_in.at_98, reference.at_98));
-            let start = if start == 0 {
-                "home".to_owned()
-            } else {
-                format!("start {start}")
-            };
-            team_runs.extend(TeamRuns::run(&m, teams, max_rounds, None)?.map(|r| (format!("{name} from {start}"), r)));
+            let team_picture = trace.map(|dir| dir.join(format!("{}-teams.png", file_stem(&traced_name))));
+            let runs = TeamRuns::run(&m, teams, max_rounds, team_picture.as_deref())?;
+            team_runs.extend(runs.map(|r| (format!("{name} from {start}"), r)));
         }
         println!("{name} | {} / {} | {}", mean(&at90), mean(&at98), cells.join(", "));
         all90.extend(at90);

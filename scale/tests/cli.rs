@@ -221,8 +221,9 @@ fn exploration_refuses_a_parameter_its_strategy_does_not_take() {
 /// draws both walks on the loop into `DIR/indoor-loop.png`: two panels of 400 px (200 cells
 /// of 0.1 m, 2 px a cell) with the start, the walk to 90 %, the walk on to 98 % and what it
 /// first saw on the way in each; and one robot's and two robots' walks into
-/// `DIR/indoor-loop-teams.png`. It cannot be asked for with `--starts`, and a folder it
-/// cannot make is named.
+/// `DIR/indoor-loop-teams.png`. With `--starts 1` it draws each start's walks too
+/// (`indoor-loop-home.png`, `indoor-loop-start-1.png` and their teams), again without
+/// changing the runs, and a folder it cannot make is named.
 #[test]
 fn exploration_traces_draw_both_walks_without_changing_the_runs() {
     use scale::trace::{FROM_90, GAP_PX, SEEN_FROM_90, START, TO_90};
@@ -260,9 +261,23 @@ fn exploration_traces_draw_both_walks_without_changing_the_runs() {
     }
     let teams = image::open(dir.path().join("indoor-loop-teams.png")).unwrap();
     assert_eq!((teams.width(), teams.height()), (2 * 400 + GAP_PX, 400));
-    let both = bench(&[&args[..], &["--trace", "t", "--starts", "1"]].concat());
-    assert!(!both.status.success());
-    assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
+    let starts = [&args[..], &["--starts", "1"]].concat();
+    let starts_dir = dir.path().join("starts");
+    let traced_starts = bench(&[&starts[..], &["--trace", starts_dir.to_str().unwrap()]].concat());
+    assert!(
+        traced_starts.status.success(),
+        "{}",
+        String::from_utf8_lossy(&traced_starts.stderr)
+    );
+    assert!(line(&traced_starts).is_some());
+    assert_eq!(line(&bench(&starts)), line(&traced_starts));
+    for start in ["home", "start-1"] {
+        for suffix in ["", "-teams"] {
+            let path = starts_dir.join(format!("indoor-loop-{start}{suffix}.png"));
+            let picture = image::open(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            assert_eq!(picture.width(), 2 * 400 + GAP_PX, "{}", path.display());
+        }
+    }
     let blocked = dir.path().join("indoor-loop.png").join("sub");
     let out = bench(&[&args[..], &["--trace", blocked.to_str().unwrap()]].concat());
     assert!(!out.status.success());
