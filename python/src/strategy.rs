@@ -15,7 +15,7 @@
 //! generator are its own, so results do not depend on the order.
 
 use std::cell::RefCell;
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::{Mutex, PoisonError};
 
 use numpy::IntoPyArray;
 use numpy::ndarray::Array2;
@@ -463,7 +463,8 @@ pub struct Robot {
     speed_m: f64,
     treasures: Vec<sim_core::agent::SeenTreasure>,
     robots: Vec<(u32, DVec2, String)>,
-    messages: Vec<(RobotId, Arc<Payload>)>,
+    /// The round's inbox: picks from the shared mail bag, no copies.
+    messages: sim_core::world::Inbox,
 }
 
 impl Robot {
@@ -492,11 +493,7 @@ impl Robot {
                 .iter()
                 .map(|r| (r.id.get(), r.position, types[r.type_index].name.clone()))
                 .collect(),
-            messages: ctx
-                .messages()
-                .iter()
-                .map(|m| (m.from, Arc::clone(&m.payload)))
-                .collect(),
+            messages: ctx.messages().clone(),
         }
     }
 }
@@ -624,7 +621,7 @@ impl Robot {
     fn messages<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         self.messages
             .iter()
-            .map(|(from, p)| message_dict(py, *from, p))
+            .map(|m| message_dict(py, m.from, &m.payload))
             .collect()
     }
 

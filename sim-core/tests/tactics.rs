@@ -3,8 +3,6 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use sim_core::agent::{
     BoundaryFollowing, CollisionAvoidance, EnergyManagement, FrontierSeeking, GIVE_UP_ROUNDS, Navigator, Tactic, Team,
     TestWorld, blocked,
@@ -474,10 +472,10 @@ fn position_message(from: u32, at: DVec2, round: u64) -> Message {
         from: RobotId::new(from),
         sent_round: round,
         to: Recipient::Broadcast,
-        payload: Arc::new(Payload::Position {
+        payload: Payload::Position {
             position: at,
             goal: None,
-        }),
+        },
     }
 }
 

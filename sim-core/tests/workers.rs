@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::sync::Arc;
-
 use sim_core::agent::{Params, StrategyRegistry, TestWorld};
 use sim_core::glam::DVec2;
 use sim_core::spatial::{RobotId, TreasureId};
@@ -27,11 +25,11 @@ fn claim(from: u32, treasure: u32, task: Task, distance_m: f32) -> Message {
         from: RobotId::new(from),
         sent_round: 1,
         to: Recipient::Broadcast,
-        payload: Arc::new(Payload::Claim {
+        payload: Payload::Claim {
             treasure: TreasureId::new(treasure),
             task,
             distance_m,
-        }),
+        },
     }
 }
 
@@ -287,10 +285,10 @@ fn scout_first_move(mates: u32, params: &Params) -> (Option<DVec2>, Option<DVec2
         from: RobotId::new(m),
         sent_round: 1,
         to: Recipient::Broadcast,
-        payload: Arc::new(Payload::Position {
+        payload: Payload::Position {
             position: home,
             goal: None,
-        }),
+        },
     });
     w.mind.perception.inbox = Inbox::from(heard.collect::<Vec<_>>());
     let mut s = StrategyRegistry::with_builtins().create("cooperative", params).unwrap();
@@ -351,10 +349,10 @@ fn goals_after_announcements(
             from: RobotId::new(id),
             sent_round: w.round - 1,
             to: Recipient::Broadcast,
-            payload: Arc::new(Payload::Position {
+            payload: Payload::Position {
                 position: DVec2::new(10.5, 1.5),
                 goal,
-            }),
+            },
         });
         w.mind.perception.inbox = Inbox::from(messages.collect::<Vec<_>>());
         let action = s.decide(&mut w.ctx());
@@ -462,10 +460,10 @@ fn first_goal_hearing(mate_goal: DVec2, params: &Params) -> DVec2 {
         from: RobotId::new(2),
         sent_round: w.round.saturating_sub(1),
         to: Recipient::Broadcast,
-        payload: Arc::new(Payload::Position {
+        payload: Payload::Position {
             position: mate_goal,
             goal: Some(mate_goal),
-        }),
+        },
     };
     w.mind.perception.inbox = Inbox::from(vec![announced]);
     let mut s = StrategyRegistry::with_builtins().create("cooperative", params).unwrap();

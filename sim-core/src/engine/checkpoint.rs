@@ -8,7 +8,6 @@
 //! around it is `io::checkpoint`'s.
 
 use std::collections::HashMap;
-use std::sync::Arc;
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -127,8 +126,8 @@ impl Simulation {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        // Shared payloads once each, by identity.
-        let mut ids: HashMap<*const Payload, u32> = HashMap::new();
+        // Each message of the bag once (receivers of a broadcast read the same one).
+        let mut ids: HashMap<u32, u32> = HashMap::new();
         let mut payloads = Vec::new();
         let inboxes = self
             .inboxes
@@ -138,8 +137,8 @@ impl Simulation {
                     .iter()
                     .map(|&k| {
                         let m = &self.mailbag[k as usize];
-                        let payload = *ids.entry(Arc::as_ptr(&m.payload)).or_insert_with(|| {
-                            payloads.push(&*m.payload);
+                        let payload = *ids.entry(k).or_insert_with(|| {
+                            payloads.push(&m.payload);
                             u32::try_from(payloads.len() - 1).unwrap_or(u32::MAX)
                         });
                         InFlight {
@@ -177,7 +176,6 @@ impl Simulation {
         let state: State = ciborium::from_reader(bytes)
             .map_err(|e| Error::Malformed(format!("the run's state does not decode: {e}")))?;
         self.check_state(&state)?;
-        let payloads: Vec<Arc<Payload>> = state.payloads.into_iter().map(Arc::new).collect();
         // Strategies first: the only step that can still fail.
         for (i, (agent, saved)) in self.agents.iter_mut().zip(&state.agents).enumerate() {
             agent
@@ -190,22 +188,7 @@ impl Simulation {
             agent.mind.output.restore(saved.goal, saved.path);
             agent.merged_from = saved.merged_from.into_iter().collect();
         }
-        // Each saved message back in the bag once per receiver (they share its payload), so
-        // that it saves to the same bytes again.
-        self.mailbag.clear();
-        for (picks, saved) in self.inboxes.iter_mut().zip(state.inboxes) {
-            picks.clear();
-            for m in saved {
-                picks
-                    .push(u32::try_from(self.mailbag.len()).map_err(|_| Error::Malformed("too many messages".into()))?);
-                self.mailbag.push(Message {
-                    from: m.from,
-                    sent_round: m.sent_round,
-                    to: m.to,
-                    payload: Arc::clone(&payloads[m.payload as usize]),
-                });
-            }
-        }
+        self.restore_mailbag(state.payloads, state.inboxes)?;
         self.round = state.round;
         self.robots = state.robots;
         self.treasures = state.treasures;
@@ -217,6 +200,43 @@ impl Simulation {
         self.rebuild_robot_indexes();
         self.report.round = self.round;
         self.report.metrics = self.metrics(self.round, 0, 0, self.robot_memory_bytes());
+        Ok(())
+    }
+
+    /// The saved messages back in the bag, each once: the receivers of a message name the
+    /// same payload with the same sender, round and addressing, and read one entry, as
+    /// before the save, so that the state saves to the same bytes again. (A payload named
+    /// with other headers too gets an entry, and a copy, for each.)
+    fn restore_mailbag(&mut self, payloads: Vec<Payload>, inboxes: Vec<Vec<InFlight>>) -> Result<()> {
+        let mut payloads: Vec<Option<Payload>> = payloads.into_iter().map(Some).collect();
+        let mut placed: HashMap<u32, usize> = HashMap::new();
+        self.mailbag.clear();
+        for (picks, saved) in self.inboxes.iter_mut().zip(inboxes) {
+            picks.clear();
+            for m in saved {
+                let same = |b: &Message| b.from == m.from && b.sent_round == m.sent_round && b.to == m.to;
+                let at = match placed.get(&m.payload) {
+                    Some(&at) if same(&self.mailbag[at]) => at,
+                    first => {
+                        let payload = match payloads[m.payload as usize].take() {
+                            Some(p) => p,
+                            None => self.mailbag[*first.expect("a payload taken was placed")]
+                                .payload
+                                .clone(),
+                        };
+                        self.mailbag.push(Message {
+                            from: m.from,
+                            sent_round: m.sent_round,
+                            to: m.to,
+                            payload,
+                        });
+                        placed.entry(m.payload).or_insert(self.mailbag.len() - 1);
+                        self.mailbag.len() - 1
+                    }
+                };
+                picks.push(u32::try_from(at).map_err(|_| Error::Malformed("too many messages".into()))?);
+            }
+        }
         Ok(())
     }
 

@@ -101,8 +101,9 @@ pub struct Message {
     pub sent_round: u64,
     /// Addressing.
     pub to: Recipient,
-    /// Content (shared, not copied, between receivers).
-    pub payload: Arc<Payload>,
+    /// Content. The round's mail bag holds each message once, and every receiver reads it
+    /// there, so a broadcast heard by hundreds is neither copied nor shared by pointer.
+    pub payload: Payload,
 }
 
 /// The messages one robot reads in a round, in sending order: picks from the round's mail
@@ -214,10 +215,10 @@ mod tests {
             from: RobotId::new(from),
             sent_round: 1,
             to: Recipient::Broadcast,
-            payload: Arc::new(Payload::Position {
+            payload: Payload::Position {
                 position: DVec2::splat(f64::from(from)),
                 goal: None,
-            }),
+            },
         }
     }
 

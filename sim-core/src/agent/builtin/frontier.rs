@@ -448,7 +448,7 @@ impl Frontier {
             let counting = !self.crowd || self.spoke.is_some();
             let mut mates = counting.then_some(&mut self.mates);
             let mut walks = (!self.crowd).then_some(&mut self.walks);
-            updates.extend(ctx.messages().iter().filter_map(|m| match *m.payload {
+            updates.extend(ctx.messages().iter().filter_map(|m| match m.payload {
                 Payload::Position { goal, position } => {
                     if let Some(walks) = walks.as_deref_mut() {
                         note_walk(walks, m.from.get(), position, goal, round);
@@ -592,7 +592,7 @@ fn make_way(ctx: &Ctx) -> Option<Action> {
     let (mate, goal) = ctx
         .messages()
         .iter()
-        .filter_map(|m| match *m.payload {
+        .filter_map(|m| match m.payload {
             Payload::Position {
                 position,
                 goal: Some(goal),
@@ -641,10 +641,10 @@ mod tests {
             from: RobotId::new(2),
             sent_round: 0,
             to: Recipient::Broadcast,
-            payload: std::sync::Arc::new(Payload::Position {
+            payload: Payload::Position {
                 position: p + mate,
                 goal: Some(p + goal),
-            }),
+            },
         };
         w.mind.perception.inbox = Inbox::from(vec![said]);
         make_way(&w.ctx()).map(|a| match a {

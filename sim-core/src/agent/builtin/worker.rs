@@ -136,7 +136,7 @@ impl Worker {
                 treasure,
                 task: t,
                 distance_m,
-            } = *m.payload
+            } = m.payload
                 && t == task
             {
                 self.spread.heard(m.from);

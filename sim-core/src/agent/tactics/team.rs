@@ -62,7 +62,7 @@ impl Tactic for Team {
         let me = ctx.me.id;
         let before = self.leader.map(|l| l.0);
         for m in ctx.messages() {
-            if let Payload::Position { position, .. } = *m.payload
+            if let Payload::Position { position, .. } = m.payload
                 && m.from < me
                 && self.leader.is_none_or(|(l, _, _)| m.from <= l)
             {

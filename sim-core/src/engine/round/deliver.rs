@@ -2,7 +2,6 @@
 //! parallel, each taking what fits its budget in a fixed order.
 
 use std::ops::ControlFlow;
-use std::sync::Arc;
 
 use glam::DVec2;
 use rayon::prelude::*;
@@ -64,15 +63,14 @@ impl Simulation {
     /// accepted keep their place with an empty payload: theirs (whole known maps, often)
     /// are dropped now, not kept for a round.
     fn bag_outgoing(&mut self, outgoing: &mut Vec<Outgoing>, used: &[u64]) {
-        let dropped = Arc::new(Payload::Custom {
-            kind: String::new(),
-            data: Vec::new(),
-        });
         self.mailbag.reserve(outgoing.len());
         for (k, o) in outgoing.drain(..).enumerate() {
             let mut message = o.message;
             if used[k / 64] >> (k % 64) & 1 == 0 {
-                message.payload = Arc::clone(&dropped);
+                message.payload = Payload::Custom {
+                    kind: String::new(),
+                    data: Vec::new(),
+                };
             }
             self.mailbag.push(message);
         }

@@ -222,7 +222,7 @@ fn read_messages(agent: &mut Agent, turn: &mut Turn, round: u64) {
     let data = &mut agent.mind.data;
     let mut merged = 0;
     for m in &agent.mind.perception.inbox {
-        match &*m.payload {
+        match &m.payload {
             // A robot digests a bounded number of maps a round (first come, first
             // served): in a crowd hundreds arrive at once. The bound is tested first:
             // once it is reached, the rest cost no lookup (each a likely cache miss on

@@ -6,7 +6,6 @@
 //! Messages are addressed after the turns, as in id order (blocks of senders on all
 //! workers), to whoever was in range at send time and alive then.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use glam::DVec2;
@@ -329,7 +328,7 @@ impl Addressing<'_> {
             from,
             sent_round: self.round,
             to,
-            payload: Arc::new(payload),
+            payload,
         };
         if self.radio_limited {
             out.outgoing.push(Outgoing {
