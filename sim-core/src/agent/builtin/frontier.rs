@@ -232,9 +232,14 @@ fn heard_in(round: u64) -> u32 {
     u32::try_from(round).unwrap_or(u32::MAX)
 }
 
+/// A mate's announcement as a walk ([`note_walk`]'s arguments but the round): its id, where
+/// it stood, its goal.
+type HeardWalk = (u32, DVec2, Option<DVec2>);
+
 thread_local! {
-    /// A worker's buffers for a round's announcements and the merged claims.
-    static SCRATCH: std::cell::RefCell<(Vec<Update>, Claims)> = const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+    /// A worker's buffers for a round's announcements, the merged claims and the walks heard.
+    static SCRATCH: std::cell::RefCell<(Vec<Update>, Claims, Vec<HeardWalk>)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
 }
 
 /// `frontier` and `cooperative`.
@@ -443,15 +448,16 @@ impl Frontier {
         // This round's announcements, and the merge, in buffers of the worker thread, not
         // of the robot: spare copies per robot would cost megabytes in a crowd, and fresh
         // ones each round would keep the allocator busy.
-        SCRATCH.with_borrow_mut(|(updates, merged)| {
+        SCRATCH.with_borrow_mut(|(updates, merged, heard_walks)| {
             updates.clear();
+            heard_walks.clear();
             let counting = !self.crowd || self.spoke.is_some();
             let mut mates = counting.then_some(&mut self.mates);
-            let mut walks = (!self.crowd).then_some(&mut self.walks);
+            let mut walks = (!self.crowd).then_some(&mut *heard_walks);
             updates.extend(ctx.messages().iter().filter_map(|m| match m.payload {
                 Payload::Position { goal, position } => {
                     if let Some(walks) = walks.as_deref_mut() {
-                        note_walk(walks, m.from.get(), position, goal, round);
+                        walks.push((m.from.get(), position, goal));
                     }
                     if let Some(mates) = mates.as_deref_mut() {
                         mates.heard(m.from);
@@ -475,6 +481,14 @@ impl Frontier {
                 let cut_now = !round.is_multiple_of(10);
                 hear_claims(&mut self.claims, updates, round, share.max_claims, cut_now, merged);
             }
+            // Walks are read only in a small team: a robot that has just heard enough mates
+            // to be a crowd notes none of this round's (each costs O(walks) to note, and in
+            // a crowd hundreds are heard).
+            if self.mates.count() < SMALL_TEAM_MATES {
+                for &(id, from, goal) in heard_walks.iter() {
+                    note_walk(&mut self.walks, id, from, goal, round);
+                }
+            }
         });
         if round.is_multiple_of(10) {
             self.walks
@@ -485,6 +499,9 @@ impl Frontier {
         }
         keep_newest(&mut self.claims, share.max_claims, round);
         self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
+        if self.crowd && self.walks.capacity() > 0 {
+            self.walks = Vec::new();
+        }
         !self.crowd && self.yield_to_lower_ids(ctx, radius)
     }
 
