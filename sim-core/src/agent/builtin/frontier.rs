@@ -687,6 +687,51 @@ mod tests {
         assert_eq!(step_aside(&open, mate, mate), None);
     }
 
+    /// The mates' announcements of one round, from ids `ids`: each stood 1 m east of the
+    /// robot and heads 5 m north of it.
+    fn announcements(p: DVec2, ids: std::ops::Range<u32>) -> Inbox {
+        Inbox::from(
+            ids.map(|id| Message {
+                from: RobotId::new(id),
+                sent_round: 0,
+                to: Recipient::Broadcast,
+                payload: Payload::Position {
+                    position: p + DVec2::X,
+                    goal: Some(p + 5.0 * DVec2::Y),
+                },
+            })
+            .collect::<Vec<_>>(),
+        )
+    }
+
+    /// A `cooperative` robot keeps the walks of a small team's mates (here 3), each mate's
+    /// last; one that hears a crowd (40 mates, above the 12 of a small team) keeps none, and
+    /// no room for them: a crowd never reads them, and at home it hears hundreds a round.
+    #[test]
+    fn only_a_small_teams_robot_keeps_its_mates_walks() {
+        use crate::agent::{Params, Strategy};
+        let sharing = super::Sharing::from_params(&Params::default()).unwrap();
+        let art = [".....", ".....", "..R..", ".....", "....."].join("\n");
+        let mut w = TestWorld::from_ascii(&art, 1.0).unwrap().knowing_all();
+        let p = w.robot.position;
+        let mut small = super::Frontier::new(Some(sharing), 0.25, None);
+        w.mind.perception.inbox = announcements(p, 2..5);
+        small.decide(&mut w.ctx());
+        w.mind.perception.inbox = announcements(p, 3..5);
+        small.decide(&mut w.ctx());
+        assert!(!small.crowd);
+        let ids: Vec<u32> = small.walks.iter().map(|m| m.id).collect();
+        assert_eq!(ids, [2, 3, 4]);
+        let mut crowd = super::Frontier::new(Some(sharing), 0.25, None);
+        w.mind.perception.inbox = announcements(p, 2..4);
+        crowd.decide(&mut w.ctx());
+        assert_eq!(crowd.walks.len(), 2);
+        w.mind.perception.inbox = announcements(p, 10..50);
+        crowd.decide(&mut w.ctx());
+        assert!(crowd.crowd);
+        assert_eq!((crowd.walks.len(), crowd.walks.capacity()), (0, 0));
+    }
+
     /// A goal kept in single precision from the home comes back within 6 mm on a
     /// 100 km map whatever its origin, here 5,000 km out (a projected map's coordinates),
     /// where single precision from the origin is off by up to a quarter of a metre.
