@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The speed-up from 1 to 2 threads of a `smartteams-bench` scenario, from processes run
-# alternately (1 thread, then 2), PAIRS pairs: each pair's rounds/s and ratio, then the
+# alternately (1 thread, then 2), PAIRS pairs: each pair's robot-rounds/s and ratio, then the
 # medians, min and max. Separate processes, because a 1-thread and a 2-thread simulation
 # played in turn in one process slow the 2-thread one (BENCHMARKS.md, "Scaling").
 # The digests of each pair must agree, or the script fails.
@@ -25,14 +25,16 @@ if [ ! -x "$bench" ]; then
 fi
 out=$(mktemp)
 trap 'rm -f "$out"' EXIT
-# One run: its rounds/s and digest from the summary line.
+# One run: its robot-rounds/s (four significant digits, where rounds/s has one decimal: a
+# slow scenario's 12.0 rounds/s would round the ratio by up to 1 %) and digest from the
+# summary line.
 run() {
     local line
-    line=$("$bench" --threads "$1" "${@:2}" 2>&1 | grep -E ' rounds/s.*digest ' | tail -1) || {
+    line=$("$bench" --threads "$1" "${@:2}" 2>&1 | grep -E ' robot-rounds/s.*digest ' | tail -1) || {
         echo "$0: no summary line from: $bench --threads $1 ${*:2}" >&2
         exit 1
     }
-    echo "$(echo "$line" | grep -oE '[0-9.]+ rounds/s' | head -1 | cut -d' ' -f1) $(echo "$line" | grep -oE 'digest [0-9a-f]+' | cut -d' ' -f2)"
+    echo "$(echo "$line" | grep -oE '[0-9.e+]+ robot-rounds/s' | head -1 | cut -d' ' -f1) $(echo "$line" | grep -oE 'digest [0-9a-f]+' | cut -d' ' -f2)"
 }
 for k in $(seq "$pairs"); do
     read -r one d1 <<<"$(run 1 "$@")"
@@ -46,7 +48,7 @@ for k in $(seq "$pairs"); do
         exit 1
     fi
     echo "$one $two" >>"$out"
-    echo "pair $k: 1 thread $one rounds/s, 2 threads $two, $(python3 -c "print(f'{$two / $one:.3f}')")x"
+    echo "pair $k: 1 thread $one robot-rounds/s, 2 threads $two, $(python3 -c "print(f'{$two / $one:.3f}')")x"
 done
 python3 - "$out" <<'PY'
 import statistics, sys
@@ -54,6 +56,8 @@ pairs = [tuple(map(float, line.split())) for line in open(sys.argv[1])]
 ratios = [b / a for a, b in pairs]
 def summary(v):
     return f"{statistics.median(v):.3f} ({min(v):.3f}-{max(v):.3f})"
-print(f"1 thread {summary([a for a, _ in pairs])} rounds/s, 2 threads {summary([b for _, b in pairs])}")
+def rate(v):
+    return f"{statistics.median(v):.4g} ({min(v):.4g}-{max(v):.4g})"
+print(f"1 thread {rate([a for a, _ in pairs])} robot-rounds/s, 2 threads {rate([b for _, b in pairs])}")
 print(f"1 -> 2 threads: {summary(ratios)}x, median of {len(pairs)} pairs; identical digests")
 PY

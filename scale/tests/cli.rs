@@ -444,9 +444,9 @@ fn scaling_with_zero_threads_names_the_core_count() {
     assert!(!text.contains("0 thr"), "{text}");
 }
 
-/// `scripts/bench-threads.sh`: each pair's ratio is its 2-thread rounds/s over its 1-thread
-/// rounds/s as printed, and the last line gives the median of the pairs' ratios (for two
-/// pairs, their mean), worked out here from the pair lines' rounds/s.
+/// `scripts/bench-threads.sh`: each pair's ratio is its 2-thread robot-rounds/s over its
+/// 1-thread robot-rounds/s as printed, and the last line gives the median of the pairs'
+/// ratios (for two pairs, their mean), worked out here from the pair lines' figures.
 #[test]
 fn the_threads_script_prints_each_pair_and_their_median() {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../scripts/bench-threads.sh");
@@ -479,7 +479,7 @@ fn the_threads_script_prints_each_pair_and_their_median() {
                 .unwrap_or_else(|| panic!("a ratio ending {l}"));
             let (one, two) = (between("1 thread ", " "), between("2 threads ", ","));
             assert!((two / one - printed).abs() < 0.001, "{l}");
-            // The script's median is of the unrounded ratios of the printed rounds/s.
+            // The script's median is of the unrounded ratios of the printed figures.
             two / one
         })
         .collect();
