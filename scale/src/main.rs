@@ -723,9 +723,7 @@ fn exploration_from_starts(
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore, starting_at, starts_along_the_reference};
-    if let Some(dir) = trace {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot make the folder {}", dir.display()))?;
-    }
+    make_trace_folder(trace)?;
     let strategy = &compared.strategy;
     println!("map | mean ratio to 90 % / 98 % | ratio to 90 % / 98 % from home, then from each start");
     println!("(a milestone only one explorer reached: `{strategy} only` or `reference only`)");
@@ -894,9 +892,7 @@ fn exploration(
     max_rounds: u64,
 ) -> Result<()> {
     use scale::exploration::{GREEDY_REFERENCE, explore};
-    if let Some(dir) = trace {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot make the folder {}", dir.display()))?;
-    }
+    make_trace_folder(trace)?;
     let strategy = &compared.strategy;
     println!(
         "map | reference m to 90 % / 98 % | {strategy} m to 90 % / 98 % | ratio 90 / 98 | teams: rounds to 90 % (x faster than 1), summed m, overlap"
@@ -929,6 +925,14 @@ fn exploration(
     }
     if n90 > 0 {
         println!("mean ratio to 90 %: {:.2} over {n90} maps", sum90 / f64::from(n90));
+    }
+    Ok(())
+}
+
+/// Make `exploration --trace`'s folder, if asked for; an error names it.
+fn make_trace_folder(trace: Option<&std::path::Path>) -> Result<()> {
+    if let Some(dir) = trace {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot make the folder {}", dir.display()))?;
     }
     Ok(())
 }

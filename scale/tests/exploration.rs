@@ -240,7 +240,7 @@ fn two_cooperative_robots_divide_the_rooms_map_after_they_part() {
 /// Eight `cooperative` robots on the indoor loop (a 20 m ring corridor), starting packed at
 /// home: more robots than the ring needs. A robot leaves a target that a mate's announced
 /// walk passes, so the eight reach 90 % sooner than one robot and walk at most 1.25× its
-/// distance between them (1.43× when only mates' goals were left alone).
+/// distance between them.
 #[test]
 fn eight_cooperative_robots_on_a_loop_leave_what_a_mate_walks_past() {
     assert_eight_sooner_within_a_quarter_more(&indoor_loop());

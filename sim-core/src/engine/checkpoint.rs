@@ -188,7 +188,7 @@ impl Simulation {
             agent.mind.output.restore(saved.goal, saved.path);
             agent.merged_from = saved.merged_from.into_iter().collect();
         }
-        self.restore_mailbag(state.payloads, state.inboxes)?;
+        self.restore_mailbag(&state.payloads, state.inboxes)?;
         self.round = state.round;
         self.robots = state.robots;
         self.treasures = state.treasures;
@@ -206,9 +206,8 @@ impl Simulation {
     /// The saved messages back in the bag, each once: the receivers of a message name the
     /// same payload with the same sender, round and addressing, and read one entry, as
     /// before the save, so that the state saves to the same bytes again. (A payload named
-    /// with other headers too gets an entry, and a copy, for each.)
-    fn restore_mailbag(&mut self, payloads: Vec<Payload>, inboxes: Vec<Vec<InFlight>>) -> Result<()> {
-        let mut payloads: Vec<Option<Payload>> = payloads.into_iter().map(Some).collect();
+    /// with other headers too gets an entry for each.)
+    fn restore_mailbag(&mut self, payloads: &[Payload], inboxes: Vec<Vec<InFlight>>) -> Result<()> {
         let mut placed: HashMap<u32, usize> = HashMap::new();
         self.mailbag.clear();
         for (picks, saved) in self.inboxes.iter_mut().zip(inboxes) {
@@ -217,18 +216,12 @@ impl Simulation {
                 let same = |b: &Message| b.from == m.from && b.sent_round == m.sent_round && b.to == m.to;
                 let at = match placed.get(&m.payload) {
                     Some(&at) if same(&self.mailbag[at]) => at,
-                    first => {
-                        let payload = match payloads[m.payload as usize].take() {
-                            Some(p) => p,
-                            None => self.mailbag[*first.expect("a payload taken was placed")]
-                                .payload
-                                .clone(),
-                        };
+                    _ => {
                         self.mailbag.push(Message {
                             from: m.from,
                             sent_round: m.sent_round,
                             to: m.to,
-                            payload,
+                            payload: payloads[m.payload as usize].clone(),
                         });
                         placed.entry(m.payload).or_insert(self.mailbag.len() - 1);
                         self.mailbag.len() - 1

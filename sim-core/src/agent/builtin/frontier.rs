@@ -481,27 +481,25 @@ impl Frontier {
                 let cut_now = !round.is_multiple_of(10);
                 hear_claims(&mut self.claims, updates, round, share.max_claims, cut_now, merged);
             }
-            // Walks are read only in a small team: a robot that has just heard enough mates
-            // to be a crowd notes none of this round's (each costs O(walks) to note, and in
-            // a crowd hundreds are heard).
-            if self.mates.count() < SMALL_TEAM_MATES {
+            // A crowd never reads walks: a robot that has just heard enough mates to be one
+            // notes none of this round's (each costs O(walks), and a crowd hears hundreds)
+            // and drops those it kept.
+            self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
+            if self.crowd {
+                self.walks = Vec::new();
+            } else {
                 for &(id, from, goal) in heard_walks.iter() {
                     note_walk(&mut self.walks, id, from, goal, round);
                 }
             }
         });
         if round.is_multiple_of(10) {
-            self.walks
-                .retain(|w| round <= w.heard_round + CLAIM_KEPT_ROUNDS && !self.crowd);
+            self.walks.retain(|w| round <= w.heard_round + CLAIM_KEPT_ROUNDS);
             self.claims.retain(|(_, g, heard)| {
                 round <= u64::from(*heard) + CLAIM_KEPT_ROUNDS && goal_of(*g, home).distance(p) <= near
             });
         }
         keep_newest(&mut self.claims, share.max_claims, round);
-        self.crowd = self.crowd || self.mates.count() >= SMALL_TEAM_MATES;
-        if self.crowd && self.walks.capacity() > 0 {
-            self.walks = Vec::new();
-        }
         !self.crowd && self.yield_to_lower_ids(ctx, radius)
     }
 
