@@ -389,7 +389,7 @@ fn starts_count_the_runs_farther_than_the_reference() {
     }
     let farther = |r: &[f64]| r.iter().filter(|&&x| x > 1.0).count();
     let expected = format!(
-        "mean over every start: {:.2} to 90 % (2 runs), {:.2} to 98 % (2 runs); farther than the reference in {} and {} of them",
+        "mean over every start: {:.3} to 90 % (2 runs), {:.3} to 98 % (2 runs); farther than the reference in {} and {} of them",
         at90.iter().sum::<f64>() / 2.0,
         at98.iter().sum::<f64>() / 2.0,
         farther(&at90),
