@@ -12,7 +12,9 @@
 //! instead, when the robots' cells span a rectangle of at most about sixteen cells a robot:
 //! a query then reads one run of entries per row of cells, without hashing. Only the order
 //! in which a query visits robots differs. In a crowd (more than four robots a cell over
-//! the robots' box) such an index also halves its cells, up to three times. Invariant: a
+//! the robots' box) such an index also halves its cells, up to three times;
+//! [`RobotIndex::rows_when_compact`] keeps the cells asked, and so the hashed walk's order,
+//! which budgeted delivery's picks follow. Invariant: a
 //! query yields exactly the robots in its disc, in the walk's order, for either layout;
 //! checked by `robot_index_matches_brute_force`, `a_robot_on_the_rim_is_found` and
 //! `runs_hold_the_disc_in_the_walks_order`.
@@ -55,6 +57,8 @@ pub struct RobotIndex {
     layout: Layout,
     /// May lay cells out densely.
     dense_allowed: bool,
+    /// How many times a dense layout may halve its cells in a crowd.
+    most_halvings: u32,
     /// `starts[b]..starts[b + 1]` are bucket b's entries.
     starts: Vec<u32>,
     entries: Vec<Entry>,
@@ -161,6 +165,7 @@ impl RobotIndex {
             cells_per_m: 1.0,
             layout: Layout::Hashed { mask: 0 },
             dense_allowed: false,
+            most_halvings: 0,
             starts: vec![0, 0],
             entries: Vec::new(),
             xs: Vec::new(),
@@ -178,8 +183,32 @@ impl RobotIndex {
     pub fn dense_when_compact() -> Self {
         Self {
             dense_allowed: true,
+            most_halvings: 3,
             ..Self::new()
         }
+    }
+
+    /// An empty index that lays its cells out row by row when the robots are close
+    /// together, at the cell size asked. Its queries visit the robots in [`new`](Self::new)'s
+    /// order (rows of cells from the lowest, cells along a row from the lowest, each cell's
+    /// robots as given) but read a row of cells as one run, without hashing or a check of
+    /// each robot's cell. The orders differ only for a query whose box holds more cells than
+    /// there are robots (both layouts then scan every robot in their own order): see
+    /// [`box_cells_at_most`](Self::box_cells_at_most). Checked by
+    /// `rows_walk_the_disc_as_hashed_cells_do`.
+    pub fn rows_when_compact() -> Self {
+        Self {
+            dense_allowed: true,
+            ..Self::new()
+        }
+    }
+
+    /// The most cells the box of a query of `radius_m` can hold in cells of `cell_m`
+    /// metres, wherever it is: `(⌈2 radius_m / cell_m⌉ + 2)²`, which allows for the
+    /// query's slack carrying the box's edge across a cell's.
+    pub fn box_cells_at_most(radius_m: f64, cell_m: f64) -> f64 {
+        let side = (2.0 * radius_m / cell_m).ceil() + 2.0;
+        side * side
     }
 
     #[inline]
@@ -255,7 +284,7 @@ impl RobotIndex {
         // A crowd (more than four robots a cell over the robots' box) gets cells half as
         // wide, up to three times, so that a query reads fewer robots outside its disc.
         let mut halvings = 0;
-        while self.dense_allowed && halvings < 3 && n as u64 > area.saturating_mul(4) {
+        while self.dense_allowed && halvings < self.most_halvings && n as u64 > area.saturating_mul(4) {
             halvings += 1;
             self.cell_m *= 0.5;
             (lo, hi) = file_in_cells(&mut self.scratch, self.cell_m);
@@ -663,6 +692,50 @@ mod tests {
                 got.sort();
                 want.sort();
                 prop_assert_eq!(got, want);
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..ProptestConfig::default() })]
+
+        /// An index of rows of cells walks a disc in exactly the order of a hashed one of the
+        /// same cells (budgeted delivery picks senders in that order and may use either),
+        /// whenever there are at least as many robots as the query's box can hold cells;
+        /// the same robots otherwise. Both are checked against brute force as sets.
+        #[test]
+        fn rows_walk_the_disc_as_hashed_cells_do(
+            points in proptest::collection::vec((-20.0f64..20.0, -20.0f64..20.0), 0..300),
+            crowd in 0usize..400,
+            cell_m in 0.5f64..6.0,
+            queries in proptest::collection::vec((-25.0f64..25.0, -25.0f64..25.0, 0.0f64..15.0), 1..10),
+        ) {
+            let robots = with_crowd(&points, crowd, 20, 0.1);
+            let (mut hashed, mut rows) = (RobotIndex::new(), RobotIndex::rows_when_compact());
+            hashed.rebuild(robots.iter().copied(), cell_m);
+            rows.rebuild(robots.iter().copied(), cell_m);
+            prop_assert!(rows.cell_m.to_bits() == cell_m.to_bits(), "rows keep the cells asked");
+            for (x, y, r) in queries {
+                let p = DVec2::new(x, y);
+                let walk = |index: &RobotIndex| {
+                    let mut walk = Vec::new();
+                    index.for_each_within(p, r, |id, _| walk.push(id));
+                    walk
+                };
+                let (mut by_hash, mut by_rows) = (walk(&hashed), walk(&rows));
+                if robots.len() as f64 >= RobotIndex::box_cells_at_most(r, cell_m) {
+                    prop_assert_eq!(&by_rows, &by_hash);
+                }
+                let mut want: Vec<RobotId> = robots
+                    .iter()
+                    .filter(|(_, q)| q.distance_squared(p) <= r * r)
+                    .map(|(id, _)| *id)
+                    .collect();
+                want.sort();
+                by_hash.sort();
+                by_rows.sort();
+                prop_assert_eq!(&by_hash, &want);
+                prop_assert_eq!(&by_rows, &want);
             }
         }
     }

@@ -45,15 +45,24 @@ impl Simulation {
     }
 
     /// Index the robots that broadcast this round (those with a part in `span`) where they
-    /// sent from, in cells of the widest range.
+    /// sent from, in cells of the widest range. Rows of cells when there are at least as many
+    /// senders as a query's box can hold cells, where their walk is the hashed cells' walk
+    /// without a cell check per sender; hashed cells otherwise, whose order the budgets'
+    /// picks have always followed.
     #[inline]
     fn index_senders(&self, span: &[(u32, u32, f64)], max_range: f64) -> RobotIndex {
-        let mut senders = RobotIndex::new();
+        let cell_m = max_range.clamp(1.0, 64.0);
+        let count = span.iter().filter(|s| s.0 != s.1).count();
+        let mut senders = if count as f64 >= RobotIndex::box_cells_at_most(max_range, cell_m) {
+            RobotIndex::rows_when_compact()
+        } else {
+            RobotIndex::new()
+        };
         senders.rebuild(
             (0..self.robots.len())
                 .filter(|&i| span[i].0 != span[i].1)
                 .map(|i| (self.robots[i].id, self.turns[i].start)),
-            max_range.clamp(1.0, 64.0),
+            cell_m,
         );
         senders
     }
