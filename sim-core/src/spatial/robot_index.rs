@@ -477,6 +477,10 @@ impl RobotIndex {
                 return ControlFlow::Continue(());
             }
             for cy in y0..=y1 {
+                let Some((x0, x1)) = self.chord_cells(p, reach, cy, (x0, x1), |x| self.cell_of(DVec2::new(x, 0.0)).0)
+                else {
+                    continue;
+                };
                 let (a, b) = self.row_run(cy, x0, x1);
                 let (a, b) = (a as usize, b as usize);
                 visit(a, &self.entries[a..b], None)?;
@@ -524,16 +528,40 @@ impl RobotIndex {
         if rows > N {
             return None;
         }
-        // Row by row from the first: each a layout's width further on.
-        let Layout::Dense { width, .. } = self.layout else {
-            unreachable!("a dense span is a dense layout's")
-        };
-        let (first, last) = (self.bucket((x0, y0)), self.bucket((x1, y0)) + 1);
-        for (k, run) in out.iter_mut().take(rows).enumerate() {
-            let step = k * width as usize;
-            *run = (self.starts[first + step], self.starts[last + step]);
+        // Row by row, each narrowed to the cells under the disc's chord.
+        let column = |x: f64| floor(x * self.cells_per_m) as i32;
+        for (cy, run) in (y0..=y1).zip(out.iter_mut()) {
+            *run = match self.chord_cells(p, reach, cy, (x0, x1), column) {
+                Some((x0, x1)) => self.row_run(cy, x0, x1),
+                None => (0, 0),
+            };
         }
         Some(rows)
+    }
+
+    /// The cells of row `cy`, within `span`, that the disc of `reach` around `p` can meet:
+    /// those under its chord over the row's band (`None` for none). The chord is taken from
+    /// the band's edge brought nearer `p` by the slack that `reach` holds beyond the radius,
+    /// which dwarfs the rounding of a robot's filing; so every robot in the disc lies in the
+    /// cells given, and skipping a row's end cells keeps the walk's order. `column` is the
+    /// caller's column of an x (each query path files as it computes its box).
+    #[inline]
+    fn chord_cells(
+        &self,
+        p: DVec2,
+        reach: f64,
+        cy: i32,
+        span: (i32, i32),
+        column: impl Fn(f64) -> i32,
+    ) -> Option<(i32, i32)> {
+        let (low, high) = (f64::from(cy) * self.cell_m, f64::from(cy + 1) * self.cell_m);
+        let dy = ((low - p.y).max(p.y - high) - self.query_slack(p, reach)).max(0.0);
+        if dy > reach {
+            return None;
+        }
+        let half = (reach * reach - dy * dy).sqrt();
+        let (x0, x1) = (column(p.x - half).max(span.0), column(p.x + half).min(span.1));
+        (x0 <= x1).then_some((x0, x1))
     }
 
     /// How much wider than its radius a query's box is taken: a robot on the rim passes a
