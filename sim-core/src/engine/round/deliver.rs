@@ -24,10 +24,10 @@ impl Simulation {
         let lists = sort_sends(&outgoing, self.robots.len());
         let max_range = outgoing.iter().map(|o| o.range_m).fold(0.0, f64::max);
         let senders = self.index_senders(&lists.span, max_range);
-        let by_entry = sends_by_entry(&senders, &lists.span);
+        let (by_entry, broadcasts) = sends_by_entry(&senders, &lists);
         let sends = Sends {
             outgoing: &outgoing,
-            broadcasts: &lists.broadcasts,
+            broadcasts: &broadcasts,
             by_entry: &by_entry,
             direct: &lists.direct,
             senders: &senders,
@@ -86,14 +86,19 @@ impl Simulation {
     }
 }
 
+/// A sender's range and its part (start, end) of the broadcasts, beside its entry in the
+/// senders' index.
+type ByEntry = (f64, u32, u32);
+
 /// A round's sends under radio budgets, as the receivers read them.
 struct Sends<'a> {
     outgoing: &'a [Outgoing],
-    /// The broadcasts as (index in `outgoing`, bytes), each sender's contiguous.
+    /// The broadcasts as (index in `outgoing`, bytes), each sender's contiguous, the
+    /// senders in the order of `senders`' entries.
     broadcasts: &'a [(u32, u64)],
     /// For each of `senders`' entries, in its order: the sender's range and its part of
     /// `broadcasts`.
-    by_entry: &'a [(f64, u32, u32)],
+    by_entry: &'a [ByEntry],
     /// Direct messages as (receiver id, index in `outgoing`), sorted.
     direct: &'a [(u32, u32)],
     /// The senders where they sent from, in cells of the widest range.
@@ -148,18 +153,23 @@ fn sort_sends(outgoing: &[Outgoing], n: usize) -> SendLists {
     }
 }
 
-/// Beside the index's entries, in its order, each sender's range and broadcasts, so a
-/// receiver reads them in step with the entries rather than jumping about `outgoing`.
+/// Beside the index's entries, in its order, each sender's range and its part of the
+/// broadcasts, which are copied into the same order: a receiver reads both in step with the
+/// entries, a row of cells' senders one stretch of memory, rather than jumping about by id.
 #[inline]
-fn sends_by_entry(senders: &RobotIndex, span: &[(u32, u32, f64)]) -> Vec<(f64, u32, u32)> {
-    senders
+fn sends_by_entry(senders: &RobotIndex, lists: &SendLists) -> (Vec<ByEntry>, Vec<(u32, u64)>) {
+    let mut broadcasts = Vec::with_capacity(lists.broadcasts.len());
+    let by_entry = senders
         .entries()
         .iter()
         .map(|e| {
-            let (b0, b1, range_m) = span[e.id.index()];
-            (range_m, b0, b1)
+            let (b0, b1, range_m) = lists.span[e.id.index()];
+            let start = broadcasts.len() as u32;
+            broadcasts.extend_from_slice(&lists.broadcasts[b0 as usize..b1 as usize]);
+            (range_m, start, broadcasts.len() as u32)
         })
-        .collect()
+        .collect();
+    (by_entry, broadcasts)
 }
 
 impl Sends<'_> {
