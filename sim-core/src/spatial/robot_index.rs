@@ -631,6 +631,17 @@ mod tests {
             .collect()
     }
 
+    /// The robots within `r` of `p` by a test of each, sorted by id.
+    fn in_disc(robots: &[(RobotId, DVec2)], p: DVec2, r: f64) -> Vec<RobotId> {
+        let mut ids: Vec<RobotId> = robots
+            .iter()
+            .filter(|(_, q)| q.distance_squared(p) <= r * r)
+            .map(|(id, _)| *id)
+            .collect();
+        ids.sort();
+        ids
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(11), ..ProptestConfig::default() })]
 
@@ -711,21 +722,11 @@ mod tests {
                         .collect();
                     prop_assert_eq!(&from_ranges, &walk);
                 }
-                let mut want: Vec<RobotId> = robots
-                    .iter()
-                    .filter(|(_, q)| q.distance_squared(p) <= r * r)
-                    .map(|(id, _)| *id)
-                    .collect();
                 let mut got = from_runs.clone();
                 got.sort();
-                want.sort();
-                prop_assert_eq!(got, want);
+                prop_assert_eq!(got, in_disc(&robots, p, r));
             }
         }
-    }
-
-    proptest! {
-        #![proptest_config(ProptestConfig { cases: 200, rng_seed: proptest::test_runner::RngSeed::Fixed(12), ..ProptestConfig::default() })]
 
         /// An index of rows of cells walks a disc in exactly the order of a hashed one of the
         /// same cells (budgeted delivery picks senders in that order and may use either),
@@ -754,12 +755,7 @@ mod tests {
                 if robots.len() as f64 >= RobotIndex::box_cells_at_most(r, cell_m) {
                     prop_assert_eq!(&by_rows, &by_hash);
                 }
-                let mut want: Vec<RobotId> = robots
-                    .iter()
-                    .filter(|(_, q)| q.distance_squared(p) <= r * r)
-                    .map(|(id, _)| *id)
-                    .collect();
-                want.sort();
+                let want = in_disc(&robots, p, r);
                 by_hash.sort();
                 by_rows.sort();
                 prop_assert_eq!(&by_hash, &want);
