@@ -10,13 +10,13 @@
 //!
 //! An index made with [`RobotIndex::dense_when_compact`] lays the cells out row by row
 //! instead, when the robots' cells span a rectangle of at most about sixteen cells a robot:
-//! a query then reads one run of entries per row of cells, without hashing. Only the order
-//! in which a query visits robots differs. In a crowd (more than four robots a cell over
-//! the robots' box) such an index also halves its cells, up to three times;
-//! [`RobotIndex::rows_when_compact`] keeps the cells asked, and so the hashed walk's order,
-//! which budgeted delivery's picks follow. Invariant: a
-//! query yields exactly the robots in its disc, in the walk's order, for either layout;
-//! checked by `robot_index_matches_brute_force`, `a_robot_on_the_rim_is_found` and
+//! a query then reads one run of entries per row of cells (those under the disc's chord over
+//! the row), without hashing. Only the order in which a query visits robots differs. In a
+//! crowd (more than four robots a cell over the robots' box) such an index also halves its
+//! cells, up to three times; [`RobotIndex::rows_when_compact`] keeps the cells asked, and so
+//! the hashed walk's order, which budgeted delivery's picks follow. Invariant: a query
+//! yields exactly the robots in its disc, in the walk's order, for either layout; checked by
+//! `robot_index_matches_brute_force`, `a_robot_on_the_rim_is_found` and
 //! `runs_hold_the_disc_in_the_walks_order`.
 
 use std::ops::ControlFlow;
@@ -497,7 +497,8 @@ impl RobotIndex {
         ControlFlow::Continue(())
     }
 
-    /// The rows of cells of the disc's box as ranges of [`entries`](Self::entries), in index
+    /// The rows of cells of the disc's box, each narrowed to the cells under the disc's chord
+    /// over it, as ranges of [`entries`](Self::entries), in index
     /// order, when the cells are laid out densely and the box spans at most `N` rows of
     /// them: how many ranges were written to `out` (the first ones), or `None` otherwise.
     /// They hold the robots in the disc that [`for_each_run_near`](Self::for_each_run_near)

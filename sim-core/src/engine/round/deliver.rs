@@ -45,10 +45,10 @@ impl Simulation {
     }
 
     /// Index the robots that broadcast this round (those with a part in `span`) where they
-    /// sent from, in cells of the widest range. Rows of cells when there are at least as many
-    /// senders as a query's box can hold cells, where their walk is the hashed cells' walk
-    /// without a cell check per sender; hashed cells otherwise, whose order the budgets'
-    /// picks have always followed.
+    /// sent from, in cells of the widest range: in rows of cells when there are at least as
+    /// many senders as a query's box can hold cells (their walk is then the hashed cells'
+    /// walk, without a cell check per sender), in hashed cells otherwise. The budgets' picks
+    /// follow that walk.
     #[inline]
     fn index_senders(&self, span: &[(u32, u32, f64)], max_range: f64) -> RobotIndex {
         let cell_m = max_range.clamp(1.0, 64.0);
