@@ -59,17 +59,29 @@ pub fn lower_priority() {
     }
 }
 
-/// How long the run waits for its logging before it asks whether the logging is starved.
+/// How long the run may wait for its logging, in all, before it asks whether the logging is
+/// starved.
 pub const STARVED_AFTER: Duration = Duration::from_secs(2);
 
-/// Tells a recording starved of the CPU: the run has waited [`STARVED_AFTER`] or more for its
-/// logging threads while the process used less than a quarter of one core, and another of
-/// its threads is ready to run now. Logging that merely has much to do keeps a core busy;
-/// logging held up by a slow disk or network is asleep, not ready to run. Says so once.
-/// Linux only (CPU time and thread states come from `/proc`); elsewhere it never does.
+/// Waits shorter than this are not counted: the process's CPU time comes in ticks of 10 ms,
+/// too coarse to tell how a shorter wait was spent, and a starved logging makes long waits.
+const COUNTED_FROM: Duration = Duration::from_millis(10);
+
+/// Tells a recording starved of the CPU: the run's waits for its logging (opening the
+/// stream, handing it rounds, closing it) add up to [`STARVED_AFTER`] or more, the process
+/// used less than a quarter of one core in them, and another of its threads is ready to run
+/// now. Logging that merely has much to do keeps a core busy; logging held up by a slow disk
+/// or network is asleep, not ready to run. Says so once. Linux only (CPU time and thread
+/// states come from `/proc`); elsewhere it never does.
+///
+/// Adding the waits up matters for a short run: its recording's work falls into a few
+/// waits, each of which may stay under [`STARVED_AFTER`] while together they double the run.
 #[derive(Debug, Default)]
 pub struct StarvationWatch {
     warned: bool,
+    /// Wall and CPU time of the counted waits that have ended.
+    waited: Duration,
+    waited_cpu: Duration,
 }
 
 /// A wait of the run for its logging, begun at `since` with the process's CPU time `cpu`.
@@ -88,25 +100,28 @@ impl LoggingWait {
         }
     }
 
-    /// Whether, [`STARVED_AFTER`] or more into the wait, the process has used less than a
-    /// quarter of a core while another of its threads is ready to run.
-    fn starved(&self) -> bool {
-        let wall = self.since.elapsed();
-        let Some(cpu) = self
-            .cpu
-            .zip(process_cpu_time())
-            .map(|(before, now)| now.saturating_sub(before))
-        else {
-            return false;
-        };
-        wall >= STARVED_AFTER && cpu * 4 < wall && another_thread_runnable()
+    /// Wall and CPU time since the wait began (`None` without the process's CPU time).
+    fn so_far(&self) -> Option<(Duration, Duration)> {
+        let (before, now) = self.cpu.zip(process_cpu_time())?;
+        Some((self.since.elapsed(), now.saturating_sub(before)))
     }
 }
 
 impl StarvationWatch {
-    /// Warn (once) if `wait` shows the logging starved; returns whether it does.
+    /// How long `wait` may go on before the next [`StarvationWatch::check`]: until the waits
+    /// add up to [`STARVED_AFTER`], then [`STARVED_AFTER`] at a time.
+    pub fn next_check(&self, wait: &LoggingWait) -> Duration {
+        let left = STARVED_AFTER.saturating_sub(self.waited + wait.since.elapsed());
+        if left.is_zero() { STARVED_AFTER } else { left }
+    }
+
+    /// Warn (once) if the waits so far, `wait` included, show the logging starved; returns
+    /// whether they do.
     pub fn check(&mut self, wait: &LoggingWait) -> bool {
-        let starved = wait.starved();
+        let starved = wait.so_far().is_some_and(|(wall, cpu)| {
+            let (wall, cpu) = (self.waited + wall, self.waited_cpu + cpu);
+            wall >= STARVED_AFTER && cpu * 4 < wall && another_thread_runnable()
+        });
         if starved && !self.warned {
             self.warned = true;
             eprintln!(
@@ -115,6 +130,17 @@ impl StarvationWatch {
             );
         }
         starved
+    }
+
+    /// Count `wait`, which has ended, if it lasted [`COUNTED_FROM`] or more.
+    pub fn end(&mut self, wait: &LoggingWait) {
+        if wait.since.elapsed() < COUNTED_FROM {
+            return;
+        }
+        if let Some((wall, cpu)) = wait.so_far() {
+            self.waited += wall;
+            self.waited_cpu += cpu;
+        }
     }
 }
 
@@ -187,5 +213,61 @@ mod tests {
         let mut watch = StarvationWatch::default();
         assert!(!watch.check(&LoggingWait::begin()));
         assert!(!watch.warned);
+    }
+
+    /// A wait begun `ago`, the process's CPU time taken now (none of it spent in the wait).
+    fn idle_wait_begun(ago: Duration) -> LoggingWait {
+        LoggingWait {
+            since: Instant::now()
+                .checked_sub(ago)
+                .expect("the monotonic clock is past `ago`"),
+            cpu: process_cpu_time(),
+        }
+    }
+
+    /// Waits add up: after an idle wait of 1.5 s, the next check of a new wait comes 0.5 s
+    /// into it, and a new idle wait of 0.6 s with another thread ready to run is starved,
+    /// though neither wait alone reaches [`STARVED_AFTER`]. Past it, checks come
+    /// [`STARVED_AFTER`] apart.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn waits_add_up_to_the_starvation_limit() {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let mut watch = StarvationWatch::default();
+        watch.end(&idle_wait_begun(Duration::from_millis(1500)));
+        let left = watch.next_check(&LoggingWait::begin());
+        assert!(
+            left <= Duration::from_millis(500) && left > Duration::from_millis(400),
+            "{left:?}"
+        );
+        assert!(!watch.check(&idle_wait_begun(Duration::from_millis(100))));
+        let stop = AtomicBool::new(false);
+        let starved = std::thread::scope(|s| {
+            // A thread that keeps running: state `R`, as a logging thread waiting for a core.
+            s.spawn(|| {
+                while !stop.load(Ordering::Relaxed) {
+                    std::hint::spin_loop();
+                }
+            });
+            let starved = watch.check(&idle_wait_begun(Duration::from_millis(600)));
+            stop.store(true, Ordering::Relaxed);
+            starved
+        });
+        assert!(starved);
+        assert!(watch.warned);
+        assert_eq!(
+            watch.next_check(&idle_wait_begun(Duration::from_millis(600))),
+            STARVED_AFTER
+        );
+    }
+
+    /// A wait shorter than [`COUNTED_FROM`] is not counted.
+    #[test]
+    fn a_wait_shorter_than_a_cpu_tick_is_not_counted() {
+        let mut watch = StarvationWatch::default();
+        watch.end(&LoggingWait::begin());
+        assert_eq!(watch.waited, Duration::ZERO);
+        watch.end(&idle_wait_begun(Duration::from_millis(300)));
+        assert!(watch.waited >= Duration::from_millis(300), "{:?}", watch.waited);
     }
 }

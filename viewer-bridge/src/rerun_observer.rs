@@ -27,7 +27,7 @@ use sim_core::spatial::{Aabb, RegionQuadtree};
 use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, Robot, RobotType, RoundMetrics, RoundReport};
 
 use crate::layers::{self, Raster, draw_order, to_2d};
-use crate::priority::{LoggingWait, STARVED_AFTER, StarvationWatch};
+use crate::priority::{LoggingWait, StarvationWatch};
 
 /// The sequence timeline every per-round entity is logged on.
 pub const TIMELINE: &str = "round";
@@ -212,14 +212,22 @@ impl RerunObserver {
         self
     }
 
+    /// Count `opening`, the wait for the stream to open (begun before
+    /// [`crate::viewer::open`]), among the run's waits for its logging: opening a file at
+    /// the lowest priority is the first of them.
+    #[must_use]
+    pub fn with_opening(mut self, opening: &LoggingWait) -> Self {
+        self.starvation.end(opening);
+        self
+    }
+
     /// What to do when the logging thread falls behind (default [`WhenBehind::Wait`]).
     pub fn with_when_behind(mut self, when_behind: WhenBehind) -> Self {
         self.when_behind = when_behind;
         self
     }
 
-    /// The recording stream; once a live stream has been closed at the end of the run, a
-    /// disabled one.
+    /// The recording stream; once it has been closed at the end of the run, a disabled one.
     pub fn recording(&self) -> &rerun::RecordingStream {
         &self.rec
     }
@@ -242,7 +250,7 @@ impl RerunObserver {
     }
 
     /// Wall time the end of the run waited for the logging thread to finish and the stream
-    /// to be flushed (known after [`Observer::on_finish`]).
+    /// to be flushed and closed (known after [`Observer::on_finish`]).
     pub fn closing(&self) -> std::time::Duration {
         self.closing
     }
@@ -373,8 +381,11 @@ impl RerunObserver {
         };
         let wait = LoggingWait::begin();
         loop {
-            match tx.send_timeout(frame, STARVED_AFTER) {
-                Ok(()) => return Ok(()),
+            match tx.send_timeout(frame, self.starvation.next_check(&wait)) {
+                Ok(()) => {
+                    self.starvation.end(&wait);
+                    return Ok(());
+                }
                 Err(crossbeam_channel::SendTimeoutError::Timeout(f)) => {
                     self.starvation.check(&wait);
                     frame = f;
@@ -1397,7 +1408,11 @@ impl Observer for RerunObserver {
         let wait = LoggingWait::begin();
         match self.when_behind {
             WhenBehind::Wait => {
-                if self.worker.as_ref().is_some_and(|w| !w.ends_within(STARVED_AFTER)) {
+                if self
+                    .worker
+                    .as_ref()
+                    .is_some_and(|w| !w.ends_within(self.starvation.next_check(&wait)))
+                {
                     self.starvation.check(&wait);
                 }
                 self.join_worker()?;
@@ -1421,7 +1436,7 @@ impl Observer for RerunObserver {
         }
         // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
         let flushed = match self.when_behind {
-            WhenBehind::Wait => self.flush_file(&wait),
+            WhenBehind::Wait => self.flush_file(&wait).map(|()| self.close_file(&wait)),
             WhenBehind::SkipWorld => self.flush_live(),
         };
         match flushed {
@@ -1464,16 +1479,39 @@ impl RerunObserver {
     }
 
     /// Flush a file's stream, waiting at most [`FINISH_TIMEOUT`] (what is left is written
-    /// when the stream closes); a flush that lasts [`STARVED_AFTER`] asks whether the
-    /// logging is starved (`wait`, begun when the rounds ended).
+    /// when the stream closes); a flush still going when the run's waits for its logging
+    /// (`wait`, begun when the rounds ended, and those before) add up to
+    /// [`crate::priority::STARVED_AFTER`] asks whether the logging is starved.
     fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
-        if self.rec.flush_with_timeout(STARVED_AFTER).is_ok() {
+        let first = self.starvation.next_check(wait);
+        if self.rec.flush_with_timeout(first).is_ok() {
             return Ok(());
         }
         self.starvation.check(wait);
         self.rec
-            .flush_with_timeout(FINISH_TIMEOUT.saturating_sub(STARVED_AFTER))
+            .flush_with_timeout(FINISH_TIMEOUT.saturating_sub(first))
             .map_err(|e| e.to_string())
+    }
+
+    /// Close a file's stream and wait until the file is whole: dropping the stream's last
+    /// handle writes what the writer holds and the file's footer, so the run reports a
+    /// complete recording. A close still going when the run's waits add up to
+    /// [`crate::priority::STARVED_AFTER`] asks whether the logging is starved, as
+    /// [`RerunObserver::flush_file`] does.
+    fn close_file(&mut self, wait: &LoggingWait) {
+        let rec = std::mem::replace(&mut self.rec, rerun::RecordingStream::disabled());
+        let (closed_tx, closed) = crossbeam_channel::bounded(1);
+        // Should no thread start, the closure and the stream are dropped here, at once.
+        let Ok(closing) = std::thread::Builder::new().name("rerun-close".into()).spawn(move || {
+            drop(rec);
+            let _ = closed_tx.send(());
+        }) else {
+            return;
+        };
+        if closed.recv_timeout(self.starvation.next_check(wait)).is_err() {
+            self.starvation.check(wait);
+        }
+        let _ = closing.join();
     }
 
     /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).

@@ -15,6 +15,7 @@ use sim_core::io::{MetricsCsv, write_robot_stats};
 use sim_core::spatial::RobotId;
 use sim_core::world::{EXPLORED_MILESTONES, Event, MapData, RoundMetrics, RoundReport};
 
+use crate::priority::LoggingWait;
 use crate::progress::Progress;
 use crate::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
 use crate::stop::Signal;
@@ -509,13 +510,15 @@ impl Outputs {
 
 /// The Rerun recording of `sim` at `target`, logging what `log` asks for.
 fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) -> Result<RerunObserver> {
+    let opening = LoggingWait::begin();
     let rec = crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?;
-    // A file writer always catches up; a live viewer may be slow or paused.
-    let when_behind = match target {
-        ViewerTarget::Rrd(_) => WhenBehind::Wait,
-        ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => WhenBehind::SkipWorld,
-    };
-    Ok(RerunObserver::new(rec, log).with_when_behind(when_behind))
+    let observer = RerunObserver::new(rec, log);
+    // A file writer always catches up, and the run waits for it from its opening; a live
+    // viewer may be slow or paused, and connecting to it waits on the network.
+    Ok(match target {
+        ViewerTarget::Rrd(_) => observer.with_opening(&opening).with_when_behind(WhenBehind::Wait),
+        ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => observer.with_when_behind(WhenBehind::SkipWorld),
+    })
 }
 
 /// Tells the user, on stderr, about robots whose strategy failed or was slow (the first
