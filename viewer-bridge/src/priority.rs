@@ -132,7 +132,7 @@ impl StarvationWatch {
         starved
     }
 
-    /// Count `wait`, which has ended, if it lasted [`COUNTED_FROM`] or more.
+    /// Count `wait`, which has ended, if it lasted 10 ms or more (one tick of CPU time).
     pub fn end(&mut self, wait: &LoggingWait) {
         if wait.since.elapsed() < COUNTED_FROM {
             return;
