@@ -69,8 +69,8 @@ const COUNTED_FROM: Duration = Duration::from_millis(10);
 
 /// Tells a recording starved of the CPU: the run's waits for its logging (opening the
 /// stream, handing it rounds, closing it) add up to [`STARVED_AFTER`] or more, the process
-/// used less than a quarter of one core in them, and another of its threads is ready to run
-/// now. Logging that merely has much to do keeps a core busy; logging held up by a slow disk
+/// used less than a quarter of one core in them (or the same holds of the wait going on
+/// alone), and another of its threads is ready to run now. Logging that merely has much to do keeps a core busy; logging held up by a slow disk
 /// or network is asleep, not ready to run. Says so once. Linux only (CPU time and thread
 /// states come from `/proc`); elsewhere it never does.
 ///
@@ -115,12 +115,13 @@ impl StarvationWatch {
         if left.is_zero() { STARVED_AFTER } else { left }
     }
 
-    /// Warn (once) if the waits so far, `wait` included, show the logging starved; returns
-    /// whether they do.
+    /// Warn (once) if the waits so far, `wait` included, show the logging starved, or
+    /// `wait` alone does (a long run whose logging starves midway, after waits in which it
+    /// kept a core busy); returns whether they do.
     pub fn check(&mut self, wait: &LoggingWait) -> bool {
+        let idle = |wall: Duration, cpu: Duration| wall >= STARVED_AFTER && cpu * 4 < wall;
         let starved = wait.so_far().is_some_and(|(wall, cpu)| {
-            let (wall, cpu) = (self.waited + wall, self.waited_cpu + cpu);
-            wall >= STARVED_AFTER && cpu * 4 < wall && another_thread_runnable()
+            (idle(wall, cpu) || idle(self.waited + wall, self.waited_cpu + cpu)) && another_thread_runnable()
         });
         if starved && !self.warned {
             self.warned = true;
@@ -259,6 +260,33 @@ mod tests {
             watch.next_check(&idle_wait_begun(Duration::from_millis(600))),
             STARVED_AFTER
         );
+    }
+
+    /// A wait of [`STARVED_AFTER`] in which the process was idle is starved on its own, even
+    /// after earlier waits in which the logging kept a core busy (their CPU time counted
+    /// as their wall time).
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn an_idle_wait_is_starved_after_busy_ones() {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let mut watch = StarvationWatch {
+            warned: false,
+            waited: Duration::from_mins(1),
+            waited_cpu: Duration::from_mins(1),
+        };
+        let stop = AtomicBool::new(false);
+        let (short, long) = std::thread::scope(|s| {
+            s.spawn(|| {
+                while !stop.load(Ordering::Relaxed) {
+                    std::hint::spin_loop();
+                }
+            });
+            let short = watch.check(&idle_wait_begun(Duration::from_millis(1900)));
+            let long = watch.check(&idle_wait_begun(STARVED_AFTER));
+            stop.store(true, Ordering::Relaxed);
+            (short, long)
+        });
+        assert!(!short && long);
     }
 
     /// A wait shorter than [`COUNTED_FROM`] is not counted.
