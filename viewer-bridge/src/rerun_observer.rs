@@ -1478,19 +1478,17 @@ impl RerunObserver {
         self.send(frame, true)
     }
 
-    /// Flush a file's stream, waiting at most [`FINISH_TIMEOUT`] (what is left is written
-    /// when the stream closes); a flush still going when the run's waits for its logging
-    /// (`wait`, begun when the rounds ended, and those before) add up to
-    /// [`crate::priority::STARVED_AFTER`] asks whether the logging is starved.
+    /// Flush a file's stream until it is written, or the writer fails (a full disk, say):
+    /// closing the stream would wait as long, and a flush says why it failed. A flush still
+    /// going when the run's waits for its logging (`wait`, begun when the rounds ended, and
+    /// those before) add up to [`crate::priority::STARVED_AFTER`] asks whether the logging
+    /// is starved.
     fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
-        let first = self.starvation.next_check(wait);
-        if self.rec.flush_with_timeout(first).is_ok() {
+        if self.rec.flush_with_timeout(self.starvation.next_check(wait)).is_ok() {
             return Ok(());
         }
         self.starvation.check(wait);
-        self.rec
-            .flush_with_timeout(FINISH_TIMEOUT.saturating_sub(first))
-            .map_err(|e| e.to_string())
+        self.rec.flush_blocking().map_err(|e| e.to_string())
     }
 
     /// Close a file's stream and wait until the file is whole: dropping the stream's last
