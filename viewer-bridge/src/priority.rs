@@ -70,9 +70,10 @@ const COUNTED_FROM: Duration = Duration::from_millis(10);
 /// Tells a recording starved of the CPU: the run's waits for its logging (opening the
 /// stream, handing it rounds, closing it) add up to [`STARVED_AFTER`] or more, the process
 /// used less than a quarter of one core in them (or the same holds of the wait going on
-/// alone), and another of its threads is ready to run now. Logging that merely has much to do keeps a core busy; logging held up by a slow disk
-/// or network is asleep, not ready to run. Says so once. Linux only (CPU time and thread
-/// states come from `/proc`); elsewhere it never does.
+/// alone), and another of its threads is ready to run now. Logging that merely has much to
+/// do keeps a core busy; logging held up by a slow disk or network is asleep, not ready to
+/// run. Says so once. Linux only (CPU time and thread states come from `/proc`); elsewhere
+/// it never does.
 ///
 /// Adding the waits up matters for a short run: its recording's work falls into a few
 /// waits, each of which may stay under [`STARVED_AFTER`] while together they double the run.
