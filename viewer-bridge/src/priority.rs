@@ -227,6 +227,24 @@ mod tests {
         }
     }
 
+    /// What `f` returns, called while another thread keeps running: state `R`, as a logging
+    /// thread waiting for a core.
+    #[cfg(target_os = "linux")]
+    fn beside_a_running_thread<T>(f: impl FnOnce() -> T) -> T {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            s.spawn(|| {
+                while !stop.load(Ordering::Relaxed) {
+                    std::hint::spin_loop();
+                }
+            });
+            let out = f();
+            stop.store(true, Ordering::Relaxed);
+            out
+        })
+    }
+
     /// Waits add up: after an idle wait of 1.5 s, the next check of a new wait comes 0.5 s
     /// into it, and a new idle wait of 0.6 s with another thread ready to run is starved,
     /// though neither wait alone reaches [`STARVED_AFTER`]. Past it, checks come
@@ -234,7 +252,6 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn waits_add_up_to_the_starvation_limit() {
-        use std::sync::atomic::{AtomicBool, Ordering};
         let mut watch = StarvationWatch::default();
         watch.end(&idle_wait_begun(Duration::from_millis(1500)));
         let left = watch.next_check(&LoggingWait::begin());
@@ -243,19 +260,9 @@ mod tests {
             "{left:?}"
         );
         assert!(!watch.check(&idle_wait_begun(Duration::from_millis(100))));
-        let stop = AtomicBool::new(false);
-        let starved = std::thread::scope(|s| {
-            // A thread that keeps running: state `R`, as a logging thread waiting for a core.
-            s.spawn(|| {
-                while !stop.load(Ordering::Relaxed) {
-                    std::hint::spin_loop();
-                }
-            });
-            let starved = watch.check(&idle_wait_begun(Duration::from_millis(600)));
-            stop.store(true, Ordering::Relaxed);
-            starved
-        });
-        assert!(starved);
+        assert!(beside_a_running_thread(
+            || watch.check(&idle_wait_begun(Duration::from_millis(600)))
+        ));
         assert!(watch.warned);
         assert_eq!(
             watch.next_check(&idle_wait_begun(Duration::from_millis(600))),
@@ -269,23 +276,14 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn an_idle_wait_is_starved_after_busy_ones() {
-        use std::sync::atomic::{AtomicBool, Ordering};
         let mut watch = StarvationWatch {
             warned: false,
             waited: Duration::from_mins(1),
             waited_cpu: Duration::from_mins(1),
         };
-        let stop = AtomicBool::new(false);
-        let (short, long) = std::thread::scope(|s| {
-            s.spawn(|| {
-                while !stop.load(Ordering::Relaxed) {
-                    std::hint::spin_loop();
-                }
-            });
+        let (short, long) = beside_a_running_thread(|| {
             let short = watch.check(&idle_wait_begun(Duration::from_millis(1900)));
-            let long = watch.check(&idle_wait_begun(STARVED_AFTER));
-            stop.store(true, Ordering::Relaxed);
-            (short, long)
+            (short, watch.check(&idle_wait_begun(STARVED_AFTER)))
         });
         assert!(!short && long);
     }
