@@ -10,8 +10,7 @@ use sim_core::agent::StrategyRegistry;
 use sim_core::io::{Checkpoint, Observer, RunOutputs, RunSource, SimConfig, write_checkpoint};
 use sim_core::spatial::RobotId;
 use sim_core::world::{METRICS_COLUMNS, RoundMetrics};
-use viewer_bridge::priority::LoggingWait;
-use viewer_bridge::rerun_observer::{LogOptions, RerunObserver, WhenBehind};
+use viewer_bridge::rerun_observer::{LogOptions, RerunObserver};
 use viewer_bridge::viewer::ViewerTarget;
 
 use crate::grids::{self, Window};
@@ -94,12 +93,8 @@ impl Run {
         )
         .map_err(|e| to_py(format!("{e:#}")))?;
         let target = ViewerTarget::Rrd(path);
-        let opening = LoggingWait::begin();
-        let rec = viewer_bridge::viewer::open(self.sim.name(), &target, viewer_bridge::blueprint::simulation())
+        let mut observer = viewer_bridge::run::open_recording(&self.sim, &target, LogOptions::default())
             .map_err(|e| to_py(format!("{e:#}")))?;
-        let mut observer = RerunObserver::new(rec, LogOptions::default())
-            .with_opening(&opening)
-            .with_when_behind(WhenBehind::Wait);
         observer.on_start(&self.sim).map_err(to_py)?;
         self.recording = Some(observer);
         self.source.outputs.recording = Some(viewer_bridge::cli::recording_words(Some(&target)));

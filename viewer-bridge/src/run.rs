@@ -508,8 +508,9 @@ impl Outputs {
     }
 }
 
-/// The Rerun recording of `sim` at `target`, logging what `log` asks for.
-fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) -> Result<RerunObserver> {
+/// The Rerun recording of `sim` at `target`, logging what `log` asks for: a file's waits
+/// for it from its opening, a live viewer's left behind when it falls behind.
+pub fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) -> Result<RerunObserver> {
     let opening = LoggingWait::begin();
     let rec = crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?;
     let observer = RerunObserver::new(rec, log);
