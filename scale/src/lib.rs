@@ -514,7 +514,7 @@ impl TimedRun {
         let t = Instant::now();
         self.pool.install(|| {
             // The bench has the cores to itself: the workers poll between parallel steps
-            // instead of sleeping (see `with_hot_workers`; SMARTTEAMS_COLD_WORKERS=1 lets
+            // instead of sleeping (see `with_hot_workers`; SMARTTEAMS_COLD_WORKERS, set to anything, lets
             // them sleep, to measure the difference).
             let mut rounds_loop = || {
                 for _ in 0..rounds {

@@ -212,8 +212,9 @@ enum Scenario {
         /// Draw each map's two walks into this folder, `MAP.png`: the reference's on the
         /// left, `--strategy`'s on the right, blue to 90 % explored, red from there on, the
         /// start green, what was first seen after 90 % amber, what stayed unseen pink; and
-        /// the teams', one robot first, into `MAP-teams.png`. With `--starts`, each start's
-        /// too: `MAP-start-K.png` and `MAP-start-K-teams.png`.
+        /// the teams', one robot first, into `MAP-teams.png`. With `--starts`, the walks from
+        /// home go to `MAP-home.png` and `MAP-home-teams.png`, each other start's to
+        /// `MAP-start-K.png` and `MAP-start-K-teams.png`.
         #[arg(long, value_name = "DIR")]
         trace: Option<std::path::PathBuf>,
     },

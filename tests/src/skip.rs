@@ -1,9 +1,9 @@
 //! Tests that cannot run here say so where the summary shows it.
 //!
-//! A test that lacks something (the real maps of `SMARTTEAMS_DATA`, the Rerun SDK) calls
+//! A test that lacks something (the real maps of `SMARTTEAMS_DATA`, the Rerun SDK, Slurm) calls
 //! [`skip`] and returns. The skip is printed and, when `SMARTTEAMS_SKIP_LOG` names a file,
 //! appended to it, so that `scripts/test.sh` counts and lists the skips at the end. When
-//! `SMARTTEAMS_REQUIRE` lists the skip's kind (`data`, `rerun`; comma-separated), the test
+//! `SMARTTEAMS_REQUIRE` lists the skip's kind (`data`, `rerun`, `slurm`; comma-separated), the test
 //! fails instead: CI requires what it installed.
 //!
 //! Crates outside `tests` include this file with `#[path]`, so it depends on `std` alone.
