@@ -284,45 +284,62 @@ fn run(cli: &Cli) -> Result<()> {
                 sizes: teams.clone(),
                 params: team_params.iter().cloned().collect(),
             };
-            // A bad name or value stops the run before its table begins.
-            anyhow::ensure!(
-                !teams.sizes.contains(&1),
-                "--teams 1: a team has 2 robots or more (one robot is what every team is timed against; 0: no teams)"
-            );
-            scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
-            scale::exploration::check_strategy("cooperative", &teams.params)?;
-            if starts > 0 {
-                let only = only.as_deref();
-                exploration_from_starts(
-                    &compared,
-                    data.as_deref(),
-                    &teams,
-                    only,
-                    starts,
-                    trace.as_deref(),
-                    cli.rounds,
-                )
-            } else {
-                let maps = exploration_maps(data.as_deref(), only.as_deref())?;
-                exploration(&compared, &maps, &teams, trace.as_deref(), cli.rounds)
-            }
+            let maps = MapChoice {
+                data: data.as_deref(),
+                only: only.as_deref(),
+                starts,
+            };
+            exploration_command(&compared, &teams, &maps, trace.as_deref(), cli.rounds)
         }
         Scenario::Timed(ref timed) => time_scenario(timed, cli.rounds, one_thread_count(&cli.threads)?),
         Scenario::Scaling {
             ref scenario,
             ref turns,
             alternate,
-        } => {
-            // 0 is rayon's default pool size, as for the other scenarios (one thread per core
-            // unless RAYON_NUM_THREADS says otherwise): the report names the count.
-            let threads: Vec<usize> = if cli.threads.is_empty() {
-                vec![1, 2]
-            } else {
-                let default = rayon::current_num_threads();
-                cli.threads.iter().map(|&n| if n == 0 { default } else { n }).collect()
-            };
-            scaling(scenario, cli.rounds, &threads, turns, alternate)
-        }
+        } => scaling(scenario, cli.rounds, &scaling_threads(&cli.threads), turns, alternate),
+    }
+}
+
+/// The maps `exploration` runs on: from `data` (the real maps), those matching `only`, and
+/// from `starts` starts besides home (0: home only).
+struct MapChoice<'a> {
+    data: Option<&'a std::path::Path>,
+    only: Option<&'a str>,
+    starts: usize,
+}
+
+/// `exploration`: checks the strategies' names and parameters before any table begins,
+/// then runs from home or from every start.
+fn exploration_command(
+    compared: &Compared,
+    teams: &Teams,
+    maps: &MapChoice,
+    trace: Option<&std::path::Path>,
+    rounds: u64,
+) -> Result<()> {
+    anyhow::ensure!(
+        !teams.sizes.contains(&1),
+        "--teams 1: a team has 2 robots or more (one robot is what every team is timed against; 0: no teams)"
+    );
+    scale::exploration::check_strategy(&compared.strategy, &compared.params)?;
+    scale::exploration::check_strategy("cooperative", &teams.params)?;
+    if maps.starts > 0 {
+        exploration_from_starts(compared, maps.data, teams, maps.only, maps.starts, trace, rounds)
+    } else {
+        let list = exploration_maps(maps.data, maps.only)?;
+        exploration(compared, &list, teams, trace, rounds)
+    }
+}
+
+/// `scaling`'s thread counts: `--threads` as given, 0 meaning rayon's default pool size (one
+/// thread per core unless `RAYON_NUM_THREADS` says otherwise; the report names the count),
+/// or 1 and 2.
+fn scaling_threads(threads: &[usize]) -> Vec<usize> {
+    if threads.is_empty() {
+        vec![1, 2]
+    } else {
+        let default = rayon::current_num_threads();
+        threads.iter().map(|&n| if n == 0 { default } else { n }).collect()
     }
 }
 

@@ -1,5 +1,5 @@
 //! Helpers shared by the editor's integration tests.
-#![allow(dead_code)]
+#![allow(dead_code)] // each test file uses a part of these helpers
 
 use std::path::PathBuf;
 

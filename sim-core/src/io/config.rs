@@ -687,7 +687,8 @@ mod tests {
         assert_eq!(err, "c.xml:5:3: a second group named 'a' (the first is at 3:3)");
     }
 
-    /// A parameter given twice in a group is refused at the group (the last one won).
+    /// A parameter given twice in a group is refused at the group, rather than one of the
+    /// two silently winning.
     #[test]
     fn a_parameter_given_twice_is_refused() {
         let err = parse_error(

@@ -112,9 +112,8 @@ fn within_mask(xs: &[f64], ys: &[f64], p: DVec2, r2: f64) -> u64 {
 }
 
 /// Robots a task of a rebuild's parallel passes: each robot's share is a few loads and
-/// stores (about 10 ns a robot for the whole rebuild), so a smaller task costs more to hand
-/// to another worker, and to read its writes back, than it saves. With tasks of 256, the 1,000 walkers' rebuilds took
-/// longer on 2 workers than on 1; with 1,024 they run as one task there.
+/// stores, so a smaller task costs more to hand to another worker, and to read its writes
+/// back, than it saves (the scaling report's "robot indexes" step shows it).
 const ROBOTS_A_TASK: usize = 1024;
 
 /// An entry to overwrite.

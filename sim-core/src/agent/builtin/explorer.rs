@@ -28,14 +28,14 @@ pub(super) struct Sharing {
     #[serde(default)]
     pub(super) spoke_mates: Option<f64>,
     /// Rounds a robot of a small team waits when it leaves its new target to a team mate
-    /// nearer to it (0: never; see `Frontier::leave_to_mates`). Checkpoints written
-    /// before this existed resume with 0, as they ran.
+    /// nearer to it (0: never; see `Frontier::leave_to_mates`). Checkpoints without it
+    /// resume with 0, as they ran.
     #[serde(default)]
     pub(super) wait_rounds: u64,
     /// A robot of a small team takes, of this many frontiers nearest to it, the one its team
     /// mates' goals are least often nearer to (0: the nearest frontier clear of their goals;
-    /// see `Navigator::least_contested_frontier_route`). Checkpoints written before this
-    /// existed resume with 0, as they ran.
+    /// see `Navigator::least_contested_frontier_route`). Checkpoints without it resume
+    /// with 0, as they ran.
     #[serde(default)]
     pub(super) compare_frontiers: usize,
 }

@@ -78,7 +78,7 @@ fn last_words(updates: &[Update]) -> impl Iterator<Item = Update> + '_ {
 /// `claims` with `updates` applied (both sorted by robot id; of a robot's updates the
 /// last counts), into `out`, by one merge of the two lists: what applying the updates one
 /// by one to a map gives (`merged_claims_equal_updates_applied_one_by_one`).
-// Out of line, as is the cut below: inlined into `decide`, they made it slower.
+// Out of line, as is the cut below: inlined, they slow `decide` down.
 #[inline(never)]
 fn merge_claims(claims: &[Claim], updates: &[Update], round: u32, out: &mut Claims) {
     out.clear();

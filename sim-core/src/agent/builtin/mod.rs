@@ -14,9 +14,11 @@ mod worker;
 use std::ops::RangeInclusive;
 
 use crate::agent::{
-    MAX_TOUR_STOPS, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry, TOUR_STOPS,
+    MAX_TOUR_STOPS, Params, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry,
+    TOUR_STOPS,
 };
 
+use crate::Result;
 use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
 const SHARE_EVERY: RangeInclusive<u64> = 1..=MAX_ROUNDS;
@@ -59,24 +61,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
          round it known; a target it gets no nearer to for 40 rounds is given up. Of the tour_stops (7) \
          nearest frontiers a view radius apart it heads for the first of the tour that reaches them soonest, \
          weighted by what each reveals, while it has seen no other robot for 50 rounds (0: the nearest)",
-        |p| {
-            p.only(&[
-                "replan_within_view",
-                "seen_cost_views",
-                "reveal_first",
-                "replan_when_known",
-                "tour_stops",
-            ])?;
-            let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            let by_target = frontier::ByTarget {
-                seen_cost_views: p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?,
-                reveal_first: p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?,
-                replan_when_known: p.f64_in("replan_when_known", REPLAN_WHEN_KNOWN, 0.0..=1.0)?,
-                tour_stops: usize::try_from(p.u64_in("tour_stops", TOUR_STOPS as u64, 0..=MAX_TOUR_STOPS as u64)?)
-                    .unwrap_or(TOUR_STOPS),
-            };
-            Ok(Box::new(frontier::Frontier::new(None, replan, Some(by_target))))
-        },
+        |p| Ok(Box::new(lone_frontier(p)?)),
     );
     r.register(
         "cooperative",
@@ -91,21 +76,7 @@ fn register_builtins(r: &mut StrategyRegistry) {
          frontier clear of them); replan_within_view as for frontier (0.25); once it has heard spoke_mates \
          team mates (never by default), it walks out along its bearing from home to just beyond the edge \
          of its known map, exploring frontiers where that is blocked",
-        |p| {
-            p.only(&[
-                "share_every",
-                "avoid_radius_m",
-                "max_claims",
-                "max_detour_m",
-                "replan_within_view",
-                "spoke_mates",
-                "wait_rounds",
-                "compare_frontiers",
-            ])?;
-            let share = explorer::Sharing::from_params(p)?;
-            let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
-            Ok(Box::new(frontier::Frontier::new(Some(share), replan, None)))
-        },
+        |p| Ok(Box::new(cooperative(p)?)),
     );
     r.register(
         "team",
@@ -132,4 +103,41 @@ fn register_builtins(r: &mut StrategyRegistry) {
          it knows of are left",
         |p| Ok(Box::new(worker::Transporter::from_params(p)?)),
     );
+}
+
+/// `frontier` from its parameters: a lone explorer ranking frontiers by target, with tours.
+fn lone_frontier(p: &Params) -> Result<frontier::Frontier> {
+    p.only(&[
+        "replan_within_view",
+        "seen_cost_views",
+        "reveal_first",
+        "replan_when_known",
+        "tour_stops",
+    ])?;
+    let replan = p.f64_in("replan_within_view", LONE_REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
+    let by_target = frontier::ByTarget {
+        seen_cost_views: p.f64_in("seen_cost_views", SEEN_COST_VIEWS, 0.0..=100.0)?,
+        reveal_first: p.f64_in("reveal_first", REVEAL_FIRST, 0.0..=1.0)?,
+        replan_when_known: p.f64_in("replan_when_known", REPLAN_WHEN_KNOWN, 0.0..=1.0)?,
+        tour_stops: usize::try_from(p.u64_in("tour_stops", TOUR_STOPS as u64, 0..=MAX_TOUR_STOPS as u64)?)
+            .unwrap_or(TOUR_STOPS),
+    };
+    Ok(frontier::Frontier::new(None, replan, Some(by_target)))
+}
+
+/// `cooperative` from its parameters: an explorer that shares with its team.
+fn cooperative(p: &Params) -> Result<frontier::Frontier> {
+    p.only(&[
+        "share_every",
+        "avoid_radius_m",
+        "max_claims",
+        "max_detour_m",
+        "replan_within_view",
+        "spoke_mates",
+        "wait_rounds",
+        "compare_frontiers",
+    ])?;
+    let share = explorer::Sharing::from_params(p)?;
+    let replan = p.f64_in("replan_within_view", REPLAN_WITHIN_VIEW, 0.0..=1.0)?;
+    Ok(frontier::Frontier::new(Some(share), replan, None))
 }

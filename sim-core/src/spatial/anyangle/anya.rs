@@ -110,7 +110,6 @@ impl Entry {
 /// The nearest integer to `x` (as a float). A cast instead of `round`, which is a library
 /// call on the baseline x86-64 target.
 #[inline]
-#[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
 fn nearest(x: f64) -> f64 {
     if x >= 0.0 {
         (x + 0.5) as i64 as f64
@@ -121,20 +120,17 @@ fn nearest(x: f64) -> f64 {
 
 /// `x` as an integer, if it is one (coordinates of the map are far below 2^31).
 #[inline]
-#[allow(clippy::cast_possible_truncation)]
 fn lattice(x: f64) -> Option<i64> {
     (x.abs() < 2_147_483_648.0 && x == nearest(x)).then_some(x as i64)
 }
 
 #[inline]
-#[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
 fn floor_i(x: f64) -> i64 {
     let t = x as i64;
     if t as f64 > x { t - 1 } else { t }
 }
 
 #[inline]
-#[allow(clippy::cast_possible_truncation, clippy::cast_precision_loss)]
 fn ceil_i(x: f64) -> i64 {
     let t = x as i64;
     if (t as f64) < x { t + 1 } else { t }
@@ -465,6 +461,8 @@ impl Search<'_> {
     }
 
     /// Queue the cone from root `ri` through `[a, b]` on line `y`, unless it holds no ray.
+    // A cone's fields as they are worked out (root, line, interval, whether each end is open,
+    // heading): a struct built at every call site would only rename them.
     #[allow(clippy::too_many_arguments, clippy::fn_params_excessive_bools)]
     fn push_cone(&mut self, ri: u32, y: i64, a: f64, b: f64, mut a_open: bool, mut b_open: bool, up: bool) {
         let (a, b) = (self.snap(a), self.snap(b));
@@ -485,7 +483,6 @@ impl Search<'_> {
             return;
         }
         let root = &self.roots[ri as usize];
-        #[allow(clippy::cast_precision_loss)]
         let f = root.g + through(root.pos, y as f64, a, b, self.goal);
         let Some(ci) = self.index(self.cones.len()) else {
             return;
@@ -532,7 +529,6 @@ impl Search<'_> {
         }
     }
 
-    #[allow(clippy::cast_precision_loss)]
     fn push_cone_ints(&mut self, ri: u32, y: i64, l: i64, h: i64, up: bool) {
         self.push_cone(ri, y, l as f64, h as f64, false, false, up);
     }
@@ -541,7 +537,9 @@ impl Search<'_> {
     /// before the line `rows` further, in the run `[lo, hi]` of free cells of those rows (a
     /// rectangle a cone of the root enters), and the ray from the root to it crosses line `y`
     /// within `[a, b]`.
-    #[allow(clippy::cast_precision_loss, clippy::too_many_arguments)]
+    // A cone's root, line and heading with the band's rows, run and interval, as the callers
+    // have them.
+    #[allow(clippy::too_many_arguments)]
     fn offer_in_band(&mut self, ri: u32, y: i64, up: bool, rows: i64, lo: i64, hi: i64, a: f64, b: f64) {
         let g = self.goal;
         let beyond = (g.y - y as f64) * if up { 1.0 } else { -1.0 };
@@ -565,7 +563,6 @@ impl Search<'_> {
         if self.superseded(c.root) {
             return;
         }
-        #[allow(clippy::cast_precision_loss)]
         if self.goal.y == c.y as f64 && self.goal.x >= c.a - self.eps && self.goal.x <= c.b + self.eps {
             self.offer(c.root);
         }
@@ -579,7 +576,6 @@ impl Search<'_> {
                 cell
             };
             first = false;
-            #[allow(clippy::cast_precision_loss)]
             if lo as f64 > c.b {
                 break;
             }
@@ -590,7 +586,6 @@ impl Search<'_> {
     }
 
     /// The part of cone `c` that enters the run `[lo, hi]` of free cells ahead.
-    #[allow(clippy::cast_precision_loss)]
     fn piece(&mut self, c: &Cone, lo: i64, hi: i64) {
         let (lf, hf) = (lo as f64, hi as f64);
         let (pa, pa_open) = if c.a >= lf { (c.a, c.a_open) } else { (lf, false) };
@@ -659,7 +654,6 @@ impl Search<'_> {
     /// How many rows ahead of cone `c` (root at `r`), through `[pa, pb]` on its line, the
     /// cone crosses with a free cell beside it on both sides all the way (0 if not the
     /// first, whose free run is `first`).
-    #[allow(clippy::cast_precision_loss)]
     fn clear_rows(&self, c: &Cone, r: DVec2, pa: f64, pb: f64, first: (i64, i64)) -> i64 {
         let dir = if c.up { 1 } else { -1 };
         let ahead = if c.up { c.y } else { c.y - 1 };
@@ -688,7 +682,6 @@ impl Search<'_> {
     /// Offer the goal from root `ri` if it lies beyond line `y` (heading `up` or down) and
     /// before the line `rows` further, and the ray from the root to it crosses line `y` within
     /// `[a, b]`: inside a cone whose rows are free.
-    #[allow(clippy::cast_precision_loss)]
     fn offer_in_cone(&mut self, ri: u32, y: i64, up: bool, rows: i64, a: f64, b: f64) {
         let g = self.goal;
         let beyond = (g.y - y as f64) * if up { 1.0 } else { -1.0 };
@@ -705,7 +698,6 @@ impl Search<'_> {
     /// Bend cone `c` round corner `(e, c.y)` at its end on side `side` (1: right, the larger
     /// x; -1: left), into the region beyond its edge ray that its root does not see. `[lo, hi]`
     /// is the run of free cells ahead that the corner bounds or lies in.
-    #[allow(clippy::cast_precision_loss)]
     fn bend(&mut self, c: &Cone, e: i64, side: i64, lo: i64, hi: i64, t: f64) {
         let r = self.raster;
         let (behind, ahead) = if c.up { (c.y - 1, c.y) } else { (c.y, c.y - 1) };
@@ -777,7 +769,6 @@ impl Search<'_> {
     /// of the stretch a path may follow: offer the goal if it lies on the way, and root cones
     /// at the convex corners whose blocked cell the walk has just passed (a path along the
     /// line bends round them into the band beyond).
-    #[allow(clippy::cast_precision_loss)]
     fn walk(&mut self, ri: u32, y: i64, side: i64, x0: f64) {
         let r = self.raster;
         let (below, above) = (y - 1, y);

@@ -81,7 +81,6 @@ impl CellRaster {
             return true;
         }
         // In range: both are non-negative and below u32::MAX.
-        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
         let (x, y) = (x as usize, y as usize);
         self.words[y * self.stride + x / 64] >> (x % 64) & 1 != 0
     }
@@ -101,7 +100,6 @@ impl CellRaster {
             return u8::from(self.blocked(x - 1, y)) | u8::from(self.blocked(x, y)) << 1;
         }
         // In range: non-negative and below u32::MAX.
-        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
         let (x, row) = (x as usize, y as usize * self.stride);
         let left = x - 1;
         let bits = if left % 64 == 63 {
@@ -110,9 +108,7 @@ impl CellRaster {
             self.words[row + left / 64] >> (left % 64) & 3
         };
         // Two bits.
-        #[allow(clippy::cast_possible_truncation)]
-        let bits = bits as u8;
-        bits
+        bits as u8
     }
 
     /// Row `y`'s words, or `None` for a row outside the map (all blocked).
@@ -122,7 +118,6 @@ impl CellRaster {
             return None;
         }
         // In range: non-negative and below u32::MAX.
-        #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation)]
         let start = y as usize * self.stride;
         Some(&self.words[start..start + self.stride])
     }
@@ -130,7 +125,6 @@ impl CellRaster {
     /// The first cell at or after `x` in row `y` whose bit equals `want_blocked` (cells
     /// past the right edge are blocked), scanning a word at a time.
     #[inline]
-    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
     fn next_with(&self, y: i64, x: i64, want_blocked: bool) -> Option<i64> {
         if x < 0 {
             return if want_blocked {
@@ -170,7 +164,6 @@ impl CellRaster {
     /// The last cell at or before `x` in row `y` whose bit equals `want_blocked` (cells left
     /// of the map are blocked).
     #[inline]
-    #[allow(clippy::cast_sign_loss, clippy::cast_possible_truncation, clippy::cast_possible_wrap)]
     fn prev_with(&self, y: i64, x: i64, want_blocked: bool) -> Option<i64> {
         let Some(row) = self.row(y) else {
             return want_blocked.then_some(x);

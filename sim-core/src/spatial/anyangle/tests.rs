@@ -22,7 +22,6 @@ fn lattice(p: DVec2) -> (i64, i64) {
     (p.x as i64, p.y as i64)
 }
 
-#[allow(clippy::cast_precision_loss)]
 fn point(p: (i64, i64)) -> DVec2 {
     DVec2::new(p.0 as f64, p.1 as f64)
 }
