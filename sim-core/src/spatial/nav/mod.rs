@@ -300,6 +300,72 @@ fn chain_to(entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)], n: u32) -> V
     nodes
 }
 
+/// A best-first search's entries, marks and heap, in the thread's scratch: entry `e` is
+/// (where the search enters, walk so far, node, parent node or [`GOAL_ENTRY`]); a node's
+/// mark is (stamp, its current entry), the stamp `stamp` once reached and `stamp + 1` once
+/// settled.
+struct Open<'s> {
+    marks: &'s mut Vec<(u32, u32)>,
+    entry: &'s mut Vec<(DVec2, f64, u32, u32)>,
+    heap: &'s mut BinaryHeap<Reverse<u128>>,
+    stamp: u32,
+}
+
+impl Open<'_> {
+    /// The stamp of a settled node.
+    fn settled_stamp(&self) -> u32 {
+        self.stamp + 1
+    }
+
+    /// Whether node `m` has been reached (or settled) in this search.
+    fn is_reached(&self, m: NavNodeId) -> bool {
+        self.marks[m.0 as usize].0 | 1 == self.settled_stamp()
+    }
+
+    /// Add `entry` and queue it at `cost`, ties broken by `rank`; returns its number.
+    fn push(&mut self, entry: (DVec2, f64, u32, u32), cost: f64, rank: u32) -> u32 {
+        let e = u32::try_from(self.entry.len()).expect("fewer entries than u32");
+        self.entry.push(entry);
+        self.heap.push(Reverse(heap_key(cost, rank, e)));
+        e
+    }
+
+    /// The route to goal entry `e`: its node's chain of nodes and the goal point.
+    fn route_to(&self, e: u32) -> (Vec<NavNodeId>, DVec2) {
+        let (goal, _, n, _) = self.entry[e as usize];
+        (chain_to(self.entry, self.marks, n), goal)
+    }
+
+    /// Goal entry `e` as `Goals::Cheapest` gathers it.
+    fn found_goal(&self, e: u32) -> FoundGoal {
+        let (nodes, point) = self.route_to(e);
+        FoundGoal {
+            cost_m: self.entry[e as usize].1,
+            nodes,
+            point,
+        }
+    }
+
+    /// The search's answer once its node budget is spent: for `Goals::Cheapest`, the goals
+    /// waiting in the heap gathered cheapest first (no route); otherwise the route to
+    /// `best_goal`, the cheapest goal queued, if any.
+    fn cut_short(&mut self, goals: &Goals, best_goal: Option<(f64, u32)>) -> Option<(Vec<NavNodeId>, DVec2)> {
+        if let Goals::Cheapest(_, out, k) = goals {
+            let mut out = out.borrow_mut();
+            while out.len() < *k
+                && let Some(Reverse(key)) = self.heap.pop()
+            {
+                let e = key as u32;
+                if self.entry[e as usize].3 == GOAL_ENTRY {
+                    out.push(self.found_goal(e));
+                }
+            }
+            return None;
+        }
+        best_goal.map(|(_, e)| self.route_to(e))
+    }
+}
+
 thread_local! {
     /// Per-thread search scratch, sized to the graph, reused across searches.
     static SCRATCH: RefCell<Scratch> = RefCell::new(Scratch::default());
@@ -889,104 +955,96 @@ impl NavGraph {
             let mut guard = cell.borrow_mut();
             let stamp = guard.begin(self.pieces.len());
             let Scratch { marks, entry, heap, .. } = &mut *guard;
-            let settled_stamp = stamp + 1;
             // Where the search enters each node (portal or start), for edge costs, and the
             // distance walked to get there (buffers reused: every explorer plans a search
             // every few rounds).
             entry.clear();
-            entry.push((from, 0.0, start.0, u32::MAX));
             heap.clear();
-            marks[start.0 as usize] = (stamp, 0);
-            heap.push(Reverse(heap_key(estimate(from), self.rank[start.0 as usize], 0)));
+            let mut open = Open {
+                marks,
+                entry,
+                heap,
+                stamp,
+            };
+            open.marks[start.0 as usize] = (stamp, 0);
+            open.push(
+                (from, 0.0, start.0, u32::MAX),
+                estimate(from),
+                self.rank[start.0 as usize],
+            );
             let mut settled = 0usize;
-            // The cheapest goal waiting in the heap (`Goals::Nearest`), as its entry.
+            // The cheapest goal waiting in the heap (`Goals::Nearest`), as its cost and entry.
             let mut best_goal: Option<(f64, u32)> = None;
-            let found = |e: u32, entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)]| {
-                let (goal, _, n, _) = entry[e as usize];
-                (chain_to(entry, marks, n), goal)
-            };
-            // A goal entry as `Goals::Cheapest` gathers it.
-            let gathered = |e: u32, entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)]| {
-                let (nodes, point) = found(e, entry, marks);
-                FoundGoal {
-                    cost_m: entry[e as usize].1,
-                    nodes,
-                    point,
-                }
-            };
-            while let Some(Reverse(key)) = heap.pop() {
+            while let Some(Reverse(key)) = open.heap.pop() {
                 let e = key as u32;
-                let (at, d, n, parent) = entry[e as usize];
+                let (at, d, n, parent) = open.entry[e as usize];
                 if parent == GOAL_ENTRY {
                     let Goals::Cheapest(_, out, k) = goals else {
-                        return Some(found(e, entry, marks));
+                        return Some(open.route_to(e));
                     };
                     let mut out = out.borrow_mut();
-                    out.push(gathered(e, entry, marks));
+                    out.push(open.found_goal(e));
                     if out.len() >= k {
                         return None;
                     }
                     continue;
                 }
-                let node = NavNodeId(n);
                 // An entry other than the node's current one was bettered since.
-                if marks[n as usize].1 != e {
+                if open.marks[n as usize].1 != e {
                     continue;
                 }
-                marks[n as usize].0 = settled_stamp;
+                open.marks[n as usize].0 = open.settled_stamp();
                 settled += 1;
-                let reached = |m: NavNodeId| marks[m.0 as usize].0 | 1 == settled_stamp;
-                if let Some((NavNodeId(g), goal)) = is_goal(node, d, at, &reached) {
+                let node = NavNodeId(n);
+                let goal = is_goal(node, d, at, &|m: NavNodeId| open.is_reached(m));
+                if let Some((NavNodeId(g), goal)) = goal {
                     let bias = match goals {
                         Goals::Nearest(bias) | Goals::Cheapest(bias, _, _) => bias,
-                        Goals::First => return Some((chain_to(entry, marks, g), goal)),
+                        Goals::First => return Some((chain_to(open.entry, open.marks, g), goal)),
                     };
                     // It waits for the nodes nearer than itself, in the heap.
                     let cost = d + at.distance(goal) + bias(goal);
-                    let e = u32::try_from(entry.len()).expect("fewer entries than u32");
-                    entry.push((goal, cost, g, GOAL_ENTRY));
-                    heap.push(Reverse(heap_key(cost, self.rank[g as usize], e)));
+                    let e = open.push((goal, cost, g, GOAL_ENTRY), cost, self.rank[g as usize]);
                     if best_goal.is_none_or(|(c, _)| cost < c) {
                         best_goal = Some((cost, e));
                     }
                 }
                 if settled >= max_nodes {
-                    if let Goals::Cheapest(_, out, k) = goals {
-                        // The goals waiting in the queue, cheapest first, as `Nearest` takes
-                        // the best of them.
-                        let mut out = out.borrow_mut();
-                        while out.len() < k
-                            && let Some(Reverse(key)) = heap.pop()
-                        {
-                            let e = key as u32;
-                            if entry[e as usize].3 == GOAL_ENTRY {
-                                out.push(gathered(e, entry, marks));
-                            }
-                        }
-                        return None;
-                    }
-                    return best_goal.map(|(_, e)| found(e, entry, marks));
+                    return open.cut_short(&goals, best_goal);
                 }
-                for m in self.neighbors(node) {
-                    let mark = marks[m.0 as usize];
-                    // Only nodes found usable are ever stamped, so the test runs once a node.
-                    let reached = mark.0 | 1 == settled_stamp;
-                    if (settled_final && mark.0 == settled_stamp) || (!reached && !usable(m)) {
-                        continue;
-                    }
-                    let p = self.entry_point(node, m, at);
-                    let nd = d + at.distance(p);
-                    if !reached || nd < entry[mark.1 as usize].1 {
-                        let e = u32::try_from(entry.len()).expect("fewer entries than u32");
-                        marks[m.0 as usize] = (stamp, e);
-                        entry.push((p, nd, m.0, n));
-                        let rank = self.rank[m.0 as usize];
-                        heap.push(Reverse(heap_key(nd + estimate(p), rank, e)));
-                    }
-                }
+                self.open_neighbors(&mut open, (node, at, d), &mut usable, &estimate, settled_final);
             }
             None
         })
+    }
+
+    /// Open the neighbours of `node`, settled and entered at `at` after walking `d`: each
+    /// usable one not yet reached, or reached by a longer way (and, when `settled_final`,
+    /// not settled yet), gets an entry at its portal's entry point and a place in the heap
+    /// by the walk plus `estimate` of the rest.
+    fn open_neighbors(
+        &self,
+        open: &mut Open,
+        (node, at, d): (NavNodeId, DVec2, f64),
+        usable: &mut impl FnMut(NavNodeId) -> bool,
+        estimate: &impl Fn(DVec2) -> f64,
+        settled_final: bool,
+    ) {
+        let settled_stamp = open.settled_stamp();
+        for m in self.neighbors(node) {
+            let mark = open.marks[m.0 as usize];
+            // Only nodes found usable are ever stamped, so the test runs once a node.
+            let reached = mark.0 | 1 == settled_stamp;
+            if (settled_final && mark.0 == settled_stamp) || (!reached && !usable(m)) {
+                continue;
+            }
+            let p = self.entry_point(node, m, at);
+            let nd = d + at.distance(p);
+            if !reached || nd < open.entry[mark.1 as usize].1 {
+                let e = open.push((p, nd, m.0, node.0), nd + estimate(p), self.rank[m.0 as usize]);
+                open.marks[m.0 as usize] = (open.stamp, e);
+            }
+        }
     }
 
     /// The `k` cheapest goals, cheapest first, as [`search_nearest_goal`](Self::search_nearest_goal)
