@@ -13,13 +13,13 @@ mod worker;
 
 use std::ops::RangeInclusive;
 
+use crate::Result;
+use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 use crate::agent::{
     MAX_TOUR_STOPS, Params, REPLAN_WHEN_KNOWN, REPLAN_WITHIN_VIEW, REVEAL_FIRST, SEEN_COST_VIEWS, StrategyRegistry,
     TOUR_STOPS,
 };
 
-use crate::Result;
-use crate::agent::params::{MAX_DISTANCE_M, MAX_ROUNDS};
 /// Sharing periods, in rounds.
 const SHARE_EVERY: RangeInclusive<u64> = 1..=MAX_ROUNDS;
 
