@@ -87,6 +87,12 @@ pub(super) fn corridor_path(
     if dist[e as usize].is_infinite() {
         return None;
     }
+    Some(chain_back(grid, &cells, &came, (s, e), goal))
+}
+
+/// The centres of the cells from start `s` (excluded) to end `e`, following `came` back
+/// from `e`, with the last one replaced by `goal` (just `goal` when `s` is `e`).
+fn chain_back(grid: &Grid, cells: &[(u32, u32)], came: &[u32], (s, e): (u32, u32), goal: DVec2) -> Vec<DVec2> {
     let mut chain = Vec::new();
     let mut i = e;
     while i != s {
@@ -100,7 +106,7 @@ pub(super) fn corridor_path(
     } else {
         chain.push(goal);
     }
-    Some(chain)
+    chain
 }
 
 /// The eight steps to a cell's neighbours, straight ones first.
