@@ -1498,18 +1498,14 @@ impl RerunObserver {
     /// [`RerunObserver::flush_file`] does.
     fn close_file(&mut self, wait: &LoggingWait) {
         let rec = std::mem::replace(&mut self.rec, rerun::RecordingStream::disabled());
-        let (closed_tx, closed) = crossbeam_channel::bounded(1);
         // Should no thread start, the closure and the stream are dropped here, at once.
-        let Ok(closing) = std::thread::Builder::new().name("rerun-close".into()).spawn(move || {
-            drop(rec);
-            let _ = closed_tx.send(());
-        }) else {
+        let Ok(closed) = on_thread("rerun-close", move || drop(rec)) else {
             return;
         };
         if closed.recv_timeout(self.starvation.next_check(wait)).is_err() {
             self.starvation.check(wait);
+            let _ = closed.recv();
         }
-        let _ = closing.join();
     }
 
     /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).
@@ -1559,11 +1555,20 @@ fn on_thread_within<T: Send + 'static>(
     timeout: std::time::Duration,
     f: impl FnOnce() -> T + Send + 'static,
 ) -> std::io::Result<Option<T>> {
+    Ok(on_thread(name, f)?.recv_timeout(timeout).ok())
+}
+
+/// Run `f` on a thread of its own named `name`; the receiver gets what it returns, once
+/// it has returned.
+fn on_thread<T: Send + 'static>(
+    name: &str,
+    f: impl FnOnce() -> T + Send + 'static,
+) -> std::io::Result<crossbeam_channel::Receiver<T>> {
     let (done, finished) = crossbeam_channel::bounded(1);
     std::thread::Builder::new().name(name.to_owned()).spawn(move || {
         let _ = done.send(f());
     })?;
-    Ok(finished.recv_timeout(timeout).ok())
+    Ok(finished)
 }
 
 /// How long the end of a run waits for a live viewer to take the rest of the recording.

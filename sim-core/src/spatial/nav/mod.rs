@@ -305,7 +305,7 @@ fn chain_to(entry: &[(DVec2, f64, u32, u32)], marks: &[(u32, u32)], n: u32) -> V
 /// mark is (stamp, its current entry), the stamp `stamp` once reached and `stamp + 1` once
 /// settled.
 struct Open<'s> {
-    marks: &'s mut Vec<(u32, u32)>,
+    marks: &'s mut [(u32, u32)],
     entry: &'s mut Vec<(DVec2, f64, u32, u32)>,
     heap: &'s mut BinaryHeap<Reverse<u128>>,
     stamp: u32,
@@ -966,12 +966,12 @@ impl NavGraph {
                 heap,
                 stamp,
             };
-            open.marks[start.0 as usize] = (stamp, 0);
-            open.push(
+            let e = open.push(
                 (from, 0.0, start.0, u32::MAX),
                 estimate(from),
                 self.rank[start.0 as usize],
             );
+            open.marks[start.0 as usize] = (stamp, e);
             let mut settled = 0usize;
             // The cheapest goal waiting in the heap (`Goals::Nearest`), as its cost and entry.
             let mut best_goal: Option<(f64, u32)> = None;
