@@ -592,31 +592,7 @@ impl Simulation {
     /// On all workers: each robot's terms of the metrics' floating-point sums, into
     /// `metric_terms`, and the sums of integers (which no order changes).
     pub(super) fn gather_metric_terms(&mut self) -> Tallies {
-        let mut terms = std::mem::take(&mut self.metric_terms);
-        terms.resize(self.robots.len(), [0.0; 3]);
-        let tallies = self
-            .robots
-            .par_iter()
-            .zip(&mut terms)
-            .zip(&self.turns)
-            .with_min_len(ROBOTS_A_TASK)
-            .map(|((r, term), turn)| {
-                // A dead robot's energy term is +0.0, which leaves any sum's bits as they are.
-                *term = [
-                    if r.alive { r.energy } else { 0.0 },
-                    r.stats.distance_m,
-                    r.stats.overlap_m,
-                ];
-                Tallies {
-                    alive: u32::from(r.alive),
-                    units_dug: r.stats.units_dug,
-                    units_delivered: r.stats.units_delivered,
-                    known_bytes: turn.known_bytes,
-                }
-            })
-            .reduce(Tallies::default, Tallies::add);
-        self.metric_terms = terms;
-        tallies
+        gather_terms(&self.robots, &self.turns, &mut self.metric_terms)
     }
 
     /// The metrics from the gathered terms: the floating-point sums in id order, on one
@@ -855,24 +831,45 @@ impl Simulation {
     /// one when some strategy perceives robots (otherwise step 2 builds it from the start
     /// positions if someone broadcasts).
     pub(super) fn rebuild_robot_indexes(&mut self) {
-        let robots = &self.robots;
-        let robot = |i: usize| (robots[i].id, robots[i].position);
-        let n = robots.len();
-        let view_cell_m = index_cell_m(&self.types);
-        // Cells about the radius of the widest contact query (`Bodies::near_move`: two radii
-        // and a move around the middle of a move), so that a query covers about 3 × 3
-        // cells: smaller cells mean more cells a query, larger ones more robots a cell.
-        let reach = 2.0 * self.max_radius_m + 2.0 * self.max_speed_m;
-        let (robot_index, body_index) = (&mut self.robot_index, &mut self.body_index);
-        if self.robot_index_eager {
-            // The two are independent: built side by side.
-            rayon::join(
-                || robot_index.rebuild_from(n, robot, view_cell_m),
-                || body_index.rebuild_from(n, robot, reach.clamp(0.25, 64.0)),
-            );
-        } else {
-            body_index.rebuild_from(n, robot, reach.clamp(0.25, 64.0));
+        let (view_cell_m, body_cell_m) = self.index_cells_m();
+        IndexRebuild {
+            robots: &self.robots,
+            view_cell_m,
+            body_cell_m,
+            robot_index: self.robot_index_eager.then_some(&mut self.robot_index),
+            body_index: &mut self.body_index,
         }
+        .run();
+    }
+
+    /// The end of a round on all workers: the robot indexes rebuilt beside the metrics' terms
+    /// gathered. Both read the robots as step 3 left them and write apart, so a worker
+    /// without a share of one takes a share of the other instead of waiting for it. Returns
+    /// the tallies and how long each took.
+    pub(super) fn rebuild_indexes_beside_metric_terms(&mut self) -> (Tallies, Duration, Duration) {
+        let (view_cell_m, body_cell_m) = self.index_cells_m();
+        let rebuild = IndexRebuild {
+            robots: &self.robots,
+            view_cell_m,
+            body_cell_m,
+            robot_index: self.robot_index_eager.then_some(&mut self.robot_index),
+            body_index: &mut self.body_index,
+        };
+        let (robots, turns, terms) = (&self.robots, &self.turns, &mut self.metric_terms);
+        let (((), indexes_took), (tallies, terms_took)) = rayon::join(
+            || timed(|| rebuild.run()),
+            || timed(|| gather_terms(robots, turns, terms)),
+        );
+        (tallies, indexes_took, terms_took)
+    }
+
+    /// The cells of the view-sized and the contact-sized robot indexes, metres. The latter's
+    /// are about the radius of the widest contact query (`Bodies::near_move`: two radii and
+    /// a move around the middle of a move), so that a query covers about 3 × 3 cells:
+    /// smaller cells mean more cells a query, larger ones more robots a cell.
+    fn index_cells_m(&self) -> (f64, f64) {
+        let reach = 2.0 * self.max_radius_m + 2.0 * self.max_speed_m;
+        (index_cell_m(&self.types), reach.clamp(0.25, 64.0))
     }
 
     /// How long the last rebuild of the robot indexes spent on one thread.
@@ -899,6 +896,66 @@ impl Simulation {
 /// milliseconds is thousands of times what the built-in strategies need, and long enough for
 /// a strategy that plans a route across a large map.
 pub const DEFAULT_DECIDE_LIMIT: Duration = Duration::from_millis(100);
+
+/// The robot indexes to rebuild from the robots' positions (the view-sized one only when
+/// some strategy perceives robots).
+struct IndexRebuild<'a> {
+    robots: &'a [Robot],
+    view_cell_m: f64,
+    body_cell_m: f64,
+    robot_index: Option<&'a mut RobotIndex>,
+    body_index: &'a mut RobotIndex,
+}
+
+impl IndexRebuild<'_> {
+    /// Rebuild them; the two are independent, so built side by side.
+    fn run(self) {
+        let robots = self.robots;
+        let robot = |i: usize| (robots[i].id, robots[i].position);
+        let n = robots.len();
+        let (body_index, body_cell_m) = (self.body_index, self.body_cell_m);
+        if let Some(robot_index) = self.robot_index {
+            rayon::join(
+                || robot_index.rebuild_from(n, robot, self.view_cell_m),
+                || body_index.rebuild_from(n, robot, body_cell_m),
+            );
+        } else {
+            body_index.rebuild_from(n, robot, body_cell_m);
+        }
+    }
+}
+
+/// On all workers: each robot's terms of the metrics' floating-point sums, into `terms`,
+/// and the sums of integers (which no order changes).
+fn gather_terms(robots: &[Robot], turns: &[Turn], terms: &mut Vec<[f64; 3]>) -> Tallies {
+    terms.resize(robots.len(), [0.0; 3]);
+    robots
+        .par_iter()
+        .zip(terms)
+        .zip(turns)
+        .with_min_len(ROBOTS_A_TASK)
+        .map(|((r, term), turn)| {
+            // A dead robot's energy term is +0.0, which leaves any sum's bits as they are.
+            *term = [
+                if r.alive { r.energy } else { 0.0 },
+                r.stats.distance_m,
+                r.stats.overlap_m,
+            ];
+            Tallies {
+                alive: u32::from(r.alive),
+                units_dug: r.stats.units_dug,
+                units_delivered: r.stats.units_delivered,
+                known_bytes: turn.known_bytes,
+            }
+        })
+        .reduce(Tallies::default, Tallies::add)
+}
+
+/// `f()` and how long it took.
+fn timed<T>(f: impl FnOnce() -> T) -> (T, Duration) {
+    let t = std::time::Instant::now();
+    (f(), t.elapsed())
+}
 
 /// Cell size for the robot index: the typical query radius.
 pub(super) fn index_cell_m(types: &[RobotType]) -> f64 {

@@ -101,14 +101,12 @@ impl Simulation {
             self.phase_times.deliver += took;
             apart += took;
         }
-        let t = Instant::now();
-        self.rebuild_robot_indexes();
-        self.phase_times.indexes += t.elapsed();
+        // 4: observe (the caller hands the report to the observers), its terms gathered
+        // beside the rebuild of the robot indexes for the next round.
+        let (tallies, indexes_took, terms_took) = self.rebuild_indexes_beside_metric_terms();
+        self.phase_times.indexes += indexes_took;
         self.phase_times.indexes_in_order += self.robot_indexes_in_order_time();
-        // 4: observe (the caller hands the report to the observers).
-        let t = Instant::now();
-        let tallies = self.gather_metric_terms();
-        crediting_took += t.elapsed();
+        crediting_took += terms_took;
         self.phase_times.crediting += crediting_took;
         let t = Instant::now();
         self.report.metrics = self.sum_metrics(round, messages, bytes, tallies.known_bytes, tallies);
