@@ -29,7 +29,8 @@ pub struct Phase {
 
 /// The round's steps as [`PhaseTimes`] measured them, in round order. On one thread their
 /// times add up to the rounds' wall time; "rest" is what no other step holds (clearing the
-/// report, the join around step 3).
+/// report, the join around step 3). On more, steps run beside each other overlap (the
+/// explored map beside resolve, the robot indexes beside the metrics' terms).
 pub fn phases(p: &PhaseTimes) -> Vec<Phase> {
     let named_other = p.inboxes + p.discoveries + p.indexes + p.crediting + p.metrics;
     let resolve_apart = p.in_order + p.ordering + p.side_by_side + p.events + p.addressing + p.fan_out + p.explored;

@@ -368,12 +368,13 @@ pub struct PhaseTimes {
     /// Of `other`: crediting first sightings and the strategies' events (one thread).
     pub discoveries: Duration,
     /// Of `other`: rebuilding the robot indexes (two, side by side; each robot's cell and
-    /// place worked out on all workers, then `indexes_in_order`).
+    /// place worked out on all workers, then `indexes_in_order`), beside the gathering of
+    /// the metrics' terms in `crediting`: on several workers the two overlap.
     pub indexes: Duration,
     /// Of `indexes`: counting the buckets and placing the robots in them (one thread).
     pub indexes_in_order: Duration,
     /// Of `other`: crediting explored cells to the robots and gathering the metrics' terms
-    /// (all workers).
+    /// (all workers, beside `indexes`).
     pub crediting: Duration,
     /// Of `other`: summing the metrics' terms in id order (one thread).
     pub metrics: Duration,
@@ -831,15 +832,7 @@ impl Simulation {
     /// one when some strategy perceives robots (otherwise step 2 builds it from the start
     /// positions if someone broadcasts).
     pub(super) fn rebuild_robot_indexes(&mut self) {
-        let (view_cell_m, body_cell_m) = self.index_cells_m();
-        IndexRebuild {
-            robots: &self.robots,
-            view_cell_m,
-            body_cell_m,
-            robot_index: self.robot_index_eager.then_some(&mut self.robot_index),
-            body_index: &mut self.body_index,
-        }
-        .run();
+        self.index_rebuild_and_terms().0.run();
     }
 
     /// The end of a round on all workers: the robot indexes rebuilt beside the metrics' terms
@@ -847,6 +840,18 @@ impl Simulation {
     /// without a share of one takes a share of the other instead of waiting for it. Returns
     /// the tallies and how long each took.
     pub(super) fn rebuild_indexes_beside_metric_terms(&mut self) -> (Tallies, Duration, Duration) {
+        let (rebuild, turns, terms) = self.index_rebuild_and_terms();
+        let robots = rebuild.robots;
+        let (((), indexes_took), (tallies, terms_took)) = rayon::join(
+            || timed(|| rebuild.run()),
+            || timed(|| gather_terms(robots, turns, terms)),
+        );
+        (tallies, indexes_took, terms_took)
+    }
+
+    /// The rebuild of the robot indexes, and the turns and terms the metrics' gathering
+    /// reads and writes, borrowed apart.
+    fn index_rebuild_and_terms(&mut self) -> (IndexRebuild<'_>, &[Turn], &mut Vec<[f64; 3]>) {
         let (view_cell_m, body_cell_m) = self.index_cells_m();
         let rebuild = IndexRebuild {
             robots: &self.robots,
@@ -855,12 +860,7 @@ impl Simulation {
             robot_index: self.robot_index_eager.then_some(&mut self.robot_index),
             body_index: &mut self.body_index,
         };
-        let (robots, turns, terms) = (&self.robots, &self.turns, &mut self.metric_terms);
-        let (((), indexes_took), (tallies, terms_took)) = rayon::join(
-            || timed(|| rebuild.run()),
-            || timed(|| gather_terms(robots, turns, terms)),
-        );
-        (tallies, indexes_took, terms_took)
+        (rebuild, &self.turns, &mut self.metric_terms)
     }
 
     /// The cells of the view-sized and the contact-sized robot indexes, metres. The latter's
