@@ -12,12 +12,36 @@ fn workspace() -> PathBuf {
 struct Hog(Child);
 
 impl Hog {
+    /// The loop, once it has run for 50 ms of CPU time: a run started before it spins could
+    /// get its logging done unhindered.
     fn on_cpu_0() -> Self {
         let child = Command::new("taskset")
             .args(["-c", "0", "sh", "-c", "while :; do :; done"])
             .spawn()
             .expect("taskset (util-linux) runs");
-        Self(child)
+        let hog = Self(child);
+        let started = std::time::Instant::now();
+        while hog.cpu_ticks() < 5 {
+            assert!(
+                started.elapsed() < std::time::Duration::from_secs(10),
+                "the busy loop did not run"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        hog
+    }
+
+    /// The loop's user and system time so far, in ticks of 10 ms (fields 14 and 15 of its
+    /// `/proc/PID/stat`; `taskset` and `sh` keep the PID, as each execs the next).
+    fn cpu_ticks(&self) -> u64 {
+        let stat = std::fs::read_to_string(format!("/proc/{}/stat", self.0.id())).unwrap_or_default();
+        let after_name = stat.rfind(')').map_or("", |k| &stat[k + 1..]);
+        after_name
+            .split_whitespace()
+            .skip(11)
+            .take(2)
+            .filter_map(|t| t.parse::<u64>().ok())
+            .sum()
     }
 }
 
@@ -28,8 +52,9 @@ impl Drop for Hog {
     }
 }
 
-/// Two rounds of the demo recorded to `rrd`, the run on the first CPU only, with
-/// `SMARTTEAMS_LOGGING_PRIORITY` set to `priority` (or unset).
+/// Two rounds of `configs/bench-1000.xml` (1,000 robots on a 1 km map of 177,346 leaves)
+/// recorded to `rrd`, the run on the first CPU only, with `SMARTTEAMS_LOGGING_PRIORITY` set
+/// to `priority` (or unset).
 fn recorded_run_on_cpu_0(rrd: &Path, priority: Option<&str>) -> Output {
     let mut cmd = Command::new("taskset");
     cmd.args([
@@ -37,7 +62,7 @@ fn recorded_run_on_cpu_0(rrd: &Path, priority: Option<&str>) -> Output {
         "0",
         env!("CARGO_BIN_EXE_smartteams"),
         "run",
-        "configs/demo.xml",
+        "configs/bench-1000.xml",
         "--rounds",
         "2",
         "--rrd",
@@ -53,7 +78,11 @@ fn recorded_run_on_cpu_0(rrd: &Path, priority: Option<&str>) -> Output {
 
 /// With a busy loop on its only CPU, logging at the lowest priority gets no core while the
 /// run waits for it: the run says so and names the setting. At normal priority the
-/// recording keeps up, with no warning. Both recordings hold the three rounds.
+/// recording keeps up, with no warning. Both recordings hold the three rounds (the start
+/// and two played). The recording is large enough that the starved run waits well beyond
+/// [`STARVED_AFTER`](viewer_bridge::priority::STARVED_AFTER) for it (8–13 s, most of it
+/// closing the file): a run waiting less, as the demo's 2 to 6 s, can end before the
+/// warning is due.
 #[cfg(target_os = "linux")]
 #[test]
 fn a_recording_starved_of_the_cpu_says_so_and_normal_priority_keeps_up() {
@@ -68,7 +97,11 @@ fn a_recording_starved_of_the_cpu_says_so_and_normal_priority_keeps_up() {
     }
     let warning = "the recording has fallen behind: other programs keep every core busy";
     let stderr = String::from_utf8_lossy(&starved.stderr);
-    assert!(stderr.contains(warning), "{stderr}");
+    assert!(
+        stderr.contains(warning),
+        "no warning; stderr: {stderr}; stdout: {}",
+        String::from_utf8_lossy(&starved.stdout)
+    );
     assert!(stderr.contains("SMARTTEAMS_LOGGING_PRIORITY=normal"), "{stderr}");
     assert_eq!(stderr.matches(warning).count(), 1, "warned once: {stderr}");
     let stderr = String::from_utf8_lossy(&normal.stderr);
