@@ -373,8 +373,8 @@ pub struct PhaseTimes {
     pub indexes: Duration,
     /// Of `indexes`: counting the buckets and placing the robots in them (one thread).
     pub indexes_in_order: Duration,
-    /// Of `other`: crediting explored cells to the robots and gathering the metrics' terms
-    /// (all workers, beside `indexes`).
+    /// Of `other`: crediting explored cells to the robots, then gathering the metrics' terms
+    /// beside `indexes` (both on all workers).
     pub crediting: Duration,
     /// Of `other`: summing the metrics' terms in id order (one thread).
     pub metrics: Duration,
