@@ -445,10 +445,11 @@ fn scaling_with_zero_threads_names_the_core_count() {
 }
 
 /// `scripts/bench-threads.sh`: each pair's ratio is its 2-thread robot-rounds/s over its
-/// 1-thread robot-rounds/s as printed, and the last line gives the median of the pairs'
-/// ratios (for two pairs, their mean), worked out here from the pair lines' figures.
+/// 1-thread robot-rounds/s as printed, then come the median of the pairs' ratios (for two
+/// pairs, their mean) and the fastest 2-thread run over the fastest 1-thread run, worked
+/// out here from the pair lines' figures.
 #[test]
-fn the_threads_script_prints_each_pair_and_their_median() {
+fn the_threads_script_prints_each_pair_their_median_and_the_fastest_runs() {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/../scripts/bench-threads.sh");
     let run = |args: &[&str]| {
         Command::new("bash")
@@ -461,7 +462,7 @@ fn the_threads_script_prints_each_pair_and_their_median() {
     let out = run(&["2", "random-walk", "--robots", "30", "--side-m", "64", "--rounds", "20"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
-    let ratios: Vec<f64> = text
+    let pairs: Vec<(f64, f64)> = text
         .lines()
         .filter(|l| l.starts_with("pair "))
         .map(|l| {
@@ -479,17 +480,20 @@ fn the_threads_script_prints_each_pair_and_their_median() {
                 .unwrap_or_else(|| panic!("a ratio ending {l}"));
             let (one, two) = (between("1 thread ", " "), between("2 threads ", ","));
             assert!((two / one - printed).abs() < 0.001, "{l}");
-            // The script's median is of the unrounded ratios of the printed figures.
-            two / one
+            (one, two)
         })
         .collect();
-    assert_eq!(ratios.len(), 2, "{text}");
-    let median = f64::midpoint(ratios[0], ratios[1]);
+    assert_eq!(pairs.len(), 2, "{text}");
+    let [(one_a, two_a), (one_b, two_b)] = [pairs[0], pairs[1]];
+    // The script's median is of the unrounded ratios of the printed figures.
+    let median = f64::midpoint(two_a / one_a, two_b / one_b);
     assert!(
         text.contains(&format!("1 -> 2 threads: {median:.3} ("))
             && text.contains("median of 2 pairs; identical digests"),
         "{text}"
     );
+    let fastest = two_a.max(two_b) / one_a.max(one_b);
+    assert!(text.contains(&format!("fastest runs: {fastest:.3}x")), "{text}");
     let none = run(&["1", "nav-graph"]);
     assert!(!none.status.success(), "a scenario without rounds is an error");
 }
