@@ -330,6 +330,13 @@ impl Open<'_> {
         e
     }
 
+    /// Add `entry` as the current entry of its node, now reached, and queue it at `cost`,
+    /// ties broken by `rank`.
+    fn reach(&mut self, entry: (DVec2, f64, u32, u32), cost: f64, rank: u32) {
+        let e = self.push(entry, cost, rank);
+        self.marks[entry.2 as usize] = (self.stamp, e);
+    }
+
     /// The route to goal entry `e`: its node's chain of nodes and the goal point.
     fn route_to(&self, e: u32) -> (Vec<NavNodeId>, DVec2) {
         let (goal, _, n, _) = self.entry[e as usize];
@@ -966,12 +973,11 @@ impl NavGraph {
                 heap,
                 stamp,
             };
-            let e = open.push(
+            open.reach(
                 (from, 0.0, start.0, u32::MAX),
                 estimate(from),
                 self.rank[start.0 as usize],
             );
-            open.marks[start.0 as usize] = (stamp, e);
             let mut settled = 0usize;
             // The cheapest goal waiting in the heap (`Goals::Nearest`), as its cost and entry.
             let mut best_goal: Option<(f64, u32)> = None;
@@ -1041,8 +1047,7 @@ impl NavGraph {
             let p = self.entry_point(node, m, at);
             let nd = d + at.distance(p);
             if !reached || nd < open.entry[mark.1 as usize].1 {
-                let e = open.push((p, nd, m.0, node.0), nd + estimate(p), self.rank[m.0 as usize]);
-                open.marks[m.0 as usize] = (open.stamp, e);
+                open.reach((p, nd, m.0, node.0), nd + estimate(p), self.rank[m.0 as usize]);
             }
         }
     }
