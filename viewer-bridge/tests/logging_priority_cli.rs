@@ -80,9 +80,8 @@ fn recorded_run_on_cpu_0(rrd: &Path, priority: Option<&str>) -> Output {
 /// run waits for it: the run says so and names the setting. At normal priority the
 /// recording keeps up, with no warning. Both recordings hold the three rounds (the start
 /// and two played). The recording is large enough that the starved run waits well beyond
-/// [`STARVED_AFTER`](viewer_bridge::priority::STARVED_AFTER) for it (8–13 s, most of it
-/// closing the file): a run waiting less, as the demo's 2 to 6 s, can end before the
-/// warning is due.
+/// [`STARVED_AFTER`](viewer_bridge::priority::STARVED_AFTER) for it: a smaller one, as the
+/// demo's, can be done before the warning is due.
 #[cfg(target_os = "linux")]
 #[test]
 fn a_recording_starved_of_the_cpu_says_so_and_normal_priority_keeps_up() {
