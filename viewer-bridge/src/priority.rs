@@ -63,6 +63,10 @@ pub fn lower_priority() {
 /// starved.
 pub const STARVED_AFTER: Duration = Duration::from_secs(2);
 
+/// How often a wait past [`STARVED_AFTER`] asks again whether the logging is starved: a check
+/// sees the threads' states at one instant, so one unlucky check must not decide the wait.
+const RECHECK_EVERY: Duration = Duration::from_millis(250);
+
 /// Waits shorter than this are not counted: the process's CPU time comes in ticks of 10 ms,
 /// too coarse to tell how a shorter wait was spent, and a starved logging makes long waits.
 const COUNTED_FROM: Duration = Duration::from_millis(10);
@@ -110,10 +114,23 @@ impl LoggingWait {
 
 impl StarvationWatch {
     /// How long `wait` may go on before the next [`StarvationWatch::check`]: until the waits
-    /// add up to [`STARVED_AFTER`], then [`STARVED_AFTER`] at a time.
+    /// add up to [`STARVED_AFTER`], then [`RECHECK_EVERY`] (250 ms) at a time.
     pub fn next_check(&self, wait: &LoggingWait) -> Duration {
         let left = STARVED_AFTER.saturating_sub(self.waited + wait.since.elapsed());
-        if left.is_zero() { STARVED_AFTER } else { left }
+        if left.is_zero() { RECHECK_EVERY } else { left }
+    }
+
+    /// Wait through `within` until it returns what was awaited, checking for starvation
+    /// each time it returns `None`. `within` waits at most the time it is given
+    /// ([`StarvationWatch::next_check`]) and returns `None` when that time ran out. Does not
+    /// [`end`](StarvationWatch::end) `wait`, which may go on through other waits.
+    pub fn wait_through<T>(&mut self, wait: &LoggingWait, mut within: impl FnMut(Duration) -> Option<T>) -> T {
+        loop {
+            if let Some(out) = within(self.next_check(wait)) {
+                return out;
+            }
+            self.check(wait);
+        }
     }
 
     /// Warn (once) if the waits so far, `wait` included, show the logging starved, or
@@ -248,7 +265,7 @@ mod tests {
     /// Waits add up: after an idle wait of 1.5 s, the next check of a new wait comes 0.5 s
     /// into it, and a new idle wait of 0.6 s with another thread ready to run is starved,
     /// though neither wait alone reaches [`STARVED_AFTER`]. Past it, checks come
-    /// [`STARVED_AFTER`] apart.
+    /// [`RECHECK_EVERY`] apart.
     #[cfg(target_os = "linux")]
     #[test]
     fn waits_add_up_to_the_starvation_limit() {
@@ -266,8 +283,31 @@ mod tests {
         assert!(watch.warned);
         assert_eq!(
             watch.next_check(&idle_wait_begun(Duration::from_millis(600))),
-            STARVED_AFTER
+            RECHECK_EVERY
         );
+    }
+
+    /// A wait past [`STARVED_AFTER`] is checked every [`RECHECK_EVERY`] until it ends, here
+    /// after three tries, and warns when starved; `wait_through` returns what the wait gave.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_wait_is_checked_again_until_it_ends() {
+        let mut watch = StarvationWatch {
+            warned: false,
+            waited: Duration::from_secs(3),
+            waited_cpu: Duration::ZERO,
+        };
+        let wait = LoggingWait::begin();
+        let mut timeouts = Vec::new();
+        let given = beside_a_running_thread(|| {
+            watch.wait_through(&wait, |timeout| {
+                timeouts.push(timeout);
+                (timeouts.len() == 3).then_some(42)
+            })
+        });
+        assert_eq!(given, 42);
+        assert_eq!(timeouts, [RECHECK_EVERY; 3]);
+        assert!(watch.warned);
     }
 
     /// A wait of [`STARVED_AFTER`] in which the process was idle is starved on its own, even

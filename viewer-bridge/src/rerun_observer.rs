@@ -380,19 +380,23 @@ impl RerunObserver {
             Err(crossbeam_channel::TrySendError::Disconnected(_)) => return self.logging_thread_stopped(),
         };
         let wait = LoggingWait::begin();
-        loop {
-            match tx.send_timeout(frame, self.starvation.next_check(&wait)) {
-                Ok(()) => {
-                    self.starvation.end(&wait);
-                    return Ok(());
+        let mut unsent = Some(frame);
+        let sent = self.starvation.wait_through(&wait, |timeout| {
+            let frame = unsent.take().expect("a frame not yet sent is put back");
+            match tx.send_timeout(frame, timeout) {
+                Ok(()) => Some(true),
+                Err(crossbeam_channel::SendTimeoutError::Timeout(frame)) => {
+                    unsent = Some(frame);
+                    None
                 }
-                Err(crossbeam_channel::SendTimeoutError::Timeout(f)) => {
-                    self.starvation.check(&wait);
-                    frame = f;
-                }
-                Err(crossbeam_channel::SendTimeoutError::Disconnected(_)) => return self.logging_thread_stopped(),
+                Err(crossbeam_channel::SendTimeoutError::Disconnected(_)) => Some(false),
             }
+        });
+        if !sent {
+            return self.logging_thread_stopped();
         }
+        self.starvation.end(&wait);
+        Ok(())
     }
 
     /// The logging thread stopped taking frames: its result says why.
@@ -1408,12 +1412,9 @@ impl Observer for RerunObserver {
         let wait = LoggingWait::begin();
         match self.when_behind {
             WhenBehind::Wait => {
-                if self
-                    .worker
-                    .as_ref()
-                    .is_some_and(|w| !w.ends_within(self.starvation.next_check(&wait)))
-                {
-                    self.starvation.check(&wait);
+                if let Some(worker) = &self.worker {
+                    self.starvation
+                        .wait_through(&wait, |timeout| worker.ends_within(timeout).then_some(()));
                 }
                 self.join_worker()?;
             }
@@ -1482,13 +1483,24 @@ impl RerunObserver {
     /// closing the stream would wait as long, and a flush says why it failed. A flush still
     /// going when the run's waits for its logging (`wait`, begun when the rounds ended, and
     /// those before) add up to [`crate::priority::STARVED_AFTER`] asks whether the logging
-    /// is starved.
+    /// is starved, and asks again until it ends.
     fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
-        if self.rec.flush_with_timeout(self.starvation.next_check(wait)).is_ok() {
-            return Ok(());
-        }
-        self.starvation.check(wait);
-        self.rec.flush_blocking().map_err(|e| e.to_string())
+        let rec = self.rec.clone();
+        let flushed = on_thread("rerun-flush", move || {
+            let result = rec.flush_blocking().map_err(|e| e.to_string());
+            // The caller is to hold the last handle (see `close_file`), not this thread.
+            drop(rec);
+            result
+        });
+        let flushed = flushed.map_err(|e| format!("cannot start the flush: {e}"))?;
+        self.starvation
+            .wait_through(wait, |timeout| match flushed.recv_timeout(timeout) {
+                Ok(result) => Some(result),
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => None,
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
+                    Some(Err("the flush's thread panicked".to_owned()))
+                }
+            })
     }
 
     /// Close a file's stream and wait until the file is whole: dropping the stream's last
@@ -1502,10 +1514,14 @@ impl RerunObserver {
         let Ok(closed) = on_thread("rerun-close", move || drop(rec)) else {
             return;
         };
-        if closed.recv_timeout(self.starvation.next_check(wait)).is_err() {
-            self.starvation.check(wait);
-            let _ = closed.recv();
-        }
+        self.starvation.wait_through(wait, |timeout| {
+            // Ended, or its thread gone: either way the close is over.
+            (!matches!(
+                closed.recv_timeout(timeout),
+                Err(crossbeam_channel::RecvTimeoutError::Timeout)
+            ))
+            .then_some(())
+        });
     }
 
     /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).
