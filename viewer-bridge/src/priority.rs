@@ -74,20 +74,37 @@ const COUNTED_FROM: Duration = Duration::from_millis(10);
 /// Tells a recording starved of the CPU: the run's waits for its logging (opening the
 /// stream, handing it rounds, closing it) add up to [`STARVED_AFTER`] or more, the process
 /// used less than a quarter of one core in them (or the same holds of the wait going on
-/// alone), and another of its threads is ready to run now. Logging that merely has much to
-/// do keeps a core busy; logging held up by a slow disk or network is asleep, not ready to
-/// run. Says so once. Linux only (CPU time and thread states come from `/proc`); elsewhere
-/// it never does.
+/// alone), and since the wait was first checked its threads have waited for a core, ready
+/// to run, for at least half the time. Logging that merely has much to do keeps a core
+/// busy; logging held up by a slow or full disk, a network or a stuck writer sleeps, and
+/// does not wait for a core. Says so once. Linux only (CPU time and the run queue's waits
+/// come from `/proc`); elsewhere it never does.
 ///
 /// Adding the waits up matters for a short run: its recording's work falls into a few
 /// waits, each of which may stay under [`STARVED_AFTER`] while together they double the run.
+/// The run queue's waits are read only from a wait's first check on: reading every thread's
+/// counter costs a file a thread, too much for every hand-off that blocks.
 #[derive(Debug, Default)]
 pub struct StarvationWatch {
     warned: bool,
     /// Wall and CPU time of the counted waits that have ended.
     waited: Duration,
     waited_cpu: Duration,
+    /// The threads' run-queue waits at the first check of the wait going on.
+    queued_at_first_check: Option<QueueSample>,
 }
+
+/// Each thread's time spent ready to run but waiting for a core, read at `at` during the
+/// wait that began at `wait_since`.
+#[derive(Debug)]
+struct QueueSample {
+    wait_since: Instant,
+    at: Instant,
+    threads: Vec<ThreadQueued>,
+}
+
+/// A thread's id and its time in the run queue so far (`run_delay` of its schedstat).
+type ThreadQueued = (u32, Duration);
 
 /// A wait of the run for its logging, begun at `since` with the process's CPU time `cpu`.
 #[derive(Clone, Copy, Debug)]
@@ -137,10 +154,16 @@ impl StarvationWatch {
     /// `wait` alone does (a long run whose logging starves midway, after waits in which it
     /// kept a core busy); returns whether they do.
     pub fn check(&mut self, wait: &LoggingWait) -> bool {
+        self.check_with(wait, threads_queued)
+    }
+
+    /// [`check`](Self::check), reading the threads' run-queue waits with `threads_queued`.
+    fn check_with(&mut self, wait: &LoggingWait, threads_queued: impl FnOnce() -> Option<Vec<ThreadQueued>>) -> bool {
         let idle = |wall: Duration, cpu: Duration| wall >= STARVED_AFTER && cpu * 4 < wall;
-        let starved = wait.so_far().is_some_and(|(wall, cpu)| {
-            (idle(wall, cpu) || idle(self.waited + wall, self.waited_cpu + cpu)) && another_thread_runnable()
-        });
+        let idle_in_waits = wait
+            .so_far()
+            .is_some_and(|(wall, cpu)| idle(wall, cpu) || idle(self.waited + wall, self.waited_cpu + cpu));
+        let starved = idle_in_waits && threads_queued().is_some_and(|now| self.kept_waiting_for_a_core(wait, now));
         if starved && !self.warned {
             self.warned = true;
             eprintln!(
@@ -149,6 +172,32 @@ impl StarvationWatch {
             );
         }
         starved
+    }
+
+    /// Whether the threads, `now`, have waited for a core for at least half the time since
+    /// `wait` was first checked. The first check only notes their waits so far. A thread
+    /// begun since counts its whole wait; one ended since counts nothing.
+    fn kept_waiting_for_a_core(&mut self, wait: &LoggingWait, now: Vec<ThreadQueued>) -> bool {
+        let Some(first) = self
+            .queued_at_first_check
+            .as_ref()
+            .filter(|q| q.wait_since == wait.since)
+        else {
+            self.queued_at_first_check = Some(QueueSample {
+                wait_since: wait.since,
+                at: Instant::now(),
+                threads: now,
+            });
+            return false;
+        };
+        let queued: Duration = now
+            .iter()
+            .map(|&(id, total)| {
+                let before = first.threads.iter().find(|t| t.0 == id).map_or(Duration::ZERO, |t| t.1);
+                total.saturating_sub(before)
+            })
+            .sum();
+        !queued.is_zero() && queued * 2 >= first.at.elapsed()
     }
 
     /// Count `wait`, which has ended, if it lasted 10 ms or more (one tick of CPU time).
@@ -170,26 +219,26 @@ fn process_cpu_time() -> Option<Duration> {
         .and_then(|s| cpu_time_of_stat(&s))
 }
 
-/// Whether a thread of this process other than the calling one is running or ready to run
-/// (state `R` in `/proc/self/task/*/stat`). A thread waiting for a core is `R`; one waiting
-/// for a disk, the network or a lock is not.
-fn another_thread_runnable() -> bool {
-    let me = std::fs::read_to_string("/proc/thread-self/stat").ok();
-    let me = me.as_deref().and_then(|s| s.split_whitespace().next());
-    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
-        return false;
-    };
-    tasks.flatten().any(|task| {
-        let name = task.file_name();
-        Some(name.to_string_lossy().as_ref()) != me
-            && std::fs::read_to_string(task.path().join("stat")).is_ok_and(|s| state_of_stat(&s) == Some('R'))
-    })
+/// Each thread of this process with its time spent ready to run but waiting for a core so
+/// far (`/proc/self/task/*/schedstat`: time on a core, time waiting in the run queue, slices,
+/// in nanoseconds); `None` where there is no such file.
+fn threads_queued() -> Option<Vec<ThreadQueued>> {
+    let tasks = std::fs::read_dir("/proc/self/task").ok()?;
+    let threads: Vec<ThreadQueued> = tasks
+        .flatten()
+        .filter_map(|task| {
+            let id = task.file_name().to_str()?.parse().ok()?;
+            let schedstat = std::fs::read_to_string(task.path().join("schedstat")).ok()?;
+            Some((id, queued_of_schedstat(&schedstat)?))
+        })
+        .collect();
+    (!threads.is_empty()).then_some(threads)
 }
 
-/// The state letter of a `/proc/PID/stat` line: the first field after the command name (in
-/// parentheses, which may hold spaces and parentheses).
-fn state_of_stat(stat: &str) -> Option<char> {
-    stat[stat.rfind(')')? + 1..].split_whitespace().next()?.chars().next()
+/// The run-queue wait of a `schedstat` line: its second field, in nanoseconds.
+fn queued_of_schedstat(schedstat: &str) -> Option<Duration> {
+    let ns = schedstat.split_whitespace().nth(1)?.parse().ok()?;
+    Some(Duration::from_nanos(ns))
 }
 
 /// User plus system time of a `/proc/PID/stat` line, in the kernel's clock ticks of 1/100 s
@@ -217,13 +266,23 @@ mod tests {
         assert_eq!(cpu_time_of_stat("4242 (x) S 1"), None);
     }
 
-    /// The state is the first field after the name's last parenthesis.
+    /// The run-queue wait is a schedstat line's second field, in nanoseconds.
     #[test]
-    fn the_state_follows_the_name() {
-        let line = "4242 (rerun (x) y) S 1 4242 4242 0 -1 4194560 1234 0 0 0 250 37 0 0 20 0 11 0 100 0 0";
-        assert_eq!(state_of_stat(line), Some('S'));
-        assert_eq!(state_of_stat("4242 (a) R) R 1"), Some('R'));
-        assert_eq!(state_of_stat("4242 (a"), None);
+    fn the_run_queue_wait_is_the_second_schedstat_field() {
+        assert_eq!(queued_of_schedstat("383977 250 1\n"), Some(Duration::from_nanos(250)));
+        assert_eq!(queued_of_schedstat("383977"), None);
+    }
+
+    /// This process's threads, the calling one among them, have run-queue counters.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn every_thread_has_a_run_queue_wait() {
+        let threads = threads_queued().expect("/proc/self/task/*/schedstat");
+        let me: u32 = std::fs::read_link("/proc/thread-self")
+            .ok()
+            .and_then(|p| p.file_name()?.to_str()?.parse().ok())
+            .expect("/proc/thread-self names the calling thread");
+        assert!(threads.iter().any(|t| t.0 == me), "{threads:?}");
     }
 
     /// A wait shorter than [`STARVED_AFTER`] is never starved, whatever the CPU time.
@@ -244,29 +303,15 @@ mod tests {
         }
     }
 
-    /// What `f` returns, called while another thread keeps running: state `R`, as a logging
-    /// thread waiting for a core.
-    #[cfg(target_os = "linux")]
-    fn beside_a_running_thread<T>(f: impl FnOnce() -> T) -> T {
-        use std::sync::atomic::{AtomicBool, Ordering};
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            s.spawn(|| {
-                while !stop.load(Ordering::Relaxed) {
-                    std::hint::spin_loop();
-                }
-            });
-            let out = f();
-            stop.store(true, Ordering::Relaxed);
-            out
-        })
+    /// A reading of the run queue's waits: one thread (id 7) has waited `ms` so far.
+    fn queued_ms(ms: u64) -> impl FnOnce() -> Option<Vec<ThreadQueued>> {
+        move || Some(vec![(7, Duration::from_millis(ms))])
     }
 
     /// Waits add up: after an idle wait of 1.5 s, the next check of a new wait comes 0.5 s
-    /// into it, and a new idle wait of 0.6 s with another thread ready to run is starved,
-    /// though neither wait alone reaches [`STARVED_AFTER`]. Past it, checks come
-    /// [`RECHECK_EVERY`] apart.
-    #[cfg(target_os = "linux")]
+    /// into it, and a new idle wait of 0.6 s whose thread then waits for a core is starved,
+    /// though neither wait alone reaches [`STARVED_AFTER`]. The first check of a wait only
+    /// notes the run queue's waits. Past the limit, checks come [`RECHECK_EVERY`] apart.
     #[test]
     fn waits_add_up_to_the_starvation_limit() {
         let mut watch = StarvationWatch::default();
@@ -276,56 +321,76 @@ mod tests {
             left <= Duration::from_millis(500) && left > Duration::from_millis(400),
             "{left:?}"
         );
-        assert!(!watch.check(&idle_wait_begun(Duration::from_millis(100))));
-        assert!(beside_a_running_thread(
-            || watch.check(&idle_wait_begun(Duration::from_millis(600)))
-        ));
+        assert!(!watch.check_with(&idle_wait_begun(Duration::from_millis(100)), queued_ms(900)));
+        let wait = idle_wait_begun(Duration::from_millis(600));
+        assert!(!watch.check_with(&wait, queued_ms(10)));
+        assert!(watch.check_with(&wait, queued_ms(1000)));
         assert!(watch.warned);
-        assert_eq!(
-            watch.next_check(&idle_wait_begun(Duration::from_millis(600))),
-            RECHECK_EVERY
-        );
+        assert_eq!(watch.next_check(&wait), RECHECK_EVERY);
+    }
+
+    /// An idle wait whose threads sleep (a stuck or slow writer), waiting for no core, is not
+    /// starved however long it lasts.
+    #[test]
+    fn an_idle_wait_whose_threads_sleep_is_not_starved() {
+        let mut watch = StarvationWatch::default();
+        let wait = idle_wait_begun(Duration::from_secs(30));
+        assert!(!watch.check_with(&wait, queued_ms(5)));
+        std::thread::sleep(Duration::from_millis(20));
+        assert!(!watch.check_with(&wait, queued_ms(5)));
+        assert!(!watch.warned);
+    }
+
+    /// Since a wait's first check, a thread begun meanwhile counts its whole run-queue wait,
+    /// one ended meanwhile counts nothing, and the queued time must reach half the time gone.
+    #[test]
+    fn run_queue_waits_count_per_thread_since_the_first_check() {
+        let ms = Duration::from_millis;
+        let mut watch = StarvationWatch::default();
+        let wait = idle_wait_begun(Duration::from_secs(3));
+        assert!(!watch.kept_waiting_for_a_core(&wait, vec![(1, ms(100)), (2, ms(50))]));
+        assert!(watch.kept_waiting_for_a_core(&wait, vec![(1, ms(100)), (3, ms(30))]));
+        assert!(!watch.kept_waiting_for_a_core(&wait, vec![(1, ms(100))]));
+        std::thread::sleep(ms(100));
+        assert!(!watch.kept_waiting_for_a_core(&wait, vec![(1, ms(120))]));
+        assert!(watch.kept_waiting_for_a_core(&wait, vec![(1, ms(600))]));
+        // A new wait starts over.
+        let next = idle_wait_begun(Duration::from_secs(3));
+        assert!(!watch.kept_waiting_for_a_core(&next, vec![(1, ms(900))]));
     }
 
     /// A wait past [`STARVED_AFTER`] is checked every [`RECHECK_EVERY`] until it ends, here
-    /// after three tries, and warns when starved; `wait_through` returns what the wait gave.
-    #[cfg(target_os = "linux")]
+    /// after three tries; `wait_through` returns what the wait gave.
     #[test]
     fn a_wait_is_checked_again_until_it_ends() {
         let mut watch = StarvationWatch {
-            warned: false,
             waited: Duration::from_secs(3),
-            waited_cpu: Duration::ZERO,
+            ..StarvationWatch::default()
         };
         let wait = LoggingWait::begin();
         let mut timeouts = Vec::new();
-        let given = beside_a_running_thread(|| {
-            watch.wait_through(&wait, |timeout| {
-                timeouts.push(timeout);
-                (timeouts.len() == 3).then_some(42)
-            })
+        let given = watch.wait_through(&wait, |timeout| {
+            timeouts.push(timeout);
+            (timeouts.len() == 3).then_some(42)
         });
         assert_eq!(given, 42);
         assert_eq!(timeouts, [RECHECK_EVERY; 3]);
-        assert!(watch.warned);
     }
 
     /// A wait of [`STARVED_AFTER`] in which the process was idle is starved on its own, even
     /// after earlier waits in which the logging kept a core busy (their CPU time counted
     /// as their wall time).
-    #[cfg(target_os = "linux")]
     #[test]
     fn an_idle_wait_is_starved_after_busy_ones() {
         let mut watch = StarvationWatch {
-            warned: false,
             waited: Duration::from_mins(1),
             waited_cpu: Duration::from_mins(1),
+            ..StarvationWatch::default()
         };
-        let (short, long) = beside_a_running_thread(|| {
-            let short = watch.check(&idle_wait_begun(Duration::from_millis(1900)));
-            (short, watch.check(&idle_wait_begun(STARVED_AFTER)))
-        });
-        assert!(!short && long);
+        assert!(!watch.check_with(&idle_wait_begun(Duration::from_millis(1900)), queued_ms(0)));
+        let wait = idle_wait_begun(STARVED_AFTER);
+        assert!(!watch.check_with(&wait, queued_ms(0)));
+        assert!(watch.check_with(&wait, queued_ms(500)));
     }
 
     /// A wait shorter than [`COUNTED_FROM`] is not counted.
