@@ -524,6 +524,8 @@ pub fn main_with(registry: &StrategyRegistry) -> ExitCode {
     if let Err(e) = crate::stop::install() {
         eprintln!("warning: {e:#}; Ctrl-C will end runs without keeping their outputs");
     }
+    // This process sets no other `tracing` subscriber: this one cannot be refused.
+    crate::rerun_errors::watch();
     match dispatch(cli, registry) {
         Ok(code) => code,
         Err(e) => {

@@ -22,6 +22,7 @@ pub mod layers;
 pub mod plot;
 pub mod priority;
 pub mod progress;
+pub mod rerun_errors;
 pub mod rerun_observer;
 pub mod run;
 pub mod stop;

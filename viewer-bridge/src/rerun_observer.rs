@@ -169,6 +169,8 @@ pub struct RerunObserver {
     core_loan: Option<std::sync::Arc<CoreLoan>>,
     /// Tells the user when the run waits for logging that other programs starve.
     starvation: StarvationWatch,
+    /// The file the stream writes, if it writes one.
+    file: Option<std::path::PathBuf>,
 }
 
 impl RerunObserver {
@@ -200,7 +202,17 @@ impl RerunObserver {
             worker_busy: std::time::Duration::ZERO,
             core_loan: None,
             starvation: StarvationWatch::default(),
+            file: None,
         }
+    }
+
+    /// The stream writes the file `path`: should Rerun report that writing it failed (a full
+    /// disk, say; see [`crate::rerun_errors`]), the rounds end with that error, and the end
+    /// of the run does not wait for the stream.
+    #[must_use]
+    pub fn with_file(mut self, path: std::path::PathBuf) -> Self {
+        self.file = Some(path);
+        self
     }
 
     /// Lend `loan` to the logging thread from each logged world until it has logged all it
@@ -1371,6 +1383,9 @@ impl Observer for RerunObserver {
     }
 
     fn on_round(&mut self, sim: &Simulation, report: &RoundReport) -> Result<(), ObserverError> {
+        if let Some(failed) = write_failure(self.file.as_deref()) {
+            return Err(failed);
+        }
         let t0 = std::time::Instant::now();
         for id in &report.known_changed {
             if let Some(d) = self.known_dirty.get_mut(id.index()) {
@@ -1436,8 +1451,19 @@ impl Observer for RerunObserver {
             }
         }
         // Transport trouble (a viewer gone) must not fail a finished run: report and go on.
+        // A file that could not be written is the run's error.
         let flushed = match self.when_behind {
-            WhenBehind::Wait => self.flush_file(&wait).map(|()| self.close_file(&wait)),
+            WhenBehind::Wait => {
+                let flushed = self.flush_file(&wait);
+                if let Some(failed) = write_failure(self.file.as_deref()) {
+                    // Rerun's stream may never finish a flush or a close after its writer
+                    // stopped: it is left, and ends with the process.
+                    self.abandon_stream();
+                    self.closing = t0.elapsed();
+                    return Err(failed);
+                }
+                flushed.map(|()| self.close_file(&wait))
+            }
             WhenBehind::SkipWorld => self.flush_live(),
         };
         match flushed {
@@ -1493,10 +1519,14 @@ impl RerunObserver {
             result
         });
         let flushed = flushed.map_err(|e| format!("cannot start the flush: {e}"))?;
+        let file = self.file.as_deref();
         self.starvation
             .wait_through(wait, |timeout| match flushed.recv_timeout(timeout) {
                 Ok(result) => Some(result),
-                Err(crossbeam_channel::RecvTimeoutError::Timeout) => None,
+                // A writer that failed may leave the flush waiting for ever; the caller says why.
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
+                    write_failure(file).map(|_| Err("the recording could not be written".to_owned()))
+                }
                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
                     Some(Err("the flush's thread panicked".to_owned()))
                 }
@@ -1514,13 +1544,15 @@ impl RerunObserver {
         let Ok(closed) = on_thread("rerun-close", move || drop(rec)) else {
             return;
         };
+        let file = self.file.as_deref();
         self.starvation.wait_through(wait, |timeout| {
-            // Ended, or its thread gone: either way the close is over.
-            (!matches!(
+            // Ended, or its thread gone: either way the close is over. A writer that failed
+            // meanwhile may leave it waiting for ever: it is left, to end with the process.
+            let waiting = matches!(
                 closed.recv_timeout(timeout),
                 Err(crossbeam_channel::RecvTimeoutError::Timeout)
-            ))
-            .then_some(())
+            );
+            (!waiting || write_failure(file).is_some()).then_some(())
         });
     }
 
@@ -1561,6 +1593,20 @@ impl RerunObserver {
             );
         }
     }
+}
+
+/// The run's error when Rerun reported that writing `file` failed (see
+/// [`crate::rerun_errors`]); `None` without a file or a report.
+fn write_failure(file: Option<&std::path::Path>) -> Option<ObserverError> {
+    let file = file?;
+    let reason = crate::rerun_errors::file_write_failure(file)?;
+    Some(
+        format!(
+            "cannot write the recording {}: {reason}; it holds the rounds written before",
+            file.display()
+        )
+        .into(),
+    )
 }
 
 /// What `f` returns, run on a thread of its own named `name`, if it ends within `timeout`;

@@ -517,7 +517,10 @@ pub fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) 
     // A file writer always catches up, and the run waits for it from its opening; a live
     // viewer may be slow or paused, and connecting to it waits on the network.
     Ok(match target {
-        ViewerTarget::Rrd(_) => observer.with_opening(&opening).with_when_behind(WhenBehind::Wait),
+        ViewerTarget::Rrd(path) => observer
+            .with_opening(&opening)
+            .with_when_behind(WhenBehind::Wait)
+            .with_file(path.clone()),
         ViewerTarget::Connect(_) | ViewerTarget::Spawn { .. } => observer.with_when_behind(WhenBehind::SkipWorld),
     })
 }
