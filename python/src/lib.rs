@@ -57,6 +57,9 @@ pub(crate) fn whole_or_none<T: TryFrom<i128>>(name: &str, value: Option<i128>) -
 /// The `smartteams._native` module.
 #[pymodule(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Rerun reports a recording file it cannot write only as a `tracing` event; this
+    // module's copy of `tracing` has no other subscriber.
+    viewer_bridge::rerun_errors::watch();
     m.add("SmartTeamsError", m.py().get_type::<SmartTeamsError>())?;
     m.add_class::<simulation::Simulation>()?;
     m.add_class::<env::EnvCore>()?;

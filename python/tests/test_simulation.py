@@ -4,6 +4,7 @@ checkpoints, errors."""
 import csv
 import os
 import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -170,6 +171,29 @@ def test_bad_arguments_raise_saying_what_is_allowed(demo_config):
     ]:
         with pytest.raises(smartteams.SmartTeamsError, match=said):
             smartteams.Simulation(str(demo_config), **kwargs)
+
+
+def test_a_recording_that_cannot_be_written_raises_with_the_reason(tmp_path, demo_config):
+    # In a child Python whose files are capped at 2 MB (SIGXFSZ ignored): a write past the cap
+    # fails with "File too large", as one to a full disk fails with "No space left on device".
+    script = """
+import resource, signal, sys, smartteams
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (2_000_000, resource.RLIM_INFINITY))
+sim = smartteams.Simulation(sys.argv[1], rounds=100_000, rrd=sys.argv[2])
+try:
+    sim.run()
+except smartteams.SmartTeamsError as e:
+    print(sim.round, e)
+"""
+    rrd = tmp_path / "capped.rrd"
+    out = subprocess.run(
+        [sys.executable, "-c", script, str(demo_config), str(rrd)], capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    round_reached, said = out.stdout.split(" ", 1)
+    assert 0 < int(round_reached) < 100_000
+    assert f"cannot write the recording {rrd}: File too large" in said, said
 
 
 def test_recording_verifies_with_the_rerun_cli(tmp_path, demo_config):
