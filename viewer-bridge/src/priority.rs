@@ -131,7 +131,7 @@ impl LoggingWait {
 
 impl StarvationWatch {
     /// How long `wait` may go on before the next [`StarvationWatch::check`]: until the waits
-    /// add up to [`STARVED_AFTER`], then [`RECHECK_EVERY`] (250 ms) at a time.
+    /// add up to [`STARVED_AFTER`], then 250 ms at a time.
     pub fn next_check(&self, wait: &LoggingWait) -> Duration {
         let left = STARVED_AFTER.saturating_sub(self.waited + wait.since.elapsed());
         if left.is_zero() { RECHECK_EVERY } else { left }
