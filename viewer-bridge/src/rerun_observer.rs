@@ -1454,7 +1454,10 @@ impl Observer for RerunObserver {
         // A file that could not be written is the run's error.
         let flushed = match self.when_behind {
             WhenBehind::Wait => {
-                let flushed = self.flush_file(&wait);
+                let mut flushed = self.flush_file(&wait);
+                if write_failure(self.file.as_deref()).is_none() {
+                    flushed = flushed.map(|()| self.close_file(&wait));
+                }
                 if let Some(failed) = write_failure(self.file.as_deref()) {
                     // Rerun's stream may never finish a flush or a close after its writer
                     // stopped: it is left, and ends with the process.
@@ -1462,7 +1465,7 @@ impl Observer for RerunObserver {
                     self.closing = t0.elapsed();
                     return Err(failed);
                 }
-                flushed.map(|()| self.close_file(&wait))
+                flushed
             }
             WhenBehind::SkipWorld => self.flush_live(),
         };
