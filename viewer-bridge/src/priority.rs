@@ -63,8 +63,8 @@ pub fn lower_priority() {
 /// starved.
 pub const STARVED_AFTER: Duration = Duration::from_secs(2);
 
-/// How often a wait past [`STARVED_AFTER`] asks again whether the logging is starved: a check
-/// sees the threads' states at one instant, so one unlucky check must not decide the wait.
+/// How often a wait past [`STARVED_AFTER`] asks again whether the logging is starved: its
+/// first check only notes the threads' run-queue waits, and a wait may starve after it.
 const RECHECK_EVERY: Duration = Duration::from_millis(250);
 
 /// Waits shorter than this are not counted: the process's CPU time comes in ticks of 10 ms,
