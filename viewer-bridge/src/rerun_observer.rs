@@ -1514,14 +1514,9 @@ impl RerunObserver {
     /// those before) add up to [`crate::priority::STARVED_AFTER`] asks whether the logging
     /// is starved, and asks again until it ends.
     fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
-        let rec = self.rec.clone();
-        let flushed = on_thread("rerun-flush", move || {
-            let result = rec.flush_blocking().map_err(|e| e.to_string());
-            // The caller is to hold the last handle (see `close_file`), not this thread.
-            drop(rec);
-            result
-        });
-        let flushed = flushed.map_err(|e| format!("cannot start the flush: {e}"))?;
+        let flushed = self
+            .flush_on_thread(std::time::Duration::MAX)
+            .map_err(|e| format!("cannot start the flush: {e}"))?;
         let file = self.file.as_deref();
         self.starvation
             .wait_through(wait, |timeout| match flushed.recv_timeout(timeout) {
@@ -1559,25 +1554,33 @@ impl RerunObserver {
         });
     }
 
-    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).
+    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`RerunObserver::flush_on_thread`]).
     fn flush_live(&self) -> Result<(), String> {
-        let rec = self.rec.clone();
-        let flushed = on_thread_within(
-            "rerun-flush",
-            FINISH_TIMEOUT + std::time::Duration::from_secs(1),
-            move || {
-                let result = rec.flush_with_timeout(FINISH_TIMEOUT).map_err(|e| e.to_string());
-                // Let go of the handle before saying so: the caller then holds the last one (see
-                // `close_live`), not this thread, which the process may not wait for.
-                drop(rec);
-                result
-            },
-        );
+        let flushed = self.flush_on_thread(FINISH_TIMEOUT).map(|done| {
+            done.recv_timeout(FINISH_TIMEOUT + std::time::Duration::from_secs(1))
+                .ok()
+        });
         match flushed {
             Ok(Some(result)) => result,
             Ok(None) => Err("the viewer took no data".to_owned()),
             Err(e) => Err(format!("cannot start the flush: {e}")),
         }
+    }
+
+    /// Flush the stream on a thread of its own, waiting there at most `timeout`; the
+    /// receiver gets the outcome. The thread lets go of its handle before it says so: the
+    /// caller then holds the last one (see `close_file` and `close_live`), not a thread the
+    /// process may not wait for.
+    fn flush_on_thread(
+        &self,
+        timeout: std::time::Duration,
+    ) -> std::io::Result<crossbeam_channel::Receiver<Result<(), String>>> {
+        let rec = self.rec.clone();
+        on_thread("rerun-flush", move || {
+            let result = rec.flush_with_timeout(timeout).map_err(|e| e.to_string());
+            drop(rec);
+            result
+        })
     }
 
     /// Close a flushed live stream, waiting at most [`FINISH_TIMEOUT`] (see
