@@ -28,6 +28,7 @@ use sim_core::world::{Event, Link, METRICS_COUNT, Outcome, Robot, RobotType, Rou
 
 use crate::layers::{self, Raster, draw_order, to_2d};
 use crate::priority::{LoggingWait, StarvationWatch};
+use crate::viewer::ViewerLink;
 
 /// The sequence timeline every per-round entity is logged on.
 pub const TIMELINE: &str = "round";
@@ -140,8 +141,9 @@ impl Progress {
 /// The simulation thread only copies what a round shows into a frame (a private type); a
 /// logging thread turns frames into Rerun archetypes and logs them, so the serialisation
 /// overlaps the next round (whose resolve phase leaves a core idle). Log errors
-/// (serialisation only: transport trouble such as a vanished viewer is absorbed by the sink)
-/// stop the run like any observer error.
+/// (serialisation, a file that cannot be written) stop the run like any observer error; a
+/// live viewer that goes away ends the logging, not the run (see
+/// [`RerunObserver::with_viewer`]).
 pub struct RerunObserver {
     rec: rerun::RecordingStream,
     opts: LogOptions,
@@ -171,6 +173,10 @@ pub struct RerunObserver {
     starvation: StarvationWatch,
     /// The file the stream writes, if it writes one.
     file: Option<std::path::PathBuf>,
+    /// The live stream's link to its viewer, if it streams to one.
+    viewer: Option<ViewerLink>,
+    /// The round at which the viewer was found gone, and why: nothing is logged after it.
+    viewer_lost: Option<(u64, String)>,
 }
 
 impl RerunObserver {
@@ -203,6 +209,8 @@ impl RerunObserver {
             core_loan: None,
             starvation: StarvationWatch::default(),
             file: None,
+            viewer: None,
+            viewer_lost: None,
         }
     }
 
@@ -213,6 +221,22 @@ impl RerunObserver {
     pub fn with_file(mut self, path: std::path::PathBuf) -> Self {
         self.file = Some(path);
         self
+    }
+
+    /// The stream goes to a live viewer, `link` its connection (see
+    /// [`crate::viewer::open`]): should the viewer go away (closed, crashed, or its network
+    /// gone), the round that finds it so says so on stderr, and the run goes on without
+    /// logging, nor waiting for the stream at its end.
+    #[must_use]
+    pub fn with_viewer(mut self, link: ViewerLink) -> Self {
+        self.viewer = Some(link);
+        self
+    }
+
+    /// The round at which the live viewer was found gone, if it went (see
+    /// [`RerunObserver::with_viewer`]).
+    pub fn viewer_lost_at(&self) -> Option<u64> {
+        self.viewer_lost.as_ref().map(|(round, _)| *round)
     }
 
     /// Lend `loan` to the logging thread from each logged world until it has logged all it
@@ -1386,6 +1410,9 @@ impl Observer for RerunObserver {
         if let Some(failed) = write_failure(self.file.as_deref()) {
             return Err(failed);
         }
+        if self.viewer_gone(report.round) {
+            return Ok(());
+        }
         let t0 = std::time::Instant::now();
         for id in &report.known_changed {
             if let Some(d) = self.known_dirty.get_mut(id.index()) {
@@ -1421,6 +1448,11 @@ impl Observer for RerunObserver {
 
     fn on_finish(&mut self, sim: &Simulation) -> Result<(), ObserverError> {
         let t0 = std::time::Instant::now();
+        if self.viewer_gone(sim.round()) {
+            self.leave_lost_viewer();
+            self.closing = t0.elapsed();
+            return Ok(());
+        }
         self.log_last_round(sim)?;
         // Closing the queue lets the logging thread finish what is queued and stop.
         self.frames = None;
@@ -1485,6 +1517,35 @@ impl Observer for RerunObserver {
 }
 
 impl RerunObserver {
+    /// Whether the live viewer is gone: known before, or found now, at `round` (said once,
+    /// on stderr; the logging thread is then told to stop, and its sends fail at once). A
+    /// read of the connection's state a round while the viewer is there.
+    fn viewer_gone(&mut self, round: u64) -> bool {
+        if self.viewer_lost.is_some() {
+            return true;
+        }
+        let Some(reason) = self.viewer.as_ref().and_then(ViewerLink::lost) else {
+            return false;
+        };
+        eprintln!(
+            "warning: round {round}: the Rerun viewer stopped taking the stream ({reason}); the run goes on without it"
+        );
+        self.viewer_lost = Some((round, reason));
+        self.frames = None;
+        true
+    }
+
+    /// End the logging to a viewer that is gone: the logging thread is waited for (a
+    /// while at most) and the stream is left, not flushed.
+    fn leave_lost_viewer(&mut self) {
+        if self.worker.as_ref().is_none_or(|w| w.ends_within(FINISH_TIMEOUT)) {
+            // A logging error after the viewer went is of no use to anyone.
+            let _ = self.join_worker();
+        }
+        self.worker = None;
+        self.abandon_stream();
+    }
+
     /// Log the world of the run's last round if it is not logged: a run stopped by a signal
     /// between rounds `--log-every` logs, or whose live viewer was behind at its last round,
     /// still shows where it stopped (a run that plays all its rounds logs its final round

@@ -105,6 +105,8 @@ pub struct RecordingSummary {
     pub closing: Duration,
     /// Time the logging thread spent building and logging archetypes.
     pub logging_thread: Duration,
+    /// The round at which a live viewer was found gone; nothing was logged from it on.
+    pub viewer_lost_at: Option<u64>,
 }
 
 impl std::fmt::Display for Summary {
@@ -215,6 +217,12 @@ impl Summary {
                     f,
                     "\n  viewer behind     the world of {} rounds was left out (metrics and events were sent)",
                     r.skipped_rounds
+                )?;
+            }
+            if let Some(round) = r.viewer_lost_at {
+                write!(
+                    f,
+                    "\n  viewer gone       at round {round}: the rounds from it on were played, not logged"
                 )?;
             }
         }
@@ -487,6 +495,7 @@ impl Outputs {
                 sim_thread: r.busy(),
                 closing: r.closing(),
                 logging_thread: r.worker_busy(),
+                viewer_lost_at: r.viewer_lost_at(),
             }),
             slow_decisions: (self.faults.slow, self.faults.slowest),
             interrupted: None,
@@ -512,8 +521,12 @@ impl Outputs {
 /// for it from its opening, a live viewer's left behind when it falls behind.
 pub fn open_recording(sim: &Simulation, target: &ViewerTarget, log: LogOptions) -> Result<RerunObserver> {
     let opening = LoggingWait::begin();
-    let rec = crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?;
+    let (rec, link) = crate::viewer::open(sim.name(), target, crate::blueprint::simulation())?;
     let observer = RerunObserver::new(rec, log);
+    let observer = match link {
+        Some(link) => observer.with_viewer(link),
+        None => observer,
+    };
     // A file writer always catches up, and the run waits for it from its opening; a live
     // viewer may be slow or paused, and connecting to it waits on the network.
     Ok(match target {
@@ -570,7 +583,7 @@ pub fn view_map(path: &std::path::Path, target: &ViewerTarget) -> Result<()> {
     let name = path
         .file_stem()
         .map_or_else(|| "map".into(), |s| s.to_string_lossy().into_owned());
-    let rec = crate::viewer::open(&name, target, crate::blueprint::map_only())?;
+    let (rec, _) = crate::viewer::open(&name, target, crate::blueprint::map_only())?;
     crate::layers::log_static_map(&rec, &map)?;
     crate::layers::log_static_treasures(&rec, &map)?;
     rec.flush_with_timeout(Duration::from_secs(10))

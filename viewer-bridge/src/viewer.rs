@@ -112,14 +112,14 @@ pub fn open(
     name: &str,
     target: &ViewerTarget,
     blueprint: rerun::blueprint::Blueprint,
-) -> Result<rerun::RecordingStream> {
+) -> Result<(rerun::RecordingStream, Option<ViewerLink>)> {
     crate::priority::logging_priority().map_err(anyhow::Error::msg)?;
     let builder = rerun::RecordingStreamBuilder::new(APPLICATION_ID)
         .recording_name(name)
         .with_blueprint(blueprint);
     // Rerun's threads (batching, encoding, writing) inherit the priority of the thread that
     // opens the stream: a low one, so that they take the cores the rounds leave idle.
-    let rec = std::thread::scope(|s| {
+    let (rec, link) = std::thread::scope(|s| {
         s.spawn(|| {
             crate::priority::lower_priority();
             open_stream(builder, target)
@@ -130,12 +130,15 @@ pub fn open(
     // Wall-clock times would make two recordings of the same run differ; rounds are the time.
     rec.set_log_time_enabled(false);
     rec.set_log_tick_enabled(false);
-    Ok(rec)
+    Ok((rec, link))
 }
 
-/// The stream of `builder` to `target`.
-fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) -> Result<rerun::RecordingStream> {
-    let rec = match target {
+/// The stream of `builder` to `target`, with its link to the viewer if it is live.
+fn open_stream(
+    builder: rerun::RecordingStreamBuilder,
+    target: &ViewerTarget,
+) -> Result<(rerun::RecordingStream, Option<ViewerLink>)> {
+    let stream = match target {
         ViewerTarget::Rrd(path) => {
             // Rerun's own error repeats itself three times over; say it once.
             if let Some(message) = crate::missing_folder("recording", path) {
@@ -144,10 +147,11 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             if path.is_dir() {
                 bail!("cannot write the recording {}: it is a folder", path.display());
             }
-            builder
+            let rec = builder
                 .batcher_config(file_batching())
                 .save(path)
-                .with_context(|| format!("cannot write the recording {}", path.display()))?
+                .with_context(|| format!("cannot write the recording {}", path.display()))?;
+            (rec, None)
         }
         ViewerTarget::Connect(url) => {
             let Some(auth) = authority(url) else {
@@ -160,9 +164,9 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             if !reachable {
                 bail!("no Rerun viewer listens at {url}: start one (`rerun`) or use --spawn / --rrd");
             }
-            let rec = connect(builder, url, all_loopback(&addrs))?;
+            let (rec, link) = connect(builder, url, all_loopback(&addrs))?;
             check_receiver(&rec, url)?;
-            rec
+            (rec, Some(link))
         }
         ViewerTarget::Spawn { port } => {
             let spawned = rerun::spawn(&rerun::SpawnOptions {
@@ -171,30 +175,36 @@ fn open_stream(builder: rerun::RecordingStreamBuilder, target: &ViewerTarget) ->
             })
             .context("cannot start the Rerun viewer (is `rerun` on PATH? `pip install rerun-sdk==0.36.3`)")?;
             let url = format!("rerun+http://127.0.0.1:{}/proxy", spawned.port);
-            let rec = connect(builder, &url, true)?;
+            let (rec, link) = connect(builder, &url, true)?;
             // Something else may be listening on the port (a viewer there is used instead).
             check_receiver(&rec, &url)?;
-            rec
+            (rec, Some(link))
         }
     };
-    Ok(rec)
+    Ok(stream)
 }
 
-/// The live stream to the viewer at `url`; `local`: the viewer is on this machine, and is
-/// sent the chunks as they are (Rerun LZ4-compresses every gRPC stream, which costs CPU on
-/// both ends; loopback has bandwidth to spare). Other hosts get Rerun's compressed stream.
-fn connect(builder: rerun::RecordingStreamBuilder, url: &str, local: bool) -> Result<rerun::RecordingStream> {
+/// The live stream to the viewer at `url`, and its link; `local`: the viewer is on this
+/// machine, and is sent the chunks as they are (Rerun LZ4-compresses every gRPC stream,
+/// which costs CPU on both ends; loopback has bandwidth to spare). Other hosts get Rerun's
+/// compressed stream.
+fn connect(
+    builder: rerun::RecordingStreamBuilder,
+    url: &str,
+    local: bool,
+) -> Result<(rerun::RecordingStream, ViewerLink)> {
     let cannot = || format!("cannot connect to {url}");
-    let builder = builder.batcher_config(live_batching());
-    if !local {
-        return builder.connect_grpc_opts(url).with_context(cannot);
-    }
     let rerun::external::re_uri::RedapUri::Proxy(uri) = url.parse().with_context(cannot)? else {
         bail!("not a Rerun proxy URL: {url} (expected rerun+http://HOST:PORT/proxy)");
     };
-    let rec = builder.buffered().with_context(cannot)?;
-    rec.set_sink(Box::new(UncompressedGrpcSink::new(uri)));
-    Ok(rec)
+    let rec = builder
+        .batcher_config(live_batching())
+        .buffered()
+        .with_context(cannot)?;
+    let sink = ViewerSink::new(uri, local);
+    let link = ViewerLink(std::sync::Arc::downgrade(&sink.0));
+    rec.set_sink(Box::new(sink));
+    Ok((rec, link))
 }
 
 /// Whether a host that resolved to `addrs` is this machine: each is a loopback address
@@ -203,21 +213,49 @@ fn all_loopback(addrs: &[SocketAddr]) -> bool {
     !addrs.is_empty() && addrs.iter().all(|a| a.ip().is_loopback())
 }
 
-/// Rerun's gRPC sink ([`rerun::sink::GrpcSink`]) without compression.
-struct UncompressedGrpcSink(rerun::external::re_grpc_client::write::Client);
+/// Rerun's gRPC sink ([`rerun::sink::GrpcSink`]), compressed or not, whose client a
+/// [`ViewerLink`] can ask about the connection.
+struct ViewerSink(std::sync::Arc<rerun::external::re_grpc_client::write::Client>);
 
-impl UncompressedGrpcSink {
-    fn new(uri: rerun::external::re_uri::ProxyUri) -> Self {
+impl ViewerSink {
+    /// A sink to `uri`, uncompressed if `local`.
+    fn new(uri: rerun::external::re_uri::ProxyUri, local: bool) -> Self {
         use rerun::external::re_grpc_client::write::{Client, Options};
+        use rerun::external::re_log_encoding::rrd::Compression;
         let options = Options {
-            compression: rerun::external::re_log_encoding::rrd::Compression::Off,
+            compression: if local { Compression::Off } else { Compression::LZ4 },
             ..Options::default()
         };
-        Self(Client::new(uri, options))
+        Self(std::sync::Arc::new(Client::new(uri, options)))
     }
 }
 
-impl rerun::sink::LogSink for UncompressedGrpcSink {
+/// A live stream's link to its viewer: whether the viewer still takes the stream. It does
+/// not keep the connection open.
+#[derive(Clone)]
+pub struct ViewerLink(std::sync::Weak<rerun::external::re_grpc_client::write::Client>);
+
+impl std::fmt::Debug for ViewerLink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_tuple("ViewerLink").field(&self.lost()).finish()
+    }
+}
+
+impl ViewerLink {
+    /// Why the viewer no longer takes the stream (it quit, or the connection broke), or
+    /// `None` while it does, is still being reached, or the stream has ended. One atomic
+    /// read of the connection's state.
+    pub fn lost(&self) -> Option<String> {
+        use rerun::external::re_grpc_client::write::ClientConnectionState;
+        match self.0.upgrade()?.status() {
+            ClientConnectionState::Disconnected(Err(failure)) => Some(failure.to_string()),
+            ClientConnectionState::Disconnected(Ok(())) => Some("the viewer ended the connection".to_owned()),
+            ClientConnectionState::Connecting { .. } | ClientConnectionState::Connected => None,
+        }
+    }
+}
+
+impl rerun::sink::LogSink for ViewerSink {
     fn send(&self, msg: rerun::log::LogMsg) {
         self.0.send_blocking(msg);
     }

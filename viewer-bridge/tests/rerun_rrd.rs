@@ -594,7 +594,8 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
     assert_eq!(rounds_of(&s, "world/robots"), (0..=20).collect::<Vec<_>>());
     assert_eq!(explored_metric_rounds(&s), 20);
 
-    // 2. The receiver is killed mid-run: the run still completes.
+    // 2. The receiver is killed mid-run: the run says so at once, and completes without
+    // logging the rest.
     let (mut rx, port) = receiver(&python, &dir.path().join("killed.rrd"));
     let rounds = 20_000;
     let mut run = demo_run(rounds)
@@ -629,6 +630,21 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
         .records()
         .count();
     assert_eq!(rows, rounds as usize, "every round was played");
+    let lost_at: u64 = stderr
+        .split("warning: round ")
+        .nth(1)
+        .filter(|rest| {
+            rest.contains(": the Rerun viewer stopped taking the stream (")
+                && rest.contains("the run goes on without it")
+        })
+        .and_then(|rest| rest.split(':').next()?.parse().ok())
+        .unwrap_or_else(|| panic!("no warning that the viewer went: {stderr}"));
+    assert!((1..rounds).contains(&lost_at), "{stderr}");
+    assert_eq!(
+        stderr.matches("warning").count(),
+        1,
+        "said once, not again at the end: {stderr}"
+    );
 }
 
 #[test]
