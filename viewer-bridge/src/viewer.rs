@@ -243,8 +243,8 @@ impl std::fmt::Debug for ViewerLink {
 
 impl ViewerLink {
     /// Why the viewer no longer takes the stream (it quit, or the connection broke), or
-    /// `None` while it does, is still being reached, or the stream has ended. One atomic
-    /// read of the connection's state.
+    /// `None` while it does, is still being reached, or the stream has ended. Costs a read
+    /// of the state Rerun's client keeps of its connection.
     pub fn lost(&self) -> Option<String> {
         use rerun::external::re_grpc_client::write::ClientConnectionState;
         match self.0.upgrade()?.status() {
