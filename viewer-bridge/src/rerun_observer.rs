@@ -1503,7 +1503,10 @@ impl Observer for RerunObserver {
         };
         match flushed {
             Err(e) => {
-                eprintln!("warning: could not flush the Rerun stream: {e}");
+                // A viewer that went while the stream was flushed is told as one gone.
+                if !self.viewer_gone(sim.round()) {
+                    eprintln!("warning: could not flush the Rerun stream: {e}");
+                }
                 if self.when_behind == WhenBehind::SkipWorld {
                     self.abandon_stream();
                 }

@@ -639,7 +639,7 @@ fn live_stream_arrives_and_a_vanishing_viewer_does_not_stop_the_run() {
         })
         .and_then(|rest| rest.split(':').next()?.parse().ok())
         .unwrap_or_else(|| panic!("no warning that the viewer went: {stderr}"));
-    assert!((1..rounds).contains(&lost_at), "{stderr}");
+    assert!((1..=rounds).contains(&lost_at), "{stderr}");
     assert_eq!(
         stderr.matches("warning").count(),
         1,
