@@ -224,9 +224,10 @@ impl RerunObserver {
     }
 
     /// The stream goes to a live viewer, `link` its connection (see
-    /// [`crate::viewer::open`]): should the viewer go away (closed, crashed, or its network
-    /// gone), the round that finds it so says so on stderr, and the run goes on without
-    /// logging, nor waiting for the stream at its end.
+    /// [`crate::viewer::open`]): should the viewer go away (closed, crashed, or its
+    /// connection reset), the round that finds it so says so on stderr, and the run goes on
+    /// without logging, nor waiting for the stream at its end. A connection that goes quiet
+    /// without a reset looks like a stalled viewer (see [`WhenBehind`]).
     #[must_use]
     pub fn with_viewer(mut self, link: ViewerLink) -> Self {
         self.viewer = Some(link);

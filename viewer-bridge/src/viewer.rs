@@ -202,10 +202,17 @@ fn connect(
         .buffered()
         .with_context(cannot)?;
     let sink = ViewerSink::new(uri, local);
+    // Rerun 0.36 ends a stream whose flush gave up waiting once that flush's turn comes, and
+    // handing the stream its sink flushes it (giving up after 5 s of connecting): the
+    // viewer is given the time to accept the connection first.
+    sink.wait_connected(url)?;
     let link = ViewerLink(std::sync::Arc::downgrade(&sink.0));
     rec.set_sink(Box::new(sink));
     Ok((rec, link))
 }
+
+/// How long a viewer may take to accept the connection (a spawned one starts first).
+const CONNECT_WAIT: Duration = Duration::from_secs(30);
 
 /// Whether a host that resolved to `addrs` is this machine: each is a loopback address
 /// (a name that resolved to none is not).
@@ -228,6 +235,23 @@ impl ViewerSink {
         };
         Self(std::sync::Arc::new(Client::new(uri, options)))
     }
+
+    /// Wait until the connection to the viewer at `url` is made, at most [`CONNECT_WAIT`]. A
+    /// server that refuses the stream may have ended it already: [`check_receiver`] says so.
+    fn wait_connected(&self, url: &str) -> Result<()> {
+        use rerun::external::re_grpc_client::write::ClientConnectionState;
+        let started = std::time::Instant::now();
+        while let ClientConnectionState::Connecting { .. } = self.0.status() {
+            if started.elapsed() > CONNECT_WAIT {
+                bail!(
+                    "the viewer at {url} did not accept the connection within {} s",
+                    CONNECT_WAIT.as_secs()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        Ok(())
+    }
 }
 
 /// A live stream's link to its viewer: whether the viewer still takes the stream. It does
@@ -242,7 +266,7 @@ impl std::fmt::Debug for ViewerLink {
 }
 
 impl ViewerLink {
-    /// Why the viewer no longer takes the stream (it quit, or the connection broke), or
+    /// Why the viewer no longer takes the stream (it quit, or the connection was reset), or
     /// `None` while it does, is still being reached, or the stream has ended. Costs a read
     /// of the state Rerun's client keeps of its connection.
     pub fn lost(&self) -> Option<String> {
