@@ -1579,8 +1579,7 @@ impl RerunObserver {
     /// those before) add up to [`crate::priority::STARVED_AFTER`] asks whether the logging
     /// is starved, and asks again until it ends.
     fn flush_file(&mut self, wait: &LoggingWait) -> Result<(), String> {
-        let flushed = self
-            .flush_on_thread(std::time::Duration::MAX)
+        let flushed = on_thread("rerun-flush", self.flush_job(std::time::Duration::MAX))
             .map_err(|e| format!("cannot start the flush: {e}"))?;
         let file = self.file.as_deref();
         self.starvation
@@ -1619,12 +1618,13 @@ impl RerunObserver {
         });
     }
 
-    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`RerunObserver::flush_on_thread`]).
+    /// Flush a live stream, waiting at most [`FINISH_TIMEOUT`] (see [`on_thread_within`]).
     fn flush_live(&self) -> Result<(), String> {
-        let flushed = self.flush_on_thread(FINISH_TIMEOUT).map(|done| {
-            done.recv_timeout(FINISH_TIMEOUT + std::time::Duration::from_secs(1))
-                .ok()
-        });
+        let flushed = on_thread_within(
+            "rerun-flush",
+            FINISH_TIMEOUT + std::time::Duration::from_secs(1),
+            self.flush_job(FINISH_TIMEOUT),
+        );
         match flushed {
             Ok(Some(result)) => result,
             Ok(None) => Err("the viewer took no data".to_owned()),
@@ -1632,20 +1632,16 @@ impl RerunObserver {
         }
     }
 
-    /// Flush the stream on a thread of its own, waiting there at most `timeout`; the
-    /// receiver gets the outcome. The thread lets go of its handle before it says so: the
-    /// caller then holds the last one (see `close_file` and `close_live`), not a thread the
-    /// process may not wait for.
-    fn flush_on_thread(
-        &self,
-        timeout: std::time::Duration,
-    ) -> std::io::Result<crossbeam_channel::Receiver<Result<(), String>>> {
+    /// A flush of the stream waiting at most `timeout`, to run on a thread of its own. It
+    /// lets go of its handle before it returns: the caller then holds the last one (see
+    /// `close_file` and `close_live`), not a thread the process may not wait for.
+    fn flush_job(&self, timeout: std::time::Duration) -> impl FnOnce() -> Result<(), String> + Send + 'static {
         let rec = self.rec.clone();
-        on_thread("rerun-flush", move || {
+        move || {
             let result = rec.flush_with_timeout(timeout).map_err(|e| e.to_string());
             drop(rec);
             result
-        })
+        }
     }
 
     /// Close a flushed live stream, waiting at most [`FINISH_TIMEOUT`] (see
