@@ -280,7 +280,8 @@ impl ViewerLink {
 }
 
 impl rerun::sink::LogSink for ViewerSink {
-    fn send(&self, msg: rerun::log::LogMsg) {
+    fn send(&self, mut msg: rerun::log::LogMsg) {
+        stamp_arrival(&mut msg);
         self.0.send_blocking(msg);
     }
 
@@ -290,6 +291,15 @@ impl rerun::sink::LogSink for ViewerSink {
             GrpcFlushError::Timeout { .. } => rerun::sink::SinkFlushError::Timeout,
             err => rerun::sink::SinkFlushError::failed(err.to_string()),
         })
+    }
+}
+
+/// Stamp `msg` with the time it reached the sink, as Rerun's own gRPC sink does: the
+/// viewer's ingestion statistics show that stage of a chunk's latency. Messages without
+/// data are left as they are.
+fn stamp_arrival(msg: &mut rerun::log::LogMsg) {
+    if let Some(key) = re_sorbet::TimestampLocation::GrpcSink.metadata_key() {
+        msg.insert_arrow_record_batch_metadata(key.to_owned(), re_sorbet::timestamp_metadata::now_timestamp());
     }
 }
 
@@ -318,6 +328,32 @@ const REFUSAL_WAIT: Duration = Duration::from_millis(100);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A chunk sent live carries the time it reached the sink, under Rerun's key for it.
+    #[test]
+    fn a_sent_chunk_is_stamped_with_its_arrival_for_the_viewers_latency_figures() {
+        let (rec, storage) = rerun::RecordingStreamBuilder::new("stamp").memory().unwrap();
+        rec.log("p", &rerun::Points2D::new([(1.0, 2.0)])).unwrap();
+        rec.flush_blocking().unwrap();
+        let before = std::time::SystemTime::now();
+        let mut msg = storage
+            .take()
+            .into_iter()
+            .find(|m| matches!(m, rerun::log::LogMsg::ArrowMsg(..)))
+            .expect("a chunk was logged");
+        stamp_arrival(&mut msg);
+        let rerun::log::LogMsg::ArrowMsg(_, arrow) = &msg else {
+            unreachable!()
+        };
+        let stamp = arrow
+            .batch
+            .schema_ref()
+            .metadata()
+            .get("rerun:timestamp_sdk_grpc_sink")
+            .expect("stamped");
+        let at = re_sorbet::timestamp_metadata::parse_timestamp(stamp).expect("Rerun's format");
+        assert!(at >= before && at <= std::time::SystemTime::now(), "{stamp}");
+    }
 
     #[test]
     fn connect_urls() {
